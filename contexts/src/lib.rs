@@ -1,0 +1,1 @@
+//! Context subsystem (issue 5): not implemented yet.

@@ -1,0 +1,3 @@
+//! Built-in petrel functional modules.
+
+pub mod demo;

@@ -1,0 +1,1 @@
+//! Petri Net Plans for petrel.

@@ -1,0 +1,2 @@
+//! petrel: facade.
+pub use petrel_actors as actors;
