@@ -1,8 +1,40 @@
 //! petrel runtime core: property types and URLs, the blackboard actor, links and queues,
-//! the module trait and module actors, agent assembly and RON configuration.
+//! the module trait and module actors, supervision, agent assembly and RON configuration.
 //!
 //! See `ARCHITECTURE.md` at the repository root for a map of the code.
+//!
+//! # Snapshots
+//! [`Agent::snapshot`] writes the whole blackboard as a RON agent config; see the `snapshot`
+//! module docs for what it holds.
+#![warn(missing_docs)]
 
+mod agent;
+mod blackboard;
+mod cell;
+pub mod config;
+mod handle;
+mod module;
+mod module_actor;
+mod module_types;
+mod ports;
+mod queue;
+mod snapshot;
+mod summary;
+mod supervisor;
 pub mod types;
+pub mod url;
+mod value;
 
+pub use agent::{Agent, StartError, DEFAULT_STOP_TIMEOUT};
+pub use blackboard::{Blackboard, BlackboardError, Registry};
+pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
+pub use handle::{Input, Item, Output, Param, QueueReader, QueueWriter, Sample, State};
+pub use module::{Cause, Context, Module, Schedule, Watchable};
+pub use module_actor::status;
+pub use module_types::{ModuleRegistry, ModuleType};
+pub use ports::{PropertyDecl, PropertyKind, Ports};
+pub use queue::DEFAULT_CAPACITY;
+pub use summary::{ModuleReport, RunSummary};
 pub use types::{Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};
+pub use url::PropertyUrl;
+pub use value::{AnyValue, TypeInfo};

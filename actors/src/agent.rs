@@ -1,0 +1,90 @@
+//! Agent assembly: from a checked config to a running blackboard, supervisor and modules.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use ractor::{Actor, ActorRef};
+use tokio::task::JoinHandle;
+
+use crate::blackboard::Blackboard;
+use crate::config::{ConfigErrors, ConfigFile};
+use crate::module_types::ModuleRegistry;
+use crate::summary::RunSummary;
+use crate::supervisor::{AgentSupervisor, SupervisorArgs, SupervisorMsg};
+
+/// How long a module gets to finish its step and cleanup when the agent stops, before it is killed.
+pub const DEFAULT_STOP_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// Why an agent did not start.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    /// The config has errors; nothing was started.
+    #[error("{0}")]
+    Config(#[from] ConfigErrors),
+    /// An actor could not be spawned.
+    #[error("could not start the agent: {0}")]
+    Spawn(String),
+}
+
+/// A running agent: one blackboard, one supervisor, its modules.
+pub struct Agent {
+    name: String,
+    blackboard: Blackboard,
+    supervisor: ActorRef<SupervisorMsg>,
+    joins: Vec<JoinHandle<()>>,
+}
+
+impl Agent {
+    /// Checks `config` against `types` and, if it is sound, starts the agent: the blackboard
+    /// with every property, value and link in place, then each module in config order.
+    pub async fn start(config: &ConfigFile, types: &ModuleRegistry) -> Result<Agent, StartError> {
+        let registry = config.build(types)?;
+        let name = config.config.name.clone();
+        let modules = config
+            .config
+            .modules
+            .iter()
+            .filter_map(|m| types.get(&m.type_name).map(|t| (m.name.clone(), *t)))
+            .collect();
+        let (blackboard, bb_join) = Blackboard::spawn(registry).await.map_err(|e| StartError::Spawn(e.to_string()))?;
+        let args = SupervisorArgs { agent: Arc::from(name.as_str()), blackboard: blackboard.clone(), modules };
+        let (supervisor, sup_join) = Actor::spawn(Some(format!("{name}/supervisor")), AgentSupervisor, args)
+            .await
+            .map_err(|e| StartError::Spawn(e.to_string()))?;
+        Ok(Agent { name, blackboard, supervisor, joins: vec![sup_join, bb_join] })
+    }
+
+    /// The agent's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The agent's blackboard, to read, set and relink properties while it runs.
+    pub fn blackboard(&self) -> &Blackboard {
+        &self.blackboard
+    }
+
+    /// How every module is doing right now.
+    pub async fn summary(&self) -> RunSummary {
+        let modules = ractor::call!(self.supervisor, SupervisorMsg::Report).unwrap_or_default();
+        RunSummary { agent: self.name.clone(), modules }
+    }
+
+    /// The whole blackboard as RON config text (see [`crate::snapshot`](crate#snapshots)).
+    pub async fn snapshot(&self) -> Result<String, crate::BlackboardError> {
+        self.blackboard.snapshot().await
+    }
+
+    /// Stops every module in reverse start order (running their cleanup, killing any that takes
+    /// longer than `timeout`), then the agent itself, and reports how each module fared.
+    pub async fn stop(self, timeout: Duration) -> RunSummary {
+        let modules = ractor::call!(self.supervisor, SupervisorMsg::StopAll, timeout).unwrap_or_default();
+        self.supervisor.stop(None);
+        self.blackboard.stop();
+        for join in self.joins {
+            let _ = join.await;
+        }
+        tracing::info!(agent = %self.name, "agent stopped");
+        RunSummary { agent: self.name, modules }
+    }
+}

@@ -1,0 +1,175 @@
+//! The blackboard: one actor per agent owning the registry of properties, links and queues.
+//!
+//! Structure changes (link, unlink, set from a tool, snapshot) are messages to the actor, so
+//! they apply one at a time in a single place. Values do not go through the actor: modules hold
+//! direct handles to the cells (see [`crate::handle`]).
+
+mod registry;
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use ractor::{Actor, ActorProcessingErr, ActorRef, RpcReplyPort};
+
+use crate::cell::Signal;
+use crate::ports::Handle;
+use crate::types::PropertyType;
+use crate::value::{AnyValue, TypeInfo};
+
+pub use registry::{BlackboardError, Registry};
+
+/// What a (re)starting module instance needs from the blackboard.
+pub(crate) struct Binding {
+    pub handles: HashMap<String, Handle>,
+    pub signal: Arc<Signal>,
+    pub enabled_signal: Arc<Signal>,
+}
+
+type Reply<T> = RpcReplyPort<Result<T, BlackboardError>>;
+
+pub(crate) enum BlackboardMsg {
+    Bind(String, Reply<Binding>),
+    Link(String, String, Reply<()>),
+    Unlink(String, Reply<()>),
+    Set { key: String, type_info: TypeInfo, value: AnyValue, runtime: bool, reply: Reply<()> },
+    SetRon(String, ron::Value, Reply<()>),
+    Get(String, Reply<(TypeInfo, AnyValue)>),
+    Snapshot(Reply<String>),
+}
+
+struct BlackboardActor;
+
+impl Actor for BlackboardActor {
+    type Msg = BlackboardMsg;
+    type State = Registry;
+    type Arguments = Registry;
+
+    async fn pre_start(&self, _me: ActorRef<Self::Msg>, registry: Registry) -> Result<Registry, ActorProcessingErr> {
+        tracing::info!(agent = registry.agent(), modules = registry.modules().len(), "blackboard started");
+        Ok(registry)
+    }
+
+    async fn handle(&self, _me: ActorRef<Self::Msg>, msg: Self::Msg, reg: &mut Registry) -> Result<(), ActorProcessingErr> {
+        // A reply port whose caller gave up is not the blackboard's failure: ignore send errors.
+        match msg {
+            BlackboardMsg::Bind(module, reply) => {
+                let binding = reg.handles(&module).zip(reg.module(&module)).map(|(handles, m)| Binding {
+                    handles,
+                    signal: m.signal.clone(),
+                    enabled_signal: m.enabled_signal.clone(),
+                });
+                let _ = reply.send(binding.ok_or_else(|| reg.key_of(&format!("{module}/enabled")).unwrap_err()));
+            }
+            BlackboardMsg::Link(from, to, reply) => {
+                let result = reg.link(&from, &to);
+                match &result {
+                    Ok(()) => tracing::info!(agent = reg.agent(), %from, %to, "linked"),
+                    Err(e) => tracing::warn!(agent = reg.agent(), %from, %to, error = %e, "link refused"),
+                }
+                let _ = reply.send(result);
+            }
+            BlackboardMsg::Unlink(from, reply) => {
+                let result = reg.unlink(&from);
+                tracing::info!(agent = reg.agent(), %from, ok = result.is_ok(), "unlinked");
+                let _ = reply.send(result);
+            }
+            BlackboardMsg::Set { key, type_info, value, runtime, reply } => {
+                let result = if runtime { reg.set_runtime(&key, type_info, value) } else { reg.set(&key, type_info, value) };
+                let _ = reply.send(result);
+            }
+            BlackboardMsg::SetRon(key, value, reply) => {
+                let _ = reply.send(reg.set_from_ron(&key, value));
+            }
+            BlackboardMsg::Get(key, reply) => {
+                let _ = reply.send(reg.get(&key));
+            }
+            BlackboardMsg::Snapshot(reply) => {
+                let _ = reply.send(Ok(crate::snapshot::write(reg)));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A handle to an agent's blackboard actor; cheap to clone.
+#[derive(Clone)]
+pub struct Blackboard {
+    actor: ActorRef<BlackboardMsg>,
+}
+
+impl Blackboard {
+    /// Starts the blackboard actor owning `registry`.
+    pub async fn spawn(registry: Registry) -> Result<(Blackboard, tokio::task::JoinHandle<()>), BlackboardError> {
+        let (actor, join) = Actor::spawn(None, BlackboardActor, registry).await.map_err(|_| BlackboardError::Stopped)?;
+        Ok((Blackboard { actor }, join))
+    }
+
+    async fn call<T: Send + 'static>(&self, msg: impl FnOnce(Reply<T>) -> BlackboardMsg) -> Result<T, BlackboardError> {
+        match self.actor.call(msg, None).await {
+            Ok(ractor::rpc::CallResult::Success(result)) => result,
+            _ => Err(BlackboardError::Stopped),
+        }
+    }
+
+    pub(crate) async fn bind(&self, module: &str) -> Result<Binding, BlackboardError> {
+        self.call(|r| BlackboardMsg::Bind(module.to_string(), r)).await
+    }
+
+    /// Links `from` to `to` while running; readers of `from` see `to` from their next read.
+    pub async fn link(&self, from: &str, to: &str) -> Result<(), BlackboardError> {
+        self.call(|r| BlackboardMsg::Link(from.to_string(), to.to_string(), r)).await
+    }
+
+    /// Removes the link of `from`.
+    pub async fn unlink(&self, from: &str) -> Result<(), BlackboardError> {
+        self.call(|r| BlackboardMsg::Unlink(from.to_string(), r)).await
+    }
+
+    /// Sets a property (e.g. a parameter, or a module's `enabled`) to a typed value.
+    pub async fn set<T: PropertyType>(&self, address: &str, value: T) -> Result<(), BlackboardError> {
+        let (key, type_info, value) = (address.to_string(), TypeInfo::of::<T>(), Arc::new(value) as AnyValue);
+        self.call(|reply| BlackboardMsg::Set { key, type_info, value, runtime: false, reply }).await
+    }
+
+    /// Sets a runtime-owned property (`stats/...`); for the supervisor.
+    pub(crate) async fn set_runtime<T: PropertyType>(&self, address: &str, value: T) -> Result<(), BlackboardError> {
+        let (key, type_info, value) = (address.to_string(), TypeInfo::of::<T>(), Arc::new(value) as AnyValue);
+        self.call(|reply| BlackboardMsg::Set { key, type_info, value, runtime: true, reply }).await
+    }
+
+    /// Sets a property from RON text, checking it against the property's type.
+    pub async fn set_text(&self, address: &str, ron_text: &str) -> Result<(), BlackboardError> {
+        let value: ron::Value = ron::from_str(ron_text).map_err(|e| BlackboardError::BadValue {
+            key: address.to_string(),
+            expected: "a RON value",
+            reason: e.to_string(),
+        })?;
+        self.call(|r| BlackboardMsg::SetRon(address.to_string(), value, r)).await
+    }
+
+    /// The current value of a property, if it has type `T`.
+    pub async fn get<T: PropertyType>(&self, address: &str) -> Result<Arc<T>, BlackboardError> {
+        let (ti, value) = self.call(|r| BlackboardMsg::Get(address.to_string(), r)).await?;
+        value.downcast::<T>().map_err(|_| BlackboardError::BadValue {
+            key: address.to_string(),
+            expected: T::TYPE_NAME,
+            reason: format!("the property is a {}", ti.name()),
+        })
+    }
+
+    /// The current value of a property as RON text.
+    pub async fn get_text(&self, address: &str) -> Result<String, BlackboardError> {
+        let (ti, value) = self.call(|r| BlackboardMsg::Get(address.to_string(), r)).await?;
+        ti.to_ron(&value).map_err(|reason| BlackboardError::BadValue { key: address.into(), expected: ti.name(), reason })
+    }
+
+    /// The whole blackboard as a RON agent config (values, links, queue capacities).
+    pub async fn snapshot(&self) -> Result<String, BlackboardError> {
+        self.call(BlackboardMsg::Snapshot).await
+    }
+
+    /// Stops the blackboard actor.
+    pub(crate) fn stop(&self) {
+        self.actor.stop(None);
+    }
+}

@@ -1,0 +1,372 @@
+//! The blackboard's registry: which properties, queues and links exist in one agent.
+//!
+//! Pure and synchronous, so configs can be checked without starting anything; the blackboard
+//! actor owns one at run time and applies structure changes to it one at a time.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use crate::cell::{Cell, Signal};
+use crate::ports::{Handle, PropertyDecl, PropertyKind, Ports};
+use crate::queue::{dropped_path, QueueCore};
+use crate::url::PropertyUrl;
+use crate::value::{AnyValue, TypeInfo};
+
+/// Why a structure change (link, value, declaration) was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum BlackboardError {
+    /// No module of that name in the agent.
+    #[error("no module `{module}` in agent `{agent}` (modules: {known})")]
+    UnknownModule {
+        /// The name asked for.
+        module: String,
+        /// The agent.
+        agent: String,
+        /// The modules it has.
+        known: String,
+    },
+    /// The module has no such property.
+    #[error("module `{module}` has no property `{path}`; it has: {known}")]
+    UnknownProperty {
+        /// The module.
+        module: String,
+        /// The path asked for.
+        path: String,
+        /// The module's properties.
+        known: String,
+    },
+    /// The address does not parse or names another agent.
+    #[error("{0}")]
+    BadAddress(String),
+    /// Only inputs, parameters and queue inputs can be linked.
+    #[error("`{key}` is a {kind} property: only inputs, parameters and queue inputs can be linked")]
+    NotLinkable {
+        /// The property.
+        key: String,
+        /// Its kind.
+        kind: PropertyKind,
+    },
+    /// Queue inputs link to queues, value properties to values.
+    #[error("cannot link `{from}` ({from_kind}) to `{to}` ({to_kind}): a queue input links to a queue, a value to a value")]
+    KindMismatch {
+        /// Link source.
+        from: String,
+        /// Its kind.
+        from_kind: PropertyKind,
+        /// Link target.
+        to: String,
+        /// Its kind.
+        to_kind: PropertyKind,
+    },
+    /// Linked properties must have the same type.
+    #[error("cannot link `{from}` ({from_type}) to `{to}` ({to_type}): the types differ")]
+    TypeMismatch {
+        /// Link source.
+        from: String,
+        /// Its type.
+        from_type: &'static str,
+        /// Link target.
+        to: String,
+        /// Its type.
+        to_type: &'static str,
+    },
+    /// The link would close a cycle.
+    #[error("link cycle: {}", .0.join(" -> "))]
+    Cycle(Vec<String>),
+    /// A value does not fit the property.
+    #[error("wrong value for `{key}`: expected {expected}: {reason}")]
+    BadValue {
+        /// The property.
+        key: String,
+        /// The type it has.
+        expected: &'static str,
+        /// What the conversion said.
+        reason: String,
+    },
+    /// The property cannot be set (stats, queues).
+    #[error("`{key}` is a {kind} property and cannot be set")]
+    NotSettable {
+        /// The property.
+        key: String,
+        /// Its kind.
+        kind: PropertyKind,
+    },
+    /// A module declared its properties wrongly.
+    #[error("{0}")]
+    Declaration(String),
+    /// The blackboard actor is gone.
+    #[error("the blackboard of this agent has stopped")]
+    Stopped,
+}
+
+pub(crate) struct Entry {
+    pub decl: PropertyDecl,
+    pub handle: Handle,
+    pub link: Option<String>,
+    /// For queue inputs: the private queue read while unlinked.
+    own_queue: Option<Arc<QueueCore>>,
+}
+
+pub(crate) struct ModuleEntry {
+    pub type_name: String,
+    /// Raised when a watched input or queue changes; kept across restarts.
+    pub signal: Arc<Signal>,
+    /// Raised when `enabled` changes.
+    pub enabled_signal: Arc<Signal>,
+}
+
+/// All properties, queues and links of one agent.
+pub struct Registry {
+    agent: String,
+    order: Vec<String>,
+    modules: HashMap<String, ModuleEntry>,
+    entries: BTreeMap<String, Entry>,
+}
+
+impl Registry {
+    /// An empty registry for `agent`.
+    pub fn new(agent: &str) -> Self {
+        Registry { agent: agent.to_string(), order: Vec::new(), modules: HashMap::new(), entries: BTreeMap::new() }
+    }
+
+    /// The agent name.
+    pub fn agent(&self) -> &str {
+        &self.agent
+    }
+
+    /// Module names in declaration order.
+    pub fn modules(&self) -> &[String] {
+        &self.order
+    }
+
+    pub(crate) fn module(&self, name: &str) -> Option<&ModuleEntry> {
+        self.modules.get(name)
+    }
+
+    /// Adopts the cells a fresh declaration of `module` created.
+    pub(crate) fn declare(&mut self, module: &str, type_name: &str, ports: Ports) -> Result<(), BlackboardError> {
+        if !ports.errors.is_empty() {
+            return Err(BlackboardError::Declaration(ports.errors.join("; ")));
+        }
+        if self.modules.contains_key(module) {
+            return Err(BlackboardError::Declaration(format!("module `{module}` is declared twice")));
+        }
+        for (decl, handle) in ports.decls.into_iter().zip(ports.handles) {
+            let own_queue = match &handle {
+                Handle::QueueIn(reader) => {
+                    let dropped = PropertyDecl {
+                        path: dropped_path(&decl.path),
+                        kind: PropertyKind::Stats,
+                        type_info: TypeInfo::of::<i64>(),
+                        default: Some(Arc::new(0_i64)),
+                        doc: format!("items `{}` lost by lagging behind its queue", decl.path),
+                        capacity: None,
+                    };
+                    let key = format!("{module}/{}", dropped.path);
+                    let entry = Entry { decl: dropped, handle: Handle::Value(reader.dropped.clone()), link: None, own_queue: None };
+                    self.entries.insert(key, entry);
+                    Some(reader.source())
+                }
+                _ => None,
+            };
+            let key = format!("{module}/{}", decl.path);
+            self.entries.insert(key, Entry { decl, handle, link: None, own_queue });
+        }
+        self.order.push(module.to_string());
+        let entry = ModuleEntry {
+            type_name: type_name.to_string(),
+            signal: Arc::default(),
+            enabled_signal: Arc::default(),
+        };
+        self.modules.insert(module.to_string(), entry);
+        Ok(())
+    }
+
+    /// The cells of `module`, by path, for binding a (re)started instance.
+    pub(crate) fn handles(&self, module: &str) -> Option<HashMap<String, Handle>> {
+        self.modules.get(module)?;
+        let prefix = format!("{module}/");
+        Some(
+            self.entries
+                .range(prefix.clone()..)
+                .take_while(|(k, _)| k.starts_with(&prefix))
+                .filter(|(_, e)| !(e.decl.kind == PropertyKind::Stats && e.decl.path.starts_with("stats/dropped/")))
+                .map(|(k, e)| (k[prefix.len()..].to_string(), e.handle.clone()))
+                .collect(),
+        )
+    }
+
+    /// The declarations of `module`'s properties, in path order.
+    pub fn declarations(&self, module: &str) -> Vec<&PropertyDecl> {
+        let prefix = format!("{module}/");
+        self.entries.range(prefix.clone()..).take_while(|(k, _)| k.starts_with(&prefix)).map(|(_, e)| &e.decl).collect()
+    }
+
+    /// The type name of `module`.
+    pub fn module_type(&self, module: &str) -> Option<&str> {
+        self.modules.get(module).map(|m| m.type_name.as_str())
+    }
+
+    /// Turns a full or short address into the key `module/path` of an existing property.
+    pub fn key_of(&self, address: &str) -> Result<String, BlackboardError> {
+        let url = PropertyUrl::parse(address).map_err(|e| BlackboardError::BadAddress(e.to_string()))?;
+        if let Some(agent) = url.agent() {
+            if agent != self.agent {
+                return Err(BlackboardError::BadAddress(format!(
+                    "`{address}` names agent `{agent}`, but this is agent `{}` (links to other agents come with teams)",
+                    self.agent
+                )));
+            }
+        }
+        let key = url.key();
+        if self.entries.contains_key(&key) {
+            return Ok(key);
+        }
+        if !self.modules.contains_key(url.module()) {
+            let mut known: Vec<&str> = self.order.iter().map(String::as_str).collect();
+            known.sort_unstable();
+            return Err(BlackboardError::UnknownModule { module: url.module().into(), agent: self.agent.clone(), known: known.join(", ") });
+        }
+        Err(BlackboardError::UnknownProperty { module: url.module().into(), path: url.path().into(), known: self.known_paths(url.module()) })
+    }
+
+    fn known_paths(&self, module: &str) -> String {
+        self.declarations(module).iter().filter(|d| d.kind != PropertyKind::Stats).map(|d| d.path.as_str()).collect::<Vec<_>>().join(", ")
+    }
+
+    /// Links `from` (an input, parameter or queue input) to `to`; reads of `from` then read `to`.
+    pub fn link(&mut self, from: &str, to: &str) -> Result<(), BlackboardError> {
+        let from = self.key_of(from)?;
+        let to = self.key_of(to)?;
+        let (f, t) = (&self.entries[&from].decl, &self.entries[&to].decl);
+        if !f.kind.linkable() {
+            return Err(BlackboardError::NotLinkable { key: from, kind: f.kind });
+        }
+        if f.kind.is_queue() != t.kind.is_queue() {
+            return Err(BlackboardError::KindMismatch { from, from_kind: f.kind, to, to_kind: t.kind });
+        }
+        if f.type_info != t.type_info {
+            let (from_type, to_type) = (f.type_info.name(), t.type_info.name());
+            return Err(BlackboardError::TypeMismatch { from, from_type, to, to_type });
+        }
+        let mut chain = vec![from.clone(), to.clone()];
+        let mut at = to.clone();
+        while let Some(next) = self.entries[&at].link.clone() {
+            chain.push(next.clone());
+            if next == from {
+                return Err(BlackboardError::Cycle(chain));
+            }
+            at = next;
+        }
+        if from == to {
+            return Err(BlackboardError::Cycle(vec![from.clone(), from]));
+        }
+        self.entries.get_mut(&from).expect("checked above").link = Some(to);
+        self.resolve();
+        Ok(())
+    }
+
+    /// Removes the link of `from`: it reads its own value (or private queue) again.
+    pub fn unlink(&mut self, from: &str) -> Result<(), BlackboardError> {
+        let from = self.key_of(from)?;
+        self.entries.get_mut(&from).expect("key_of checked it").link = None;
+        self.resolve();
+        Ok(())
+    }
+
+    /// The link target of `key`, if linked.
+    pub fn link_of(&self, key: &str) -> Option<&str> {
+        self.entries.get(key)?.link.as_deref()
+    }
+
+    /// Points every endpoint and queue reader at the end of its link chain.
+    fn resolve(&self) {
+        for (key, entry) in &self.entries {
+            let mut end = key;
+            while let Some(next) = &self.entries[end].link {
+                end = next;
+            }
+            let target = &self.entries[end];
+            match (&entry.handle, &target.handle) {
+                (Handle::Value(ep), Handle::Value(t)) => ep.retarget(t.own.clone()),
+                (Handle::QueueIn(reader), Handle::QueueOut(core)) => reader.retarget(core.clone()),
+                (Handle::QueueIn(reader), Handle::QueueIn(_)) => {
+                    if let Some(own) = &target.own_queue {
+                        reader.retarget(own.clone());
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Sets a property from a config value, checking its type.
+    pub fn set_from_ron(&mut self, address: &str, value: ron::Value) -> Result<(), BlackboardError> {
+        let key = self.key_of(address)?;
+        let ti = self.entries[&key].decl.type_info;
+        let value = ti.from_ron(value).map_err(|reason| BlackboardError::BadValue { key: key.clone(), expected: ti.name(), reason })?;
+        self.set(&key, ti, value)
+    }
+
+    /// Sets a property to a value of type `type_info`.
+    pub(crate) fn set(&self, address: &str, type_info: TypeInfo, value: AnyValue) -> Result<(), BlackboardError> {
+        let key = self.key_of(address)?;
+        let kind = self.entries[&key].decl.kind;
+        if !kind.settable() {
+            return Err(BlackboardError::NotSettable { key, kind });
+        }
+        self.set_runtime(&key, type_info, value)
+    }
+
+    /// Sets any value property, including runtime-owned `stats/...`.
+    pub(crate) fn set_runtime(&self, address: &str, type_info: TypeInfo, value: AnyValue) -> Result<(), BlackboardError> {
+        let key = self.key_of(address)?;
+        let entry = &self.entries[&key];
+        if entry.decl.type_info != type_info {
+            return Err(BlackboardError::BadValue { key, expected: entry.decl.type_info.name(), reason: format!("got a {}", type_info.name()) });
+        }
+        match &entry.handle {
+            // A value set on a linked property goes to its target, like writing through a symlink.
+            Handle::Value(ep) => {
+                ep.write(value);
+                Ok(())
+            }
+            _ => Err(BlackboardError::NotSettable { key, kind: entry.decl.kind }),
+        }
+    }
+
+    /// The current value of a property (of its link target, if linked).
+    pub fn get(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
+        let key = self.key_of(address)?;
+        match &self.entries[&key].handle {
+            Handle::Value(ep) => Ok((ep.type_info(), ep.value())),
+            _ => Err(BlackboardError::NotSettable { kind: self.entries[&key].decl.kind, key }),
+        }
+    }
+
+    /// Sets the capacity of an output queue.
+    pub fn set_capacity(&mut self, address: &str, capacity: usize) -> Result<(), BlackboardError> {
+        let key = self.key_of(address)?;
+        match &self.entries[&key].handle {
+            Handle::QueueOut(core) => {
+                core.set_capacity(capacity);
+                Ok(())
+            }
+            _ => Err(BlackboardError::BadValue { key, expected: "an output queue", reason: "only output queues have a capacity".into() }),
+        }
+    }
+
+    /// Every property with its current own value (not its link target's), links, and queue
+    /// capacities, module by module; what a snapshot writes.
+    pub(crate) fn entries(&self) -> impl Iterator<Item = (&String, &Entry)> {
+        self.entries.iter()
+    }
+
+    /// The cell a value property stores its own value in.
+    pub(crate) fn own_cell(entry: &Entry) -> Option<&Arc<Cell>> {
+        match &entry.handle {
+            Handle::Value(ep) => Some(&ep.own),
+            _ => None,
+        }
+    }
+}

@@ -1,0 +1,223 @@
+//! Shared property storage: the cells the blackboard owns and modules read and write directly.
+//!
+//! The blackboard actor owns the *structure* (which cells exist, what links to what); values
+//! move through these cells without any actor round trip. A write replaces the cell's value
+//! under a short lock and raises the [`Signal`] of every module watching the cell.
+
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
+
+use arc_swap::ArcSwap;
+use parking_lot::{Mutex, RwLock};
+use tokio::sync::Notify;
+use tokio::time::Instant;
+
+use crate::value::{AnyValue, TypeInfo};
+
+/// Why a module woke up; a set of these is reported to the module's step.
+pub(crate) mod cause {
+    pub const PERIOD: u8 = 1;
+    pub const CHANGE: u8 = 2;
+    pub const ITEMS: u8 = 4;
+    pub const TIMEOUT: u8 = 8;
+}
+
+/// The wake-up signal of one module: one per module name, kept across restarts.
+///
+/// Raising it never blocks and is never lost: if the module is busy, the next wait returns at once.
+#[derive(Default)]
+pub(crate) struct Signal {
+    notify: Notify,
+    causes: AtomicU8,
+}
+
+impl Signal {
+    pub fn raise(&self, cause: u8) {
+        self.causes.fetch_or(cause, Ordering::Release);
+        self.notify.notify_one();
+    }
+
+    /// Waits for the next raise and returns the causes gathered since the last call.
+    pub async fn wait(&self) -> u8 {
+        self.notify.notified().await;
+        self.take()
+    }
+
+    pub fn take(&self) -> u8 {
+        self.causes.swap(0, Ordering::Acquire)
+    }
+}
+
+/// A value with its version (writes since declaration) and write time.
+#[derive(Clone)]
+pub(crate) struct Slot {
+    pub value: AnyValue,
+    pub version: u64,
+    pub written: Instant,
+}
+
+/// The storage of one property.
+pub(crate) struct Cell {
+    pub type_info: TypeInfo,
+    slot: RwLock<Slot>,
+    watchers: ArcSwap<Vec<Arc<Signal>>>,
+}
+
+impl Cell {
+    pub fn new(type_info: TypeInfo, value: AnyValue) -> Arc<Self> {
+        Arc::new(Cell {
+            type_info,
+            slot: RwLock::new(Slot { value, version: 0, written: Instant::now() }),
+            watchers: ArcSwap::from_pointee(Vec::new()),
+        })
+    }
+
+    pub fn read(&self) -> Slot {
+        self.slot.read().clone()
+    }
+
+    pub fn value(&self) -> AnyValue {
+        self.slot.read().value.clone()
+    }
+
+    pub fn write(&self, value: AnyValue) {
+        let old = {
+            let mut slot = self.slot.write();
+            slot.version += 1;
+            slot.written = Instant::now();
+            std::mem::replace(&mut slot.value, value)
+        };
+        // The previous value (maybe a large image) is freed outside the lock.
+        drop(old);
+        for watcher in self.watchers.load().iter() {
+            watcher.raise(cause::CHANGE);
+        }
+    }
+
+    fn add_watcher(&self, signal: &Arc<Signal>) {
+        self.watchers.rcu(|w| {
+            let mut w = Vec::clone(w);
+            w.push(signal.clone());
+            w
+        });
+    }
+
+    fn remove_watcher(&self, signal: &Arc<Signal>) {
+        self.watchers.rcu(|w| {
+            let mut w = Vec::clone(w);
+            if let Some(i) = w.iter().position(|s| Arc::ptr_eq(s, signal)) {
+                w.swap_remove(i);
+            }
+            w
+        });
+    }
+}
+
+/// A declared (non-queue) property: its own cell, and the cell reads and writes go to,
+/// which differs from its own when the property is linked (symlink semantics).
+pub(crate) struct Endpoint {
+    /// `module/path`, for traces and errors.
+    pub key: Arc<str>,
+    pub own: Arc<Cell>,
+    resolved: ArcSwap<Cell>,
+    subscribers: Mutex<Vec<Arc<Signal>>>,
+}
+
+impl Endpoint {
+    pub fn new(key: &str, type_info: TypeInfo, default: AnyValue) -> Arc<Self> {
+        let own = Cell::new(type_info, default);
+        Arc::new(Endpoint {
+            key: key.into(),
+            resolved: ArcSwap::new(own.clone()),
+            own,
+            subscribers: Mutex::new(Vec::new()),
+        })
+    }
+
+    pub fn type_info(&self) -> TypeInfo {
+        self.own.type_info
+    }
+
+    #[inline]
+    pub fn read(&self) -> Slot {
+        self.resolved.load().read()
+    }
+
+    #[inline]
+    pub fn value(&self) -> AnyValue {
+        self.resolved.load().value()
+    }
+
+    #[inline]
+    pub fn write(&self, value: AnyValue) {
+        self.resolved.load().write(value)
+    }
+
+    /// Wakes `signal` whenever the value seen through this endpoint changes, including after a relink.
+    pub fn subscribe(&self, signal: &Arc<Signal>) {
+        let mut subs = self.subscribers.lock();
+        if !subs.iter().any(|s| Arc::ptr_eq(s, signal)) {
+            subs.push(signal.clone());
+            self.resolved.load().add_watcher(signal);
+        }
+    }
+
+    /// Points the endpoint at another cell; subscribers follow, and are woken if the value they see changed.
+    pub fn retarget(&self, target: Arc<Cell>) {
+        let subs = self.subscribers.lock();
+        let old = self.resolved.swap(target.clone());
+        if Arc::ptr_eq(&old, &target) {
+            return;
+        }
+        for s in subs.iter() {
+            old.remove_watcher(s);
+            target.add_watcher(s);
+        }
+        if !Arc::ptr_eq(&old.value(), &target.value()) {
+            for s in subs.iter() {
+                s.raise(cause::CHANGE);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn f64_endpoint(key: &str, v: f64) -> Arc<Endpoint> {
+        Endpoint::new(key, TypeInfo::of::<f64>(), Arc::new(v))
+    }
+
+    fn read_f64(e: &Endpoint) -> f64 {
+        *e.value().downcast_ref::<f64>().unwrap()
+    }
+
+    #[test]
+    fn write_bumps_version_and_wakes_subscribers() {
+        let e = f64_endpoint("a/out/x", 1.0);
+        let s = Arc::new(Signal::default());
+        e.subscribe(&s);
+        e.subscribe(&s); // idempotent
+        e.write(Arc::new(2.0));
+        assert_eq!(e.read().version, 1);
+        assert_eq!(read_f64(&e), 2.0);
+        assert_eq!(s.take(), cause::CHANGE);
+    }
+
+    #[test]
+    fn retarget_moves_subscribers_and_wakes_on_different_value() {
+        let input = f64_endpoint("b/in/x", 0.0);
+        let source = f64_endpoint("a/out/x", 5.0);
+        let s = Arc::new(Signal::default());
+        input.subscribe(&s);
+        input.retarget(source.own.clone());
+        assert_eq!(s.take(), cause::CHANGE, "reader sees a new value after relink");
+        assert_eq!(read_f64(&input), 5.0);
+        input.own.write(Arc::new(9.0));
+        assert_eq!(s.take(), 0, "the input's own cell is no longer watched");
+        source.write(Arc::new(6.0));
+        assert_eq!(s.take(), cause::CHANGE);
+        assert_eq!(read_f64(&input), 6.0);
+    }
+}

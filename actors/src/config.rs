@@ -1,0 +1,229 @@
+//! Agent configuration files (RON): loading, overlays, and checking against module types.
+//!
+//! ```ron
+//! Agent(
+//!     name: "robot1",
+//!     modules: [
+//!         (name: "counter", type: "demo.counter", values: {"params/period_ms": 100}),
+//!         (name: "scale", type: "demo.scale",
+//!          values: {"params/factor": 2.0},
+//!          links: {"in/value": "counter/out/value"}),
+//!     ],
+//! )
+//! ```
+//! Checking builds the agent's blackboard [`Registry`] exactly as a run would, so `petrel check`
+//! and `petrel run` cannot disagree; every problem found is reported, one per line, with the
+//! file, line and column it comes from.
+
+use std::collections::{BTreeMap, HashSet};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::blackboard::{BlackboardError, Registry};
+use crate::module_types::ModuleRegistry;
+
+/// One agent's configuration.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(rename = "Agent", deny_unknown_fields)]
+pub struct AgentConfig {
+    /// The agent name (the `agent` of every property URL).
+    pub name: String,
+    /// Module instances, started in this order and stopped in reverse.
+    #[serde(default)]
+    pub modules: Vec<ModuleConfig>,
+}
+
+/// One module instance of an agent.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModuleConfig {
+    /// Instance name, unique in the agent.
+    pub name: String,
+    /// Registered module type, e.g. `demo.scale`.
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// Property values by path (`params/factor`, `enabled`, ...), checked against their types.
+    #[serde(default)]
+    pub values: BTreeMap<String, ron::Value>,
+    /// Links: own input or parameter path → target property address.
+    #[serde(default)]
+    pub links: BTreeMap<String, String>,
+    /// Capacities of this module's output queues, by path.
+    #[serde(default)]
+    pub capacities: BTreeMap<String, usize>,
+}
+
+/// A problem in a config file, located in it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// 1-based column (0 when unknown).
+    pub column: usize,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            0 => write!(f, "{}: error: {}", self.file.display(), self.message),
+            _ => write!(f, "{}:{}:{}: error: {}", self.file.display(), self.line, self.column, self.message),
+        }
+    }
+}
+
+/// Every problem found in a config, one per line when displayed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigErrors(pub Vec<ConfigError>);
+
+impl fmt::Display for ConfigErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{e}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ConfigErrors {}
+
+/// A loaded config, with the text it came from (for locating errors).
+#[derive(Debug, Clone)]
+pub struct ConfigFile {
+    /// The merged configuration.
+    pub config: AgentConfig,
+    /// Files merged into it, base first, with their text.
+    sources: Vec<(PathBuf, String)>,
+}
+
+impl ConfigFile {
+    /// Reads and parses a config file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigErrors> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            ConfigErrors(vec![ConfigError { file: path.into(), line: 0, column: 0, message: format!("cannot read config: {e}") }])
+        })?;
+        Self::parse(path, &text)
+    }
+
+    /// Parses config text; `path` names it in errors.
+    pub fn parse(path: impl AsRef<Path>, text: &str) -> Result<Self, ConfigErrors> {
+        let path = path.as_ref();
+        match ron::Options::default().from_str::<AgentConfig>(text) {
+            Ok(config) => Ok(ConfigFile { config, sources: vec![(path.into(), text.to_string())] }),
+            Err(e) => Err(ConfigErrors(vec![ConfigError {
+                file: path.into(),
+                line: e.span.start.line,
+                column: e.span.start.col,
+                message: format!("{} (RON syntax; see the config example in the README)", e.code),
+            }])),
+        }
+    }
+
+    /// Applies `overlay` (e.g. a snapshot) on top: modules match by name; its values, links and
+    /// capacities replace this config's; modules only it has are appended.
+    pub fn overlay(&mut self, overlay: ConfigFile) {
+        for m in overlay.config.modules {
+            match self.config.modules.iter_mut().find(|b| b.name == m.name) {
+                Some(base) => {
+                    base.type_name = m.type_name;
+                    base.values.extend(m.values);
+                    base.links.extend(m.links);
+                    base.capacities.extend(m.capacities);
+                }
+                None => self.config.modules.push(m),
+            }
+        }
+        self.sources.extend(overlay.sources);
+    }
+
+    /// The file the config was loaded from (the base, for overlays).
+    pub fn path(&self) -> &Path {
+        &self.sources[0].0
+    }
+
+    /// Builds the agent's blackboard registry: declares every module, applies values,
+    /// capacities and links. Returns every problem found.
+    pub fn build(&self, types: &ModuleRegistry) -> Result<Registry, ConfigErrors> {
+        let mut registry = Registry::new(&self.config.name);
+        let mut errors = Vec::new();
+        let mut names = HashSet::new();
+        for m in &self.config.modules {
+            if !names.insert(m.name.as_str()) {
+                errors.push(self.error(&m.name, None, format!("duplicate module name `{}`: each module needs its own name", m.name)));
+                continue;
+            }
+            let Some(module_type) = types.get(&m.type_name) else {
+                let near = types.nearest(&m.type_name);
+                let hint = match near.is_empty() {
+                    true => "run `petrel modules` to list the types".to_string(),
+                    false => format!("did you mean {}?", near.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")),
+                };
+                errors.push(self.error(&m.name, Some(&m.type_name), format!("module `{}`: unknown module type `{}`; {hint}", m.name, m.type_name)));
+                continue;
+            };
+            if let Err(e) = registry.declare(&m.name, module_type.name(), module_type.declare(&m.name)) {
+                errors.push(self.error(&m.name, None, format!("module type `{}` declares its properties wrongly: {e}", m.type_name)));
+            }
+        }
+        let declared: Vec<&ModuleConfig> =
+            self.config.modules.iter().filter(|m| registry.module_type(&m.name) == Some(m.type_name.as_str())).collect();
+        let mut pending = Vec::new();
+        for &m in &declared {
+            for (path, value) in &m.values {
+                let result = registry.set_from_ron(&format!("{}/{path}", m.name), value.clone());
+                pending.push((m, path, result));
+            }
+            for (path, capacity) in &m.capacities {
+                pending.push((m, path, registry.set_capacity(&format!("{}/{path}", m.name), *capacity)));
+            }
+        }
+        for &m in &declared {
+            for (path, target) in &m.links {
+                let result = registry.link(&format!("{}/{path}", m.name), target);
+                pending.push((m, path, result));
+            }
+        }
+        for (m, path, result) in pending {
+            if let Err(e) = result {
+                errors.push(self.error(&m.name, Some(path), describe(&m.name, path, e)));
+            }
+        }
+        match errors.is_empty() {
+            true => Ok(registry),
+            false => Err(ConfigErrors(errors)),
+        }
+    }
+
+    /// An error located at the first quoted `needle` after module `module`'s name, in the
+    /// last source that has it (overlays win), else at the module's name.
+    fn error(&self, module: &str, needle: Option<&str>, message: String) -> ConfigError {
+        let quoted_module = format!("\"{module}\"");
+        for (file, text) in self.sources.iter().rev() {
+            let Some(start) = text.find(&quoted_module) else { continue };
+            let at = needle.and_then(|n| text[start..].find(&format!("\"{n}\"")).map(|i| start + i)).unwrap_or(start);
+            let line = text[..at].matches('\n').count() + 1;
+            let column = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+            return ConfigError { file: file.clone(), line, column, message };
+        }
+        ConfigError { file: self.path().into(), line: 0, column: 0, message }
+    }
+}
+
+/// Says which module and key a registry error is about, in config terms.
+fn describe(module: &str, path: &str, error: BlackboardError) -> String {
+    match error {
+        BlackboardError::UnknownProperty { module: m, path: p, known } if m == module && p == path => {
+            format!("module `{module}` has no property `{path}`; it has: {known}")
+        }
+        other => format!("module `{module}`, `{path}`: {other}"),
+    }
+}

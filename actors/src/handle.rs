@@ -1,0 +1,237 @@
+//! Typed handles a module uses to read and write its properties and queues.
+//!
+//! Handles point straight at the blackboard's shared cells: reading or writing costs a short
+//! lock, never a message to the blackboard actor. A handle stays valid across relinks: an
+//! input reads whatever its link points to at the time of the read.
+
+use std::marker::PhantomData;
+use std::ops::Deref;
+use std::sync::Arc;
+
+use tokio::time::Instant;
+
+use crate::cell::Endpoint;
+use crate::queue::{QueueCore, QueueItem, ReaderEndpoint};
+use crate::types::PropertyType;
+use crate::value::AnyValue;
+
+fn downcast<T: PropertyType>(value: AnyValue) -> Arc<T> {
+    // Ports and links are type-checked when declared and linked, so a cell behind a
+    // `T` handle always holds a `T`.
+    value.downcast::<T>().unwrap_or_else(|_| unreachable!("property holds a {}", T::TYPE_NAME))
+}
+
+/// A value read from a property, with its version and write time.
+#[derive(Debug, Clone)]
+pub struct Sample<T> {
+    /// The value, shared with the blackboard.
+    pub value: Arc<T>,
+    /// Number of writes to the cell read since it was declared.
+    pub version: u64,
+    /// When the value was written.
+    pub written: Instant,
+}
+
+impl<T> Deref for Sample<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.value
+    }
+}
+
+/// Read access to an input (`in/...`) or parameter (`params/...`).
+pub struct Input<T> {
+    pub(crate) ep: Arc<Endpoint>,
+    _t: PhantomData<fn() -> T>,
+}
+
+/// A parameter handle: read-only for the module, set by config, links, tools or contexts.
+pub type Param<T> = Input<T>;
+
+impl<T: PropertyType> Input<T> {
+    pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
+        Input { ep, _t: PhantomData }
+    }
+
+    /// The current value (of the link target, if linked). Copies no data, only a pointer.
+    #[inline]
+    pub fn get(&self) -> Arc<T> {
+        downcast(self.ep.value())
+    }
+
+    /// The current value with its version and write time.
+    pub fn read(&self) -> Sample<T> {
+        let slot = self.ep.read();
+        Sample { value: downcast(slot.value), version: slot.version, written: slot.written }
+    }
+
+    /// The property's `module/path`.
+    pub fn key(&self) -> &str {
+        &self.ep.key
+    }
+}
+
+impl<T: PropertyType + Copy> Input<T> {
+    /// The current value, copied out (for small `Copy` values such as `f64`).
+    #[inline]
+    pub fn value(&self) -> T {
+        *self.get()
+    }
+}
+
+/// Read and write access to an output (`out/...`) or state (`state/...`).
+pub struct Output<T> {
+    pub(crate) ep: Arc<Endpoint>,
+    _t: PhantomData<fn() -> T>,
+}
+
+/// A state handle: like an output, but meant for what the module must find again after a restart.
+pub type State<T> = Output<T>;
+
+impl<T: PropertyType> Output<T> {
+    pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
+        Output { ep, _t: PhantomData }
+    }
+
+    /// Publishes a new value and wakes every module watching it.
+    #[inline]
+    pub fn set(&self, value: T) {
+        if tracing::enabled!(tracing::Level::TRACE) {
+            let shown = self.ep.type_info().short(&(Arc::new(value.clone()) as AnyValue));
+            tracing::trace!(property = %self.ep.key, value = %shown, "write");
+        }
+        self.ep.write(Arc::new(value))
+    }
+
+    /// The current value.
+    #[inline]
+    pub fn get(&self) -> Arc<T> {
+        downcast(self.ep.value())
+    }
+
+    /// The current value with its version and write time.
+    pub fn read(&self) -> Sample<T> {
+        let slot = self.ep.read();
+        Sample { value: downcast(slot.value), version: slot.version, written: slot.written }
+    }
+
+    /// The property's `module/path`.
+    pub fn key(&self) -> &str {
+        &self.ep.key
+    }
+}
+
+impl<T: PropertyType + Copy> Output<T> {
+    /// The current value, copied out.
+    #[inline]
+    pub fn value(&self) -> T {
+        *self.get()
+    }
+}
+
+/// One queue item: the value, shared by every reader, with its sequence number and push time.
+#[derive(Debug, Clone)]
+pub struct Item<T> {
+    /// Position in the queue's stream, from 0; gaps mean items this reader lost.
+    pub seq: u64,
+    /// When the item was pushed.
+    pub stamp: Instant,
+    /// The payload, shared (never copied) between readers.
+    pub value: Arc<T>,
+}
+
+impl<T> Deref for Item<T> {
+    type Target = T;
+    fn deref(&self) -> &T {
+        &self.value
+    }
+}
+
+/// The producing side of an `out/...` queue.
+pub struct QueueWriter<T> {
+    pub(crate) core: Arc<QueueCore>,
+    _t: PhantomData<fn(T)>,
+}
+
+impl<T: PropertyType> QueueWriter<T> {
+    pub(crate) fn new(core: Arc<QueueCore>) -> Self {
+        QueueWriter { core, _t: PhantomData }
+    }
+
+    /// Appends an item and wakes every subscribed reader.
+    #[inline]
+    pub fn push(&self, value: T) {
+        self.push_shared(Arc::new(value))
+    }
+
+    /// Appends an already shared item without copying it.
+    pub fn push_shared(&self, value: Arc<T>) {
+        self.core.push(value)
+    }
+
+    /// Items held for readers that have not consumed them yet.
+    pub fn len(&self) -> usize {
+        self.core.len()
+    }
+
+    /// Whether every reader has consumed every item.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The queue's `module/path`.
+    pub fn key(&self) -> &str {
+        &self.core.key
+    }
+}
+
+/// The consuming side of an `in/...` queue input: sees every item of the queue it is linked to,
+/// once, in order, from the moment it was linked.
+pub struct QueueReader<T> {
+    pub(crate) reader: Arc<ReaderEndpoint>,
+    _t: PhantomData<fn() -> T>,
+}
+
+impl<T: PropertyType> QueueReader<T> {
+    pub(crate) fn new(reader: Arc<ReaderEndpoint>) -> Self {
+        QueueReader { reader, _t: PhantomData }
+    }
+
+    /// The next unread item, if any.
+    pub fn try_next(&self) -> Option<Item<T>> {
+        let mut out = Vec::with_capacity(1);
+        self.reader.take(1, &mut out);
+        out.pop().map(convert)
+    }
+
+    /// Every unread item, oldest first.
+    pub fn drain(&self) -> Vec<Item<T>> {
+        self.drain_at_most(usize::MAX)
+    }
+
+    /// Up to `max` unread items, oldest first.
+    pub fn drain_at_most(&self, max: usize) -> Vec<Item<T>> {
+        let mut out = Vec::new();
+        self.reader.take(max, &mut out);
+        out.into_iter().map(convert).collect()
+    }
+
+    /// How many items wait to be read.
+    pub fn pending(&self) -> usize {
+        self.reader.pending()
+    }
+
+    /// How many items this reader lost because it lagged more than the queue's capacity.
+    pub fn dropped(&self) -> i64 {
+        *downcast::<i64>(self.reader.dropped.value())
+    }
+
+    /// The input's `module/path`.
+    pub fn key(&self) -> &str {
+        &self.reader.key
+    }
+}
+
+fn convert<T: PropertyType>(item: QueueItem) -> Item<T> {
+    Item { seq: item.seq, stamp: item.stamp, value: downcast(item.value) }
+}

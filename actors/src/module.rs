@@ -1,0 +1,222 @@
+//! The [`Module`] trait: what a functional module (driver, localizer, planner...) implements.
+//!
+//! Lifecycle of one instance: [`declare`](Module::declare) its properties (type, default, doc)
+//! → the runtime applies config values and links → [`init`](Module::init) (may open
+//! resources, may fail cleanly) → [`step`](Module::step) each time an event of its
+//! [`Schedule`] occurs → [`cleanup`](Module::cleanup) when the agent stops.
+//! A module never names another module: it only reads and writes its own properties, and the
+//! configuration links them.
+
+use std::future::Future;
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use crate::cell::{cause, Endpoint};
+use crate::handle::{Input, Output, QueueReader};
+use crate::ports::Ports;
+use crate::queue::ReaderEndpoint;
+use crate::types::PropertyType;
+
+/// A functional module. Each instance runs as a supervised actor of its agent.
+///
+/// ```
+/// use petrel_actors::{Context, Input, Module, Output, Ports, Schedule};
+///
+/// /// Doubles its input.
+/// struct Double { input: Input<f64>, out: Output<f64> }
+///
+/// impl Module for Double {
+///     const TYPE: &'static str = "example.double";
+///     const DESCRIPTION: &'static str = "Writes twice its input.";
+///     fn declare(ports: &mut Ports) -> Self {
+///         Double {
+///             input: ports.input("in/value", 0.0, "value to double"),
+///             out: ports.output("out/value", 0.0, "twice in/value"),
+///         }
+///     }
+///     fn schedule(&self) -> Schedule {
+///         Schedule::new().on_change(&self.input)
+///     }
+///     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+///         self.out.set(2.0 * self.input.value());
+///         Ok(())
+///     }
+/// }
+/// ```
+pub trait Module: Send + Sized + 'static {
+    /// The type name configs use, e.g. `demo.scale`.
+    const TYPE: &'static str;
+    /// One line saying what the module does, for `petrel modules`.
+    const DESCRIPTION: &'static str;
+
+    /// Declares the module's properties and builds the instance from their handles.
+    ///
+    /// Must not do I/O or depend on anything but `ports`: it also runs to describe the type
+    /// and to check configs. Mistakes (bad paths, duplicates) are reported by the runtime.
+    fn declare(ports: &mut Ports) -> Self;
+
+    /// The events that make the module step; asked once, after [`init`](Module::init).
+    fn schedule(&self) -> Schedule;
+
+    /// Prepares the module after config values and links are in place; an error stops it cleanly.
+    fn init(&mut self, _ctx: &mut Context) -> impl Future<Output = anyhow::Result<()>> + Send {
+        async { Ok(()) }
+    }
+
+    /// Does one unit of work. An error (or a panic) is a module failure.
+    fn step(&mut self, ctx: &mut Context) -> impl Future<Output = anyhow::Result<()>> + Send;
+
+    /// Releases resources when the agent stops the module.
+    fn cleanup(&mut self, _ctx: &mut Context) -> impl Future<Output = anyhow::Result<()>> + Send {
+        async { Ok(()) }
+    }
+}
+
+/// Something a module can wait on: an input, parameter or output (a change of its value),
+/// or a queue reader (new items).
+pub trait Watchable {
+    #[doc(hidden)]
+    fn watch(&self) -> Watch;
+}
+
+/// What a [`Watchable`] hands to a [`Schedule`]; opaque.
+#[derive(Clone)]
+pub struct Watch(pub(crate) WatchTarget);
+
+#[derive(Clone)]
+pub(crate) enum WatchTarget {
+    Value(Arc<Endpoint>),
+    Queue(Arc<ReaderEndpoint>),
+}
+
+impl<T: PropertyType> Watchable for Input<T> {
+    fn watch(&self) -> Watch {
+        Watch(WatchTarget::Value(self.ep.clone()))
+    }
+}
+
+impl<T: PropertyType> Watchable for Output<T> {
+    fn watch(&self) -> Watch {
+        Watch(WatchTarget::Value(self.ep.clone()))
+    }
+}
+
+impl<T: PropertyType> Watchable for QueueReader<T> {
+    fn watch(&self) -> Watch {
+        Watch(WatchTarget::Queue(self.reader.clone()))
+    }
+}
+
+/// When a module steps: any combination of a period, changes of properties, new queue items,
+/// and a timeout. With none of them the module steps only once, right after init.
+#[derive(Clone, Default)]
+pub struct Schedule {
+    pub(crate) period: Option<Duration>,
+    pub(crate) timeout: Option<Duration>,
+    pub(crate) watches: Vec<Watch>,
+}
+
+impl Schedule {
+    /// An empty schedule.
+    pub fn new() -> Self {
+        Schedule::default()
+    }
+
+    /// A schedule that steps every `period`.
+    pub fn every(period: Duration) -> Self {
+        Schedule::new().period(period)
+    }
+
+    /// Steps every `period`, on a fixed grid from the start (no drift); ticks missed while a
+    /// step ran late are skipped, not bunched up.
+    pub fn period(mut self, period: Duration) -> Self {
+        self.period = Some(period.max(Duration::from_micros(1)));
+        self
+    }
+
+    /// Steps when the value seen through `property` changes, or when the queue has new items.
+    pub fn on_change(mut self, property: &impl Watchable) -> Self {
+        self.watches.push(property.watch());
+        self
+    }
+
+    /// Steps when `queue` has new items (same as [`on_change`](Schedule::on_change)).
+    pub fn on_items<T: PropertyType>(self, queue: &QueueReader<T>) -> Self {
+        self.on_change(queue)
+    }
+
+    /// Steps when nothing else made the module step for `timeout`.
+    pub fn timeout(mut self, timeout: Duration) -> Self {
+        self.timeout = Some(timeout);
+        self
+    }
+}
+
+/// Why a step runs: one or more of the schedule's events.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Cause(pub(crate) u8);
+
+impl Cause {
+    /// The period elapsed.
+    pub fn period(self) -> bool {
+        self.0 & cause::PERIOD != 0
+    }
+    /// A watched property changed.
+    pub fn changed(self) -> bool {
+        self.0 & cause::CHANGE != 0
+    }
+    /// A watched queue has new items.
+    pub fn items(self) -> bool {
+        self.0 & cause::ITEMS != 0
+    }
+    /// The timeout elapsed with no other event.
+    pub fn timeout(self) -> bool {
+        self.0 & cause::TIMEOUT != 0
+    }
+    /// The first step after init, whatever the schedule.
+    pub fn first(self) -> bool {
+        self.0 == 0
+    }
+}
+
+/// What the runtime tells a module while it runs.
+pub struct Context {
+    pub(crate) agent: Arc<str>,
+    pub(crate) module: Arc<str>,
+    pub(crate) cause: Cause,
+    pub(crate) steps: u64,
+    pub(crate) now: Instant,
+}
+
+impl Context {
+    pub(crate) fn new(agent: &str, module: &str) -> Self {
+        Context { agent: agent.into(), module: module.into(), cause: Cause(0), steps: 0, now: Instant::now() }
+    }
+
+    /// The agent this module runs in.
+    pub fn agent(&self) -> &str {
+        &self.agent
+    }
+
+    /// This module instance's name.
+    pub fn module(&self) -> &str {
+        &self.module
+    }
+
+    /// Why this step runs.
+    pub fn cause(&self) -> Cause {
+        self.cause
+    }
+
+    /// How many steps ran before this one, since the instance started.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// When this step started (tokio time: follows a paused test clock).
+    pub fn now(&self) -> Instant {
+        self.now
+    }
+}

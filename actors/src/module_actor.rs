@@ -1,0 +1,271 @@
+//! The actor shell around one module instance: binds it to its cells, runs init, then waits
+//! for its schedule's events and steps it, publishing its stats.
+//!
+//! The step loop runs inside one actor message handler, so a step is a plain function call
+//! after a wake-up (no mailbox hop on the hot path). ractor still supervises it: a panic or an
+//! error ends the actor and reaches the supervisor, and a kill drops the running step.
+
+use std::marker::PhantomData;
+use std::sync::Arc;
+use std::time::Duration;
+
+use ractor::{Actor, ActorProcessingErr, ActorRef};
+use tokio::sync::watch;
+use tokio::time::{Instant, MissedTickBehavior};
+use tracing::Instrument;
+
+use crate::blackboard::Blackboard;
+use crate::cell::{cause, Signal};
+use crate::handle::Output;
+use crate::module::{Cause, Context, Module, Schedule, WatchTarget};
+use crate::ports::{PropertyKind, Ports};
+
+/// Stats are published at most this often (and at every status change), to keep steps cheap.
+const STATS_INTERVAL: Duration = Duration::from_millis(100);
+
+/// Module status values, as published in `stats/status`.
+pub mod status {
+    /// Declared, running `init`.
+    pub const INITIALIZING: &str = "initializing";
+    /// Waiting for events and stepping.
+    pub const RUNNING: &str = "running";
+    /// `enabled` is false: not stepping.
+    pub const DISABLED: &str = "disabled";
+    /// Ended by a panic, an error or a hang.
+    pub const FAILED: &str = "failed";
+    /// Stopped on request.
+    pub const STOPPED: &str = "stopped";
+}
+
+/// The runtime-owned properties every module has.
+pub(crate) struct Builtins {
+    pub enabled: Output<bool>,
+    pub status: Output<String>,
+    pub steps: Output<i64>,
+    pub last_step_us: Output<f64>,
+    pub mean_step_us: Output<f64>,
+    pub mean_interval_ms: Output<f64>,
+}
+
+pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
+    use PropertyKind::{Enabled, Stats};
+    // Written by the supervisor, declared here so that every module has it.
+    ports.builtin(Stats, "stats/failures", 0_i64, "failures (panics, errors, hangs) of this module");
+    Builtins {
+        enabled: ports.builtin(Enabled, "enabled", true, "whether the module steps"),
+        status: ports.builtin(Stats, "stats/status", status::INITIALIZING.to_string(), "initializing, running, disabled, failed or stopped"),
+        steps: ports.builtin(Stats, "stats/steps", 0_i64, "steps run since the agent started"),
+        last_step_us: ports.builtin(Stats, "stats/last_step_us", 0.0, "duration of the last step, µs"),
+        mean_step_us: ports.builtin(Stats, "stats/mean_step_us", 0.0, "mean step duration, µs"),
+        mean_interval_ms: ports.builtin(Stats, "stats/mean_interval_ms", 0.0, "mean time between step starts, ms"),
+    }
+}
+
+pub(crate) struct ModuleArgs {
+    pub agent: Arc<str>,
+    pub name: String,
+    pub blackboard: Blackboard,
+    pub stop: watch::Receiver<bool>,
+}
+
+pub(crate) struct ModuleActor<M>(PhantomData<fn() -> M>);
+
+impl<M> ModuleActor<M> {
+    pub fn new() -> Self {
+        ModuleActor(PhantomData)
+    }
+}
+
+pub(crate) struct Running<M> {
+    module: M,
+    ctx: Context,
+    builtins: Builtins,
+    signal: Arc<Signal>,
+    enabled_signal: Arc<Signal>,
+    stop: watch::Receiver<bool>,
+    span: tracing::Span,
+    stats: StepStats,
+}
+
+/// The message that starts the step loop; the loop then owns the handler until it stops.
+pub(crate) struct RunLoop;
+
+impl<M: Module> Actor for ModuleActor<M> {
+    type Msg = RunLoop;
+    type State = Running<M>;
+    type Arguments = ModuleArgs;
+
+    async fn pre_start(&self, _me: ActorRef<RunLoop>, args: ModuleArgs) -> Result<Running<M>, ActorProcessingErr> {
+        let span = tracing::info_span!("module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
+        let binding = args.blackboard.bind(&args.name).await?;
+        let mut ports = Ports::bound(&args.name, binding.handles);
+        let builtins = declare_builtins(&mut ports);
+        let mut module = M::declare(&mut ports);
+        if !ports.errors.is_empty() {
+            return Err(ports.errors.join("; ").into());
+        }
+        builtins.status.set(status::INITIALIZING.into());
+        let mut ctx = Context::new(&args.agent, &args.name);
+        if let Err(e) = module.init(&mut ctx).instrument(span.clone()).await {
+            builtins.status.set(status::FAILED.into());
+            return Err(format!("init failed: {e:#}").into());
+        }
+        span.in_scope(|| tracing::info!("initialized"));
+        Ok(Running {
+            module,
+            ctx,
+            builtins,
+            signal: binding.signal,
+            enabled_signal: binding.enabled_signal,
+            stop: args.stop,
+            span,
+            stats: StepStats::default(),
+        })
+    }
+
+    async fn post_start(&self, me: ActorRef<RunLoop>, _state: &mut Running<M>) -> Result<(), ActorProcessingErr> {
+        me.send_message(RunLoop)?;
+        Ok(())
+    }
+
+    async fn handle(&self, me: ActorRef<RunLoop>, _msg: RunLoop, state: &mut Running<M>) -> Result<(), ActorProcessingErr> {
+        let span = state.span.clone();
+        match state.run().instrument(span.clone()).await {
+            Ok(()) => {
+                let cleanup = state.module.cleanup(&mut state.ctx).instrument(span.clone()).await;
+                state.publish(status::STOPPED);
+                me.stop(None);
+                cleanup.map_err(|e| format!("cleanup failed: {e:#}").into())
+            }
+            Err(e) => {
+                state.publish(status::FAILED);
+                Err(format!("{e:#}").into())
+            }
+        }
+    }
+}
+
+impl<M: Module> Running<M> {
+    /// Waits for events and steps until asked to stop; an error is the module's failure.
+    async fn run(&mut self) -> anyhow::Result<()> {
+        let Schedule { period, timeout, watches } = self.module.schedule();
+        for watch in &watches {
+            match &watch.0 {
+                WatchTarget::Value(ep) => ep.subscribe(&self.signal),
+                WatchTarget::Queue(reader) => reader.subscribe(&self.signal),
+            }
+        }
+        self.builtins.enabled.ep.subscribe(&self.enabled_signal);
+        let mut ticker = period.map(|p| {
+            let mut t = tokio::time::interval_at(Instant::now() + p, p);
+            t.set_missed_tick_behavior(MissedTickBehavior::Skip);
+            t
+        });
+        let mut enabled = self.builtins.enabled.value();
+        self.publish(if enabled { status::RUNNING } else { status::DISABLED });
+        // Every module steps once after init; later steps need an event.
+        let mut pending: Option<u8> = Some(0);
+        let mut last_step = Instant::now();
+        loop {
+            if let (true, Some(causes)) = (enabled, pending.take()) {
+                self.step(causes).await?;
+                last_step = Instant::now();
+                continue;
+            }
+            let causes = tokio::select! {
+                biased;
+                _ = self.stop.wait_for(|stop| *stop) => return Ok(()),
+                _ = self.enabled_signal.wait() => None,
+                c = self.signal.wait() => Some(c),
+                _ = tick(&mut ticker) => Some(cause::PERIOD | self.signal.take()),
+                _ = tokio::time::sleep_until(last_step + timeout.unwrap_or_default()), if timeout.is_some() => Some(cause::TIMEOUT),
+            };
+            let Some(causes) = causes else {
+                let now_enabled = self.builtins.enabled.value();
+                if now_enabled != enabled {
+                    enabled = now_enabled;
+                    self.span.in_scope(|| tracing::info!(enabled, "enabled changed"));
+                    self.publish(if enabled { status::RUNNING } else { status::DISABLED });
+                }
+                continue;
+            };
+            pending = Some(pending.unwrap_or(0) | causes);
+        }
+    }
+
+    async fn step(&mut self, causes: u8) -> anyhow::Result<()> {
+        let started = Instant::now();
+        self.ctx.cause = Cause(causes);
+        self.ctx.now = started;
+        self.module.step(&mut self.ctx).await?;
+        self.ctx.steps += 1;
+        let took = started.elapsed();
+        if self.stats.record(started, took) {
+            self.publish_stats();
+        }
+        Ok(())
+    }
+
+    fn publish(&mut self, status: &str) {
+        if *self.builtins.status.get() != status {
+            self.builtins.status.set(status.to_string());
+            self.span.in_scope(|| tracing::info!(status, "status"));
+        }
+        self.publish_stats();
+    }
+
+    fn publish_stats(&mut self) {
+        let s = &mut self.stats;
+        s.published = Some(Instant::now());
+        self.builtins.steps.set(self.ctx.steps as i64);
+        self.builtins.last_step_us.set(s.last.as_secs_f64() * 1e6);
+        self.builtins.mean_step_us.set(s.mean_step_us());
+        self.builtins.mean_interval_ms.set(s.mean_interval_ms());
+    }
+}
+
+async fn tick(ticker: &mut Option<tokio::time::Interval>) {
+    match ticker {
+        Some(t) => {
+            t.tick().await;
+        }
+        None => std::future::pending().await,
+    }
+}
+
+/// Running step-time and interval figures, kept locally and published now and then.
+#[derive(Default)]
+struct StepStats {
+    count: u64,
+    total: Duration,
+    last: Duration,
+    first_start: Option<Instant>,
+    last_start: Option<Instant>,
+    published: Option<Instant>,
+}
+
+impl StepStats {
+    /// Records a step; true when the stats are due for publishing.
+    fn record(&mut self, started: Instant, took: Duration) -> bool {
+        self.count += 1;
+        self.total += took;
+        self.last = took;
+        self.first_start.get_or_insert(started);
+        self.last_start = Some(started);
+        self.published.is_none_or(|p| started.duration_since(p) >= STATS_INTERVAL)
+    }
+
+    fn mean_step_us(&self) -> f64 {
+        if self.count == 0 {
+            return 0.0;
+        }
+        self.total.as_secs_f64() * 1e6 / self.count as f64
+    }
+
+    fn mean_interval_ms(&self) -> f64 {
+        match (self.first_start, self.last_start) {
+            (Some(a), Some(b)) if self.count > 1 => b.duration_since(a).as_secs_f64() * 1e3 / (self.count - 1) as f64,
+            _ => 0.0,
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! The catalogue of module types an agent can instantiate: name → factory, description and
+//! declared properties. `petrel modules` lists it; configs name its entries.
+
+use std::collections::BTreeMap;
+use std::future::Future;
+use std::pin::Pin;
+
+use ractor::{Actor, ActorCell, ActorRef};
+use tokio::task::JoinHandle;
+
+use crate::module::Module;
+use crate::module_actor::{declare_builtins, ModuleActor, ModuleArgs, RunLoop};
+use crate::ports::{PropertyDecl, Ports};
+
+type SpawnResult = Result<(ActorCell, JoinHandle<()>), String>;
+type SpawnFuture = Pin<Box<dyn Future<Output = SpawnResult> + Send>>;
+
+/// A registered module type.
+#[derive(Clone, Copy)]
+pub struct ModuleType {
+    name: &'static str,
+    description: &'static str,
+    declare: fn(&str) -> Ports,
+    spawn: fn(ModuleArgs, ActorCell) -> SpawnFuture,
+}
+
+impl ModuleType {
+    /// The type for module implementation `M`.
+    pub fn of<M: Module>() -> Self {
+        ModuleType {
+            name: M::TYPE,
+            description: M::DESCRIPTION,
+            declare: |name| {
+                let mut ports = Ports::fresh(name);
+                declare_builtins(&mut ports);
+                drop(M::declare(&mut ports));
+                ports
+            },
+            spawn: |args, supervisor| {
+                Box::pin(async move {
+                    let name = format!("{}/{}", args.agent, args.name);
+                    Actor::spawn_linked(Some(name), ModuleActor::<M>::new(), args, supervisor)
+                        .await
+                        .map(|(actor, join): (ActorRef<RunLoop>, _)| (actor.get_cell(), join))
+                        .map_err(|e| match e {
+                            ractor::SpawnErr::StartupFailed(reason) => reason.to_string(),
+                            other => other.to_string(),
+                        })
+                })
+            },
+        }
+    }
+
+    /// The name configs use.
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// One line saying what it does.
+    pub fn description(&self) -> &'static str {
+        self.description
+    }
+
+    /// Its properties (including the runtime's `enabled` and `stats/...`), in declaration order.
+    pub fn properties(&self) -> Vec<PropertyDecl> {
+        (self.declare)("describe").decls
+    }
+
+    /// A fresh declaration of an instance called `name`.
+    pub(crate) fn declare(&self, name: &str) -> Ports {
+        (self.declare)(name)
+    }
+
+    pub(crate) fn spawn(&self, args: ModuleArgs, supervisor: ActorCell) -> SpawnFuture {
+        (self.spawn)(args, supervisor)
+    }
+}
+
+/// Module types by name.
+#[derive(Clone, Default)]
+pub struct ModuleRegistry {
+    types: BTreeMap<&'static str, ModuleType>,
+}
+
+impl ModuleRegistry {
+    /// An empty registry.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds module type `M` (replacing any type of the same name).
+    pub fn register<M: Module>(&mut self) -> &mut Self {
+        self.types.insert(M::TYPE, ModuleType::of::<M>());
+        self
+    }
+
+    /// The type called `name`.
+    pub fn get(&self, name: &str) -> Option<&ModuleType> {
+        self.types.get(name)
+    }
+
+    /// Every type, by name.
+    pub fn types(&self) -> impl Iterator<Item = &ModuleType> {
+        self.types.values()
+    }
+
+    /// Up to three registered names closest to `name`, for "did you mean" hints.
+    pub fn nearest(&self, name: &str) -> Vec<&'static str> {
+        let mut scored: Vec<(f64, &'static str)> =
+            self.types.keys().map(|k| (strsim::jaro_winkler(name, k), *k)).filter(|(s, _)| *s > 0.7).collect();
+        scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+        scored.into_iter().take(3).map(|(_, k)| k).collect()
+    }
+}

@@ -1,0 +1,265 @@
+//! Property declarations: what a module says it reads, writes and exposes.
+//!
+//! A module's [`Module::declare`](crate::Module::declare) receives [`Ports`] and builds itself
+//! from the handles Ports returns. The same declaration runs in two modes: *fresh* (creating
+//! new cells, used to describe a module type, to check configs, and on first start) and
+//! *bound* (handing out the cells the blackboard already holds, so that a restarted module
+//! finds its parameters, state and queue positions as its previous instance left them).
+
+use std::collections::HashMap;
+use std::fmt;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+
+use crate::cell::Endpoint;
+use crate::handle::{Input, Output, QueueReader, QueueWriter};
+use crate::queue::{QueueCore, ReaderEndpoint, DEFAULT_CAPACITY};
+use crate::types::PropertyType;
+use crate::value::{AnyValue, TypeInfo};
+
+/// What role a property plays in its module; the path prefix says it (`in/`, `params/`, ...).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PropertyKind {
+    /// `in/...`: a value the module reads, usually linked to another module's output.
+    Input,
+    /// `params/...`: a setting the module reads; set by config, tools or contexts.
+    Param,
+    /// `out/...`: a value the module publishes.
+    Output,
+    /// `state/...`: what the module keeps between steps and must find again after a restart.
+    State,
+    /// `enabled`: whether the module steps.
+    Enabled,
+    /// `stats/...`: figures the runtime keeps about the module.
+    Stats,
+    /// `out/...` queue: a stream the module produces.
+    QueueOut,
+    /// `in/...` queue: a stream the module consumes.
+    QueueIn,
+}
+
+impl PropertyKind {
+    /// The path prefix properties of this kind must have.
+    pub fn prefix(self) -> &'static str {
+        match self {
+            PropertyKind::Input | PropertyKind::QueueIn => "in/",
+            PropertyKind::Param => "params/",
+            PropertyKind::Output | PropertyKind::QueueOut => "out/",
+            PropertyKind::State => "state/",
+            PropertyKind::Enabled => "enabled",
+            PropertyKind::Stats => "stats/",
+        }
+    }
+
+    /// Whether a link may point this property elsewhere.
+    pub fn linkable(self) -> bool {
+        matches!(self, PropertyKind::Input | PropertyKind::Param | PropertyKind::QueueIn)
+    }
+
+    /// Whether this is a queue rather than a last-value property.
+    pub fn is_queue(self) -> bool {
+        matches!(self, PropertyKind::QueueIn | PropertyKind::QueueOut)
+    }
+
+    /// Whether configs and snapshots may set its value.
+    pub fn settable(self) -> bool {
+        !matches!(self, PropertyKind::Stats) && !self.is_queue()
+    }
+}
+
+impl fmt::Display for PropertyKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            PropertyKind::Input => "input",
+            PropertyKind::Param => "param",
+            PropertyKind::Output => "output",
+            PropertyKind::State => "state",
+            PropertyKind::Enabled => "enabled",
+            PropertyKind::Stats => "stats",
+            PropertyKind::QueueOut => "queue output",
+            PropertyKind::QueueIn => "queue input",
+        })
+    }
+}
+
+/// One declared property, as `petrel modules describe` shows it.
+#[derive(Clone)]
+pub struct PropertyDecl {
+    /// Path inside the module, e.g. `params/factor`.
+    pub path: String,
+    /// Its role.
+    pub kind: PropertyKind,
+    /// Its value type (the item type for queues).
+    pub type_info: TypeInfo,
+    /// The default value (none for queues).
+    pub default: Option<AnyValue>,
+    /// One line saying what it is.
+    pub doc: String,
+    /// Default capacity, for queue outputs.
+    pub capacity: Option<usize>,
+}
+
+impl PropertyDecl {
+    /// The default value as RON text, or `-` for queues.
+    pub fn default_text(&self) -> String {
+        match &self.default {
+            Some(v) => self.type_info.to_ron(v).unwrap_or_else(|e| format!("<{e}>")),
+            None => match self.capacity {
+                Some(c) => format!("queue, capacity {c}"),
+                None => "queue".to_string(),
+            },
+        }
+    }
+}
+
+/// A cell, queue or reader a declaration produced or was bound to.
+#[derive(Clone)]
+pub(crate) enum Handle {
+    Value(Arc<Endpoint>),
+    QueueOut(Arc<QueueCore>),
+    QueueIn(Arc<ReaderEndpoint>),
+}
+
+static NEXT_READER: AtomicU64 = AtomicU64::new(1);
+
+/// The declaration context handed to [`Module::declare`](crate::Module::declare).
+pub struct Ports {
+    module: String,
+    bound: Option<HashMap<String, Handle>>,
+    pub(crate) decls: Vec<PropertyDecl>,
+    pub(crate) handles: Vec<Handle>,
+    pub(crate) errors: Vec<String>,
+}
+
+impl Ports {
+    /// Declarations that create fresh cells, for a module named `module`.
+    pub(crate) fn fresh(module: &str) -> Self {
+        Ports { module: module.to_string(), bound: None, decls: Vec::new(), handles: Vec::new(), errors: Vec::new() }
+    }
+
+    /// Declarations that hand out the blackboard's existing cells.
+    pub(crate) fn bound(module: &str, handles: HashMap<String, Handle>) -> Self {
+        Ports { bound: Some(handles), ..Ports::fresh(module) }
+    }
+
+    /// The name of the module instance being declared.
+    pub fn module_name(&self) -> &str {
+        &self.module
+    }
+
+    /// Declares an input `in/...` with its default value.
+    pub fn input<T: PropertyType>(&mut self, path: &str, default: T, doc: &str) -> Input<T> {
+        Input::new(self.value(PropertyKind::Input, path, default, doc))
+    }
+
+    /// Declares a parameter `params/...` with its default value.
+    pub fn param<T: PropertyType>(&mut self, path: &str, default: T, doc: &str) -> Input<T> {
+        Input::new(self.value(PropertyKind::Param, path, default, doc))
+    }
+
+    /// Declares an output `out/...` with its initial value.
+    pub fn output<T: PropertyType>(&mut self, path: &str, initial: T, doc: &str) -> Output<T> {
+        Output::new(self.value(PropertyKind::Output, path, initial, doc))
+    }
+
+    /// Declares a state property `state/...` with its initial value.
+    pub fn state<T: PropertyType>(&mut self, path: &str, initial: T, doc: &str) -> Output<T> {
+        Output::new(self.value(PropertyKind::State, path, initial, doc))
+    }
+
+    /// Declares an output queue `out/...` holding at most `capacity` unread items
+    /// (configs may change the capacity).
+    pub fn queue_out<T: PropertyType>(&mut self, path: &str, capacity: usize, doc: &str) -> QueueWriter<T> {
+        let ti = TypeInfo::of::<T>();
+        self.declare(PropertyKind::QueueOut, path, ti, None, doc, Some(capacity));
+        let core = match self.take_bound(path, ti) {
+            Some(Handle::QueueOut(core)) => core,
+            _ => QueueCore::new(&self.key(path), ti, capacity),
+        };
+        self.handles.push(Handle::QueueOut(core.clone()));
+        QueueWriter::new(core)
+    }
+
+    /// Declares an input queue `in/...`: link it to an output queue to receive its items.
+    pub fn queue_in<T: PropertyType>(&mut self, path: &str, doc: &str) -> QueueReader<T> {
+        let ti = TypeInfo::of::<T>();
+        self.declare(PropertyKind::QueueIn, path, ti, None, doc, None);
+        let reader = match self.take_bound(path, ti) {
+            Some(Handle::QueueIn(reader)) => reader,
+            _ => {
+                // An unlinked queue input reads a private queue nobody pushes to.
+                let key = self.key(path);
+                let private = QueueCore::new(&key, ti, DEFAULT_CAPACITY);
+                ReaderEndpoint::new(NEXT_READER.fetch_add(1, Ordering::Relaxed), &key, ti, private)
+            }
+        };
+        self.handles.push(Handle::QueueIn(reader.clone()));
+        QueueReader::new(reader)
+    }
+
+    /// Declares a runtime-owned property (`enabled`, `stats/...`).
+    pub(crate) fn builtin<T: PropertyType>(&mut self, kind: PropertyKind, path: &str, default: T, doc: &str) -> Output<T> {
+        Output::new(self.value(kind, path, default, doc))
+    }
+
+    fn value<T: PropertyType>(&mut self, kind: PropertyKind, path: &str, default: T, doc: &str) -> Arc<Endpoint> {
+        let ti = TypeInfo::of::<T>();
+        let default: AnyValue = Arc::new(default);
+        self.declare(kind, path, ti, Some(default.clone()), doc, None);
+        let ep = match self.take_bound(path, ti) {
+            Some(Handle::Value(ep)) => ep,
+            _ => Endpoint::new(&self.key(path), ti, default),
+        };
+        self.handles.push(Handle::Value(ep.clone()));
+        ep
+    }
+
+    fn key(&self, path: &str) -> String {
+        format!("{}/{}", self.module, path)
+    }
+
+    fn declare(&mut self, kind: PropertyKind, path: &str, type_info: TypeInfo, default: Option<AnyValue>, doc: &str, capacity: Option<usize>) {
+        let well_formed = !path.is_empty()
+            && path.split('/').all(|s| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')));
+        let prefixed = match kind {
+            PropertyKind::Enabled => path == "enabled",
+            _ => path.starts_with(kind.prefix()) && path.len() > kind.prefix().len(),
+        };
+        if !well_formed || !prefixed {
+            self.errors.push(format!(
+                "property `{path}` of module `{}`: a {kind} path must look like `{}name` (letters, digits, `_`, `-`, `.`)",
+                self.module,
+                kind.prefix()
+            ));
+        } else if self.decls.iter().any(|d| d.path == path) {
+            self.errors.push(format!("property `{path}` of module `{}` is declared twice", self.module));
+        }
+        self.decls.push(PropertyDecl { path: path.to_string(), kind, type_info, default, doc: doc.to_string(), capacity });
+    }
+
+    fn take_bound(&mut self, path: &str, type_info: TypeInfo) -> Option<Handle> {
+        let handle = self.bound.as_mut()?.remove(path);
+        let found = match &handle {
+            Some(Handle::Value(e)) => Some(e.type_info()),
+            Some(Handle::QueueOut(q)) => Some(q.type_info),
+            Some(Handle::QueueIn(r)) => Some(r.type_info),
+            None => None,
+        };
+        match found {
+            Some(t) if t == type_info => handle,
+            Some(t) => {
+                self.errors.push(format!(
+                    "property `{path}` of module `{}` is a {} in the blackboard but is declared as {}",
+                    self.module,
+                    t.name(),
+                    type_info.name()
+                ));
+                None
+            }
+            None => {
+                self.errors.push(format!("property `{path}` of module `{}` is not in the blackboard", self.module));
+                None
+            }
+        }
+    }
+}

@@ -1,0 +1,294 @@
+//! Queues: producer/consumer streams with many readers, for sensor data.
+//!
+//! A queue is passive (no task): a push appends an `Arc`-shared, timestamped item and raises
+//! the signal of every subscribed reader; each reader has its own cursor and sees every item
+//! once, in order. An item is freed as soon as every reader has consumed it. A queue holds at
+//! most `capacity` items: a reader that lags further loses the oldest ones, and the loss is
+//! added to its drop counter, which is published as the property `stats/dropped/<input path>`.
+
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+use arc_swap::ArcSwap;
+use parking_lot::Mutex;
+use tokio::time::Instant;
+
+use crate::cell::{cause, Endpoint, Signal};
+use crate::value::{AnyValue, TypeInfo};
+
+/// Default number of items a queue keeps for its slowest reader.
+pub const DEFAULT_CAPACITY: usize = 64;
+
+#[derive(Clone)]
+pub(crate) struct QueueItem {
+    pub seq: u64,
+    pub stamp: Instant,
+    pub value: AnyValue,
+}
+
+struct ReaderEntry {
+    id: u64,
+    cursor: u64,
+    signal: Option<Arc<Signal>>,
+    dropped: Arc<Endpoint>,
+}
+
+struct Inner {
+    capacity: usize,
+    items: VecDeque<QueueItem>,
+    /// Sequence number the next pushed item gets.
+    next_seq: u64,
+    readers: Vec<ReaderEntry>,
+}
+
+impl Inner {
+    fn head_seq(&self) -> u64 {
+        self.next_seq - self.items.len() as u64
+    }
+
+    /// Frees the items every reader has consumed.
+    fn trim(&mut self) {
+        let min = self.readers.iter().map(|r| r.cursor).min().unwrap_or(self.next_seq);
+        while self.items.front().is_some_and(|i| i.seq < min) {
+            self.items.pop_front();
+        }
+    }
+}
+
+/// The shared state of one queue (an `out/...` queue property).
+pub(crate) struct QueueCore {
+    pub key: Arc<str>,
+    pub type_info: TypeInfo,
+    inner: Mutex<Inner>,
+}
+
+impl QueueCore {
+    pub fn new(key: &str, type_info: TypeInfo, capacity: usize) -> Arc<Self> {
+        Arc::new(QueueCore {
+            key: key.into(),
+            type_info,
+            inner: Mutex::new(Inner {
+                capacity: capacity.max(1),
+                items: VecDeque::new(),
+                next_seq: 0,
+                readers: Vec::new(),
+            }),
+        })
+    }
+
+    pub fn set_capacity(&self, capacity: usize) {
+        self.inner.lock().capacity = capacity.max(1);
+    }
+
+    pub fn capacity(&self) -> usize {
+        self.inner.lock().capacity
+    }
+
+    /// Items currently held (not yet consumed by every reader).
+    pub fn len(&self) -> usize {
+        self.inner.lock().items.len()
+    }
+
+    pub fn push(&self, value: AnyValue) {
+        let stamp = Instant::now();
+        let mut lagging = Vec::new();
+        {
+            let mut inner = self.inner.lock();
+            let seq = inner.next_seq;
+            inner.next_seq += 1;
+            if inner.readers.is_empty() {
+                return;
+            }
+            inner.items.push_back(QueueItem { seq, stamp, value });
+            if inner.items.len() > inner.capacity {
+                inner.items.pop_front();
+                let head = inner.head_seq();
+                for r in inner.readers.iter_mut().filter(|r| r.cursor < head) {
+                    lagging.push((r.dropped.clone(), head - r.cursor));
+                    r.cursor = head;
+                }
+            }
+            for r in &inner.readers {
+                if let Some(s) = &r.signal {
+                    s.raise(cause::ITEMS);
+                }
+            }
+        }
+        for (dropped, lost) in lagging {
+            let total = *dropped.value().downcast_ref::<i64>().unwrap_or(&0) + lost as i64;
+            dropped.write(Arc::new(total));
+            tracing::warn!(queue = %self.key, reader = %dropped.key, lost, total, "queue reader lagged: oldest items dropped");
+        }
+    }
+
+    fn attach(&self, id: u64, signal: Option<Arc<Signal>>, dropped: Arc<Endpoint>) {
+        let mut inner = self.inner.lock();
+        let cursor = inner.next_seq;
+        inner.readers.push(ReaderEntry { id, cursor, signal, dropped });
+    }
+
+    fn detach(&self, id: u64) {
+        let mut inner = self.inner.lock();
+        inner.readers.retain(|r| r.id != id);
+        inner.trim();
+    }
+
+    fn set_signal(&self, id: u64, signal: &Arc<Signal>) {
+        let mut inner = self.inner.lock();
+        if let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) {
+            r.signal = Some(signal.clone());
+            if r.cursor < inner.next_seq {
+                signal.raise(cause::ITEMS);
+            }
+        }
+    }
+
+    /// Takes up to `max` unread items for reader `id`, advancing its cursor.
+    fn take(&self, id: u64, max: usize, out: &mut Vec<QueueItem>) {
+        let mut inner = self.inner.lock();
+        let head = inner.head_seq();
+        let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) else { return };
+        let start = (r.cursor - head) as usize;
+        let end = inner.items.len().min(start.saturating_add(max));
+        if start >= end {
+            return;
+        }
+        out.extend(inner.items.range(start..end).cloned());
+        let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) else { return };
+        r.cursor = head + end as u64;
+        inner.trim();
+    }
+
+    fn pending(&self, id: u64) -> usize {
+        let inner = self.inner.lock();
+        inner.readers.iter().find(|r| r.id == id).map_or(0, |r| (inner.next_seq - r.cursor) as usize)
+    }
+}
+
+/// The path of the property that counts what the queue input at `path` lost.
+pub(crate) fn dropped_path(path: &str) -> String {
+    format!("stats/dropped/{path}")
+}
+
+/// The reading side of one `in/...` queue input; it follows relinks to other queues.
+pub(crate) struct ReaderEndpoint {
+    pub id: u64,
+    pub key: Arc<str>,
+    pub type_info: TypeInfo,
+    source: ArcSwap<QueueCore>,
+    signal: Mutex<Option<Arc<Signal>>>,
+    pub dropped: Arc<Endpoint>,
+}
+
+impl ReaderEndpoint {
+    /// A reader of `source`, starting at its current tail.
+    pub fn new(id: u64, key: &str, type_info: TypeInfo, source: Arc<QueueCore>) -> Arc<Self> {
+        let (module, path) = key.split_once('/').unwrap_or(("", key));
+        let dropped = Endpoint::new(
+            &format!("{module}/{}", dropped_path(path)),
+            TypeInfo::of::<i64>(),
+            Arc::new(0_i64),
+        );
+        source.attach(id, None, dropped.clone());
+        Arc::new(ReaderEndpoint {
+            id,
+            key: key.into(),
+            type_info,
+            source: ArcSwap::new(source),
+            signal: Mutex::new(None),
+            dropped,
+        })
+    }
+
+    pub fn source(&self) -> Arc<QueueCore> {
+        self.source.load_full()
+    }
+
+    pub fn subscribe(&self, signal: &Arc<Signal>) {
+        let mut s = self.signal.lock();
+        *s = Some(signal.clone());
+        self.source.load().set_signal(self.id, signal);
+    }
+
+    /// Reads from `target` from now on, starting at its tail.
+    pub fn retarget(&self, target: Arc<QueueCore>) {
+        let signal = self.signal.lock();
+        let old = self.source.swap(target.clone());
+        if Arc::ptr_eq(&old, &target) {
+            return;
+        }
+        old.detach(self.id);
+        target.attach(self.id, signal.clone(), self.dropped.clone());
+    }
+
+    pub fn take(&self, max: usize, out: &mut Vec<QueueItem>) {
+        self.source.load().take(self.id, max, out)
+    }
+
+    pub fn pending(&self) -> usize {
+        self.source.load().pending(self.id)
+    }
+}
+
+impl Drop for ReaderEndpoint {
+    fn drop(&mut self) {
+        self.source.load().detach(self.id);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reader(id: u64, q: &Arc<QueueCore>) -> Arc<ReaderEndpoint> {
+        ReaderEndpoint::new(id, &format!("r{id}/in/q"), TypeInfo::of::<i64>(), q.clone())
+    }
+
+    fn seqs(r: &ReaderEndpoint) -> Vec<i64> {
+        let mut out = Vec::new();
+        r.take(usize::MAX, &mut out);
+        out.iter().map(|i| *i.value.downcast_ref::<i64>().unwrap()).collect()
+    }
+
+    #[test]
+    fn every_reader_sees_every_item_once_in_order_and_items_are_freed() {
+        let q = QueueCore::new("p/out/q", TypeInfo::of::<i64>(), 16);
+        let (a, b) = (reader(1, &q), reader(2, &q));
+        for i in 0..5 {
+            q.push(Arc::new(i as i64));
+        }
+        assert_eq!(seqs(&a), vec![0, 1, 2, 3, 4]);
+        assert_eq!(seqs(&a), Vec::<i64>::new());
+        assert_eq!(q.len(), 5, "b has not read yet");
+        assert_eq!(seqs(&b), vec![0, 1, 2, 3, 4]);
+        assert_eq!(q.len(), 0, "freed once both consumed");
+    }
+
+    #[test]
+    fn lagging_reader_loses_oldest_items_and_counts_them() {
+        let q = QueueCore::new("p/out/q", TypeInfo::of::<i64>(), 3);
+        let r = reader(1, &q);
+        for i in 0..10 {
+            q.push(Arc::new(i as i64));
+        }
+        assert_eq!(seqs(&r), vec![7, 8, 9]);
+        assert_eq!(*r.dropped.value().downcast_ref::<i64>().unwrap(), 7);
+    }
+
+    #[test]
+    fn subscribed_reader_is_signalled_and_retarget_starts_at_tail() {
+        let q1 = QueueCore::new("p/out/a", TypeInfo::of::<i64>(), 8);
+        let q2 = QueueCore::new("p/out/b", TypeInfo::of::<i64>(), 8);
+        let r = reader(1, &q1);
+        let s = Arc::new(Signal::default());
+        r.subscribe(&s);
+        q2.push(Arc::new(100_i64));
+        q1.push(Arc::new(1_i64));
+        assert_eq!(s.take(), cause::ITEMS);
+        r.retarget(q2.clone());
+        assert_eq!(q1.len(), 0, "detaching frees what only this reader held");
+        q2.push(Arc::new(101_i64));
+        assert_eq!(s.take(), cause::ITEMS);
+        assert_eq!(seqs(&r), vec![101]);
+    }
+}

@@ -1,0 +1,57 @@
+//! The run summary printed when an agent stops.
+
+use std::fmt;
+
+/// How one module fared.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ModuleReport {
+    /// Instance name.
+    pub name: String,
+    /// Module type.
+    pub module_type: String,
+    /// Last status (`stopped`, `failed`, ...).
+    pub status: String,
+    /// Steps run.
+    pub steps: u64,
+    /// Failures (panics, errors).
+    pub failures: u64,
+    /// The last failure's message.
+    pub last_error: Option<String>,
+}
+
+/// Every module's report, in start order.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RunSummary {
+    /// The agent.
+    pub agent: String,
+    /// One report per module.
+    pub modules: Vec<ModuleReport>,
+}
+
+impl RunSummary {
+    /// The report of module `name`.
+    pub fn module(&self, name: &str) -> Option<&ModuleReport> {
+        self.modules.iter().find(|m| m.name == name)
+    }
+
+    /// Total failures across modules.
+    pub fn failures(&self) -> u64 {
+        self.modules.iter().map(|m| m.failures).sum()
+    }
+}
+
+impl fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let w = self.modules.iter().map(|m| m.name.len()).max().unwrap_or(6).max(6);
+        let tw = self.modules.iter().map(|m| m.module_type.len()).max().unwrap_or(4).max(4);
+        writeln!(f, "agent {}: {} modules, {} failures", self.agent, self.modules.len(), self.failures())?;
+        writeln!(f, "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}", "module", "type", "status", "steps", "failures")?;
+        for m in &self.modules {
+            writeln!(f, "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}", m.name, m.module_type, m.status, m.steps, m.failures)?;
+            if let Some(e) = &m.last_error {
+                writeln!(f, "  {:<w$}  last error: {e}", "")?;
+            }
+        }
+        Ok(())
+    }
+}

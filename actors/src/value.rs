@@ -1,0 +1,118 @@
+//! Type-erased property values and the per-type operations the blackboard needs
+//! (config parsing, snapshot writing, short display for traces).
+
+use std::any::{Any, TypeId};
+use std::fmt;
+use std::sync::Arc;
+
+use crate::types::PropertyType;
+
+/// A property value of any [`PropertyType`], shared: cloning it copies a pointer.
+pub type AnyValue = Arc<dyn Any + Send + Sync>;
+
+/// The operations on values of one [`PropertyType`], looked up without knowing the type.
+#[derive(Clone, Copy)]
+pub struct TypeInfo {
+    name: &'static str,
+    id: fn() -> TypeId,
+    from_ron: fn(ron::Value) -> Result<AnyValue, String>,
+    to_ron: fn(&AnyValue) -> Result<String, String>,
+    short: fn(&AnyValue) -> String,
+}
+
+/// Longest value text shown in traces and summaries.
+const SHORT_LEN: usize = 60;
+
+impl TypeInfo {
+    /// The operations for `T`.
+    pub fn of<T: PropertyType>() -> Self {
+        TypeInfo {
+            name: T::TYPE_NAME,
+            id: TypeId::of::<T>,
+            from_ron: |v| v.into_rust::<T>().map(|t| Arc::new(t) as AnyValue).map_err(|e| e.to_string()),
+            to_ron: |v| {
+                let t = v.downcast_ref::<T>().ok_or("value has another type")?;
+                ron::to_string(t).map_err(|e| e.to_string())
+            },
+            short: |v| match v.downcast_ref::<T>() {
+                Some(t) => shorten(format!("{t:?}")),
+                None => "<other type>".to_string(),
+            },
+        }
+    }
+
+    /// The stable type name, e.g. `f64` or `Pose2`.
+    pub fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// Whether this describes `T`.
+    pub fn is<T: 'static>(&self) -> bool {
+        (self.id)() == TypeId::of::<T>()
+    }
+
+    /// Converts a config value into a value of this type, or says what was wrong.
+    pub fn from_ron(&self, value: ron::Value) -> Result<AnyValue, String> {
+        (self.from_ron)(value)
+    }
+
+    /// Writes a value of this type as RON text.
+    pub fn to_ron(&self, value: &AnyValue) -> Result<String, String> {
+        (self.to_ron)(value)
+    }
+
+    /// A short human-readable rendering of a value, for traces and summaries.
+    pub fn short(&self, value: &AnyValue) -> String {
+        (self.short)(value)
+    }
+}
+
+impl PartialEq for TypeInfo {
+    fn eq(&self, other: &Self) -> bool {
+        (self.id)() == (other.id)()
+    }
+}
+
+impl fmt::Debug for TypeInfo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+fn shorten(mut s: String) -> String {
+    if s.len() > SHORT_LEN {
+        let mut cut = SHORT_LEN;
+        while !s.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        s.truncate(cut);
+        s.push('…');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::Pose2;
+
+    #[test]
+    fn converts_config_values_and_reports_type_errors() {
+        let f = TypeInfo::of::<f64>();
+        let v = f.from_ron(ron::from_str("2").unwrap()).unwrap();
+        assert_eq!(*v.downcast_ref::<f64>().unwrap(), 2.0);
+        let err = f.from_ron(ron::from_str("\"fast\"").unwrap()).unwrap_err();
+        assert!(err.to_lowercase().contains("expected f64"), "{err}");
+        assert!(TypeInfo::of::<i64>().from_ron(ron::from_str("2.5").unwrap()).is_err());
+    }
+
+    #[test]
+    fn struct_values_round_trip_through_snapshot_text() {
+        let t = TypeInfo::of::<Pose2>();
+        let v: AnyValue = Arc::new(Pose2::new(1.0, 2.0, 0.5));
+        let text = t.to_ron(&v).unwrap();
+        let back = t.from_ron(ron::from_str(&text).unwrap()).unwrap();
+        assert_eq!(back.downcast_ref::<Pose2>().unwrap().y(), 2.0);
+        assert_eq!(t.short(&v).len() <= SHORT_LEN + 3, true);
+    }
+}
