@@ -1,2 +1,74 @@
-//! petrel: facade.
+//! petrel: an async, actor-based, context-aware mission runtime for robots.
+//!
+//! This crate is the facade: it re-exports the runtime core ([`actors`]), the built-in
+//! modules ([`modules`]), and holds the `petrel` command line. To add your own module types,
+//! build your own binary with [`Petrel`]:
+//!
+//! ```no_run
+//! use petrel::actors::{Context, Input, Module, Output, Ports, Schedule};
+//!
+//! struct Double { input: Input<f64>, out: Output<f64> }
+//!
+//! impl Module for Double {
+//!     const TYPE: &'static str = "my.double";
+//!     const DESCRIPTION: &'static str = "Writes twice its input.";
+//!     fn declare(ports: &mut Ports) -> Self {
+//!         Double { input: ports.input("in/value", 0.0, "value"), out: ports.output("out/value", 0.0, "2 * value") }
+//!     }
+//!     fn schedule(&self) -> Schedule { Schedule::new().on_change(&self.input) }
+//!     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+//!         self.out.set(2.0 * self.input.value());
+//!         Ok(())
+//!     }
+//! }
+//!
+//! fn main() -> std::process::ExitCode {
+//!     petrel::Petrel::new().module::<Double>().main()
+//! }
+//! ```
+
+pub mod cli;
+
 pub use petrel_actors as actors;
+pub use petrel_contexts as contexts;
+pub use petrel_modules as modules;
+pub use petrel_plans as plans;
+
+use petrel_actors::{Module, ModuleRegistry};
+
+/// Builds a `petrel` command line with the built-in module types plus your own.
+#[derive(Clone)]
+pub struct Petrel {
+    registry: ModuleRegistry,
+}
+
+impl Default for Petrel {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Petrel {
+    /// The built-in module types.
+    pub fn new() -> Self {
+        Petrel {
+            registry: petrel_modules::builtin(),
+        }
+    }
+
+    /// Adds module type `M`.
+    pub fn module<M: Module>(mut self) -> Self {
+        self.registry.register::<M>();
+        self
+    }
+
+    /// The module types known so far.
+    pub fn registry(&self) -> &ModuleRegistry {
+        &self.registry
+    }
+
+    /// Parses the process arguments and runs the `petrel` command line.
+    pub fn main(self) -> std::process::ExitCode {
+        cli::main(self.registry, std::env::args_os())
+    }
+}

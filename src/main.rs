@@ -1,1 +1,5 @@
-fn main() {}
+//! The `petrel` command line, with the built-in module types.
+
+fn main() -> std::process::ExitCode {
+    petrel::Petrel::new().main()
+}

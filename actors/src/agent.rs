@@ -46,12 +46,23 @@ impl Agent {
             .iter()
             .filter_map(|m| types.get(&m.type_name).map(|t| (m.name.clone(), *t)))
             .collect();
-        let (blackboard, bb_join) = Blackboard::spawn(registry).await.map_err(|e| StartError::Spawn(e.to_string()))?;
-        let args = SupervisorArgs { agent: Arc::from(name.as_str()), blackboard: blackboard.clone(), modules };
-        let (supervisor, sup_join) = Actor::spawn(Some(format!("{name}/supervisor")), AgentSupervisor, args)
+        let (blackboard, bb_join) = Blackboard::spawn(registry)
             .await
             .map_err(|e| StartError::Spawn(e.to_string()))?;
-        Ok(Agent { name, blackboard, supervisor, joins: vec![sup_join, bb_join] })
+        let args = SupervisorArgs {
+            agent: Arc::from(name.as_str()),
+            blackboard: blackboard.clone(),
+            modules,
+        };
+        let (supervisor, sup_join) = Actor::spawn(None, AgentSupervisor, args)
+            .await
+            .map_err(|e| StartError::Spawn(e.to_string()))?;
+        Ok(Agent {
+            name,
+            blackboard,
+            supervisor,
+            joins: vec![sup_join, bb_join],
+        })
     }
 
     /// The agent's name.
@@ -67,7 +78,10 @@ impl Agent {
     /// How every module is doing right now.
     pub async fn summary(&self) -> RunSummary {
         let modules = ractor::call!(self.supervisor, SupervisorMsg::Report).unwrap_or_default();
-        RunSummary { agent: self.name.clone(), modules }
+        RunSummary {
+            agent: self.name.clone(),
+            modules,
+        }
     }
 
     /// The whole blackboard as RON config text (see [`crate::snapshot`](crate#snapshots)).
@@ -76,15 +90,31 @@ impl Agent {
     }
 
     /// Stops every module in reverse start order (running their cleanup, killing any that takes
-    /// longer than `timeout`), then the agent itself, and reports how each module fared.
-    pub async fn stop(self, timeout: Duration) -> RunSummary {
-        let modules = ractor::call!(self.supervisor, SupervisorMsg::StopAll, timeout).unwrap_or_default();
+    /// longer than `timeout`), and reports how each fared. The blackboard stays readable
+    /// (e.g. for a snapshot) until [`shutdown`](Agent::shutdown).
+    pub async fn stop_modules(&self, timeout: Duration) -> RunSummary {
+        let modules =
+            ractor::call!(self.supervisor, SupervisorMsg::StopAll, timeout).unwrap_or_default();
+        RunSummary {
+            agent: self.name.clone(),
+            modules,
+        }
+    }
+
+    /// Stops the supervisor and the blackboard (after [`stop_modules`](Agent::stop_modules)).
+    pub async fn shutdown(self) {
         self.supervisor.stop(None);
         self.blackboard.stop();
         for join in self.joins {
             let _ = join.await;
         }
         tracing::info!(agent = %self.name, "agent stopped");
-        RunSummary { agent: self.name, modules }
+    }
+
+    /// Stops the modules, then the agent; reports how each module fared.
+    pub async fn stop(self, timeout: Duration) -> RunSummary {
+        let summary = self.stop_modules(timeout).await;
+        self.shutdown().await;
+        summary
     }
 }

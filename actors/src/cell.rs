@@ -67,7 +67,11 @@ impl Cell {
     pub fn new(type_info: TypeInfo, value: AnyValue) -> Arc<Self> {
         Arc::new(Cell {
             type_info,
-            slot: RwLock::new(Slot { value, version: 0, written: Instant::now() }),
+            slot: RwLock::new(Slot {
+                value,
+                version: 0,
+                written: Instant::now(),
+            }),
             watchers: ArcSwap::from_pointee(Vec::new()),
         })
     }
@@ -212,7 +216,11 @@ mod tests {
         let s = Arc::new(Signal::default());
         input.subscribe(&s);
         input.retarget(source.own.clone());
-        assert_eq!(s.take(), cause::CHANGE, "reader sees a new value after relink");
+        assert_eq!(
+            s.take(),
+            cause::CHANGE,
+            "reader sees a new value after relink"
+        );
         assert_eq!(read_f64(&input), 5.0);
         input.own.write(Arc::new(9.0));
         assert_eq!(s.take(), 0, "the input's own cell is no longer watched");

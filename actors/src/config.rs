@@ -72,7 +72,14 @@ impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.line {
             0 => write!(f, "{}: error: {}", self.file.display(), self.message),
-            _ => write!(f, "{}:{}:{}: error: {}", self.file.display(), self.line, self.column, self.message),
+            _ => write!(
+                f,
+                "{}:{}:{}: error: {}",
+                self.file.display(),
+                self.line,
+                self.column,
+                self.message
+            ),
         }
     }
 }
@@ -109,7 +116,12 @@ impl ConfigFile {
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigErrors> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|e| {
-            ConfigErrors(vec![ConfigError { file: path.into(), line: 0, column: 0, message: format!("cannot read config: {e}") }])
+            ConfigErrors(vec![ConfigError {
+                file: path.into(),
+                line: 0,
+                column: 0,
+                message: format!("cannot read config: {e}"),
+            }])
         })?;
         Self::parse(path, &text)
     }
@@ -118,12 +130,18 @@ impl ConfigFile {
     pub fn parse(path: impl AsRef<Path>, text: &str) -> Result<Self, ConfigErrors> {
         let path = path.as_ref();
         match ron::Options::default().from_str::<AgentConfig>(text) {
-            Ok(config) => Ok(ConfigFile { config, sources: vec![(path.into(), text.to_string())] }),
+            Ok(config) => Ok(ConfigFile {
+                config,
+                sources: vec![(path.into(), text.to_string())],
+            }),
             Err(e) => Err(ConfigErrors(vec![ConfigError {
                 file: path.into(),
                 line: e.span.start.line,
                 column: e.span.start.col,
-                message: format!("{} (RON syntax; see the config example in the README)", e.code),
+                message: format!(
+                    "{} (RON syntax; see the config example in the README)",
+                    e.code
+                ),
             }])),
         }
     }
@@ -158,24 +176,59 @@ impl ConfigFile {
         let mut names = HashSet::new();
         for m in &self.config.modules {
             if !names.insert(m.name.as_str()) {
-                errors.push(self.error(&m.name, None, format!("duplicate module name `{}`: each module needs its own name", m.name)));
+                let e = self.error_at(
+                    &m.name,
+                    1,
+                    None,
+                    format!(
+                        "duplicate module name `{}`: each module needs its own name",
+                        m.name
+                    ),
+                );
+                errors.push(e);
                 continue;
             }
             let Some(module_type) = types.get(&m.type_name) else {
                 let near = types.nearest(&m.type_name);
                 let hint = match near.is_empty() {
                     true => "run `petrel modules` to list the types".to_string(),
-                    false => format!("did you mean {}?", near.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")),
+                    false => format!(
+                        "did you mean {}?",
+                        near.iter()
+                            .map(|n| format!("`{n}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
                 };
-                errors.push(self.error(&m.name, Some(&m.type_name), format!("module `{}`: unknown module type `{}`; {hint}", m.name, m.type_name)));
+                errors.push(self.error(
+                    &m.name,
+                    Some(&m.type_name),
+                    format!(
+                        "module `{}`: unknown module type `{}`; {hint}",
+                        m.name, m.type_name
+                    ),
+                ));
                 continue;
             };
-            if let Err(e) = registry.declare(&m.name, module_type.name(), module_type.declare(&m.name)) {
-                errors.push(self.error(&m.name, None, format!("module type `{}` declares its properties wrongly: {e}", m.type_name)));
+            if let Err(e) =
+                registry.declare(&m.name, module_type.name(), module_type.declare(&m.name))
+            {
+                errors.push(self.error(
+                    &m.name,
+                    None,
+                    format!(
+                        "module type `{}` declares its properties wrongly: {e}",
+                        m.type_name
+                    ),
+                ));
             }
         }
-        let declared: Vec<&ModuleConfig> =
-            self.config.modules.iter().filter(|m| registry.module_type(&m.name) == Some(m.type_name.as_str())).collect();
+        let declared: Vec<&ModuleConfig> = self
+            .config
+            .modules
+            .iter()
+            .filter(|m| registry.module_type(&m.name) == Some(m.type_name.as_str()))
+            .collect();
         let mut pending = Vec::new();
         for &m in &declared {
             for (path, value) in &m.values {
@@ -183,7 +236,11 @@ impl ConfigFile {
                 pending.push((m, path, result));
             }
             for (path, capacity) in &m.capacities {
-                pending.push((m, path, registry.set_capacity(&format!("{}/{path}", m.name), *capacity)));
+                pending.push((
+                    m,
+                    path,
+                    registry.set_capacity(&format!("{}/{path}", m.name), *capacity),
+                ));
             }
         }
         for &m in &declared {
@@ -206,24 +263,56 @@ impl ConfigFile {
     /// An error located at the first quoted `needle` after module `module`'s name, in the
     /// last source that has it (overlays win), else at the module's name.
     fn error(&self, module: &str, needle: Option<&str>, message: String) -> ConfigError {
+        self.error_at(module, 0, needle, message)
+    }
+
+    /// Like [`error`](Self::error), after the `nth` (from 0) occurrence of the module's name.
+    fn error_at(
+        &self,
+        module: &str,
+        nth: usize,
+        needle: Option<&str>,
+        message: String,
+    ) -> ConfigError {
         let quoted_module = format!("\"{module}\"");
         for (file, text) in self.sources.iter().rev() {
-            let Some(start) = text.find(&quoted_module) else { continue };
-            let at = needle.and_then(|n| text[start..].find(&format!("\"{n}\"")).map(|i| start + i)).unwrap_or(start);
+            let Some((start, _)) = text.match_indices(&quoted_module).nth(nth) else {
+                continue;
+            };
+            let at = needle
+                .and_then(|n| text[start..].find(&format!("\"{n}\"")).map(|i| start + i))
+                .unwrap_or(start);
             let line = text[..at].matches('\n').count() + 1;
             let column = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
-            return ConfigError { file: file.clone(), line, column, message };
+            return ConfigError {
+                file: file.clone(),
+                line,
+                column,
+                message,
+            };
         }
-        ConfigError { file: self.path().into(), line: 0, column: 0, message }
+        ConfigError {
+            file: self.path().into(),
+            line: 0,
+            column: 0,
+            message,
+        }
     }
 }
 
 /// Says which module and key a registry error is about, in config terms.
 fn describe(module: &str, path: &str, error: BlackboardError) -> String {
     match error {
-        BlackboardError::UnknownProperty { module: m, path: p, known } if m == module && p == path => {
+        BlackboardError::UnknownProperty {
+            module: m,
+            path: p,
+            known,
+        } if m == module && p == path => {
             format!("module `{module}` has no property `{path}`; it has: {known}")
         }
+        BlackboardError::BadValue {
+            expected, reason, ..
+        } => format!("module `{module}`, `{path}` ({expected}): {reason}"),
         other => format!("module `{module}`, `{path}`: {other}"),
     }
 }

@@ -18,7 +18,9 @@ use crate::value::AnyValue;
 fn downcast<T: PropertyType>(value: AnyValue) -> Arc<T> {
     // Ports and links are type-checked when declared and linked, so a cell behind a
     // `T` handle always holds a `T`.
-    value.downcast::<T>().unwrap_or_else(|_| unreachable!("property holds a {}", T::TYPE_NAME))
+    value
+        .downcast::<T>()
+        .unwrap_or_else(|_| unreachable!("property holds a {}", T::TYPE_NAME))
 }
 
 /// A value read from a property, with its version and write time.
@@ -50,7 +52,10 @@ pub type Param<T> = Input<T>;
 
 impl<T: PropertyType> Input<T> {
     pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
-        Input { ep, _t: PhantomData }
+        Input {
+            ep,
+            _t: PhantomData,
+        }
     }
 
     /// The current value (of the link target, if linked). Copies no data, only a pointer.
@@ -62,7 +67,11 @@ impl<T: PropertyType> Input<T> {
     /// The current value with its version and write time.
     pub fn read(&self) -> Sample<T> {
         let slot = self.ep.read();
-        Sample { value: downcast(slot.value), version: slot.version, written: slot.written }
+        Sample {
+            value: downcast(slot.value),
+            version: slot.version,
+            written: slot.written,
+        }
     }
 
     /// The property's `module/path`.
@@ -90,14 +99,20 @@ pub type State<T> = Output<T>;
 
 impl<T: PropertyType> Output<T> {
     pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
-        Output { ep, _t: PhantomData }
+        Output {
+            ep,
+            _t: PhantomData,
+        }
     }
 
     /// Publishes a new value and wakes every module watching it.
     #[inline]
     pub fn set(&self, value: T) {
         if tracing::enabled!(tracing::Level::TRACE) {
-            let shown = self.ep.type_info().short(&(Arc::new(value.clone()) as AnyValue));
+            let shown = self
+                .ep
+                .type_info()
+                .short(&(Arc::new(value.clone()) as AnyValue));
             tracing::trace!(property = %self.ep.key, value = %shown, "write");
         }
         self.ep.write(Arc::new(value))
@@ -112,7 +127,11 @@ impl<T: PropertyType> Output<T> {
     /// The current value with its version and write time.
     pub fn read(&self) -> Sample<T> {
         let slot = self.ep.read();
-        Sample { value: downcast(slot.value), version: slot.version, written: slot.written }
+        Sample {
+            value: downcast(slot.value),
+            version: slot.version,
+            written: slot.written,
+        }
     }
 
     /// The property's `module/path`.
@@ -155,7 +174,10 @@ pub struct QueueWriter<T> {
 
 impl<T: PropertyType> QueueWriter<T> {
     pub(crate) fn new(core: Arc<QueueCore>) -> Self {
-        QueueWriter { core, _t: PhantomData }
+        QueueWriter {
+            core,
+            _t: PhantomData,
+        }
     }
 
     /// Appends an item and wakes every subscribed reader.
@@ -194,7 +216,10 @@ pub struct QueueReader<T> {
 
 impl<T: PropertyType> QueueReader<T> {
     pub(crate) fn new(reader: Arc<ReaderEndpoint>) -> Self {
-        QueueReader { reader, _t: PhantomData }
+        QueueReader {
+            reader,
+            _t: PhantomData,
+        }
     }
 
     /// The next unread item, if any.
@@ -233,5 +258,9 @@ impl<T: PropertyType> QueueReader<T> {
 }
 
 fn convert<T: PropertyType>(item: QueueItem) -> Item<T> {
-    Item { seq: item.seq, stamp: item.stamp, value: downcast(item.value) }
+    Item {
+        seq: item.seq,
+        stamp: item.stamp,
+        value: downcast(item.value),
+    }
 }

@@ -32,7 +32,7 @@ pub use handle::{Input, Item, Output, Param, QueueReader, QueueWriter, Sample, S
 pub use module::{Cause, Context, Module, Schedule, Watchable};
 pub use module_actor::status;
 pub use module_types::{ModuleRegistry, ModuleType};
-pub use ports::{PropertyDecl, PropertyKind, Ports};
+pub use ports::{Ports, PropertyDecl, PropertyKind};
 pub use queue::DEFAULT_CAPACITY;
 pub use summary::{ModuleReport, RunSummary};
 pub use types::{Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};

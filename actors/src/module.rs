@@ -192,7 +192,13 @@ pub struct Context {
 
 impl Context {
     pub(crate) fn new(agent: &str, module: &str) -> Self {
-        Context { agent: agent.into(), module: module.into(), cause: Cause(0), steps: 0, now: Instant::now() }
+        Context {
+            agent: agent.into(),
+            module: module.into(),
+            cause: Cause(0),
+            steps: 0,
+            now: Instant::now(),
+        }
     }
 
     /// The agent this module runs in.

@@ -18,7 +18,7 @@ use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
 use crate::handle::Output;
 use crate::module::{Cause, Context, Module, Schedule, WatchTarget};
-use crate::ports::{PropertyKind, Ports};
+use crate::ports::{Ports, PropertyKind};
 
 /// Stats are published at most this often (and at every status change), to keep steps cheap.
 const STATS_INTERVAL: Duration = Duration::from_millis(100);
@@ -50,14 +50,39 @@ pub(crate) struct Builtins {
 pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
     use PropertyKind::{Enabled, Stats};
     // Written by the supervisor, declared here so that every module has it.
-    ports.builtin(Stats, "stats/failures", 0_i64, "failures (panics, errors, hangs) of this module");
+    ports.builtin(
+        Stats,
+        "stats/failures",
+        0_i64,
+        "failures (panics, errors, hangs) of this module",
+    );
     Builtins {
         enabled: ports.builtin(Enabled, "enabled", true, "whether the module steps"),
-        status: ports.builtin(Stats, "stats/status", status::INITIALIZING.to_string(), "initializing, running, disabled, failed or stopped"),
-        steps: ports.builtin(Stats, "stats/steps", 0_i64, "steps run since the agent started"),
-        last_step_us: ports.builtin(Stats, "stats/last_step_us", 0.0, "duration of the last step, µs"),
+        status: ports.builtin(
+            Stats,
+            "stats/status",
+            status::INITIALIZING.to_string(),
+            "initializing, running, disabled, failed or stopped",
+        ),
+        steps: ports.builtin(
+            Stats,
+            "stats/steps",
+            0_i64,
+            "steps run since the agent started",
+        ),
+        last_step_us: ports.builtin(
+            Stats,
+            "stats/last_step_us",
+            0.0,
+            "duration of the last step, µs",
+        ),
         mean_step_us: ports.builtin(Stats, "stats/mean_step_us", 0.0, "mean step duration, µs"),
-        mean_interval_ms: ports.builtin(Stats, "stats/mean_interval_ms", 0.0, "mean time between step starts, ms"),
+        mean_interval_ms: ports.builtin(
+            Stats,
+            "stats/mean_interval_ms",
+            0.0,
+            "mean time between step starts, ms",
+        ),
     }
 }
 
@@ -95,8 +120,12 @@ impl<M: Module> Actor for ModuleActor<M> {
     type State = Running<M>;
     type Arguments = ModuleArgs;
 
-    async fn pre_start(&self, _me: ActorRef<RunLoop>, args: ModuleArgs) -> Result<Running<M>, ActorProcessingErr> {
-        let span = tracing::info_span!("module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
+    async fn pre_start(
+        &self,
+        _me: ActorRef<RunLoop>,
+        args: ModuleArgs,
+    ) -> Result<Running<M>, ActorProcessingErr> {
+        let span = tracing::info_span!(parent: None, "module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
         let binding = args.blackboard.bind(&args.name).await?;
         let mut ports = Ports::bound(&args.name, binding.handles);
         let builtins = declare_builtins(&mut ports);
@@ -123,16 +152,29 @@ impl<M: Module> Actor for ModuleActor<M> {
         })
     }
 
-    async fn post_start(&self, me: ActorRef<RunLoop>, _state: &mut Running<M>) -> Result<(), ActorProcessingErr> {
+    async fn post_start(
+        &self,
+        me: ActorRef<RunLoop>,
+        _state: &mut Running<M>,
+    ) -> Result<(), ActorProcessingErr> {
         me.send_message(RunLoop)?;
         Ok(())
     }
 
-    async fn handle(&self, me: ActorRef<RunLoop>, _msg: RunLoop, state: &mut Running<M>) -> Result<(), ActorProcessingErr> {
+    async fn handle(
+        &self,
+        me: ActorRef<RunLoop>,
+        _msg: RunLoop,
+        state: &mut Running<M>,
+    ) -> Result<(), ActorProcessingErr> {
         let span = state.span.clone();
         match state.run().instrument(span.clone()).await {
             Ok(()) => {
-                let cleanup = state.module.cleanup(&mut state.ctx).instrument(span.clone()).await;
+                let cleanup = state
+                    .module
+                    .cleanup(&mut state.ctx)
+                    .instrument(span.clone())
+                    .await;
                 state.publish(status::STOPPED);
                 me.stop(None);
                 cleanup.map_err(|e| format!("cleanup failed: {e:#}").into())
@@ -148,7 +190,11 @@ impl<M: Module> Actor for ModuleActor<M> {
 impl<M: Module> Running<M> {
     /// Waits for events and steps until asked to stop; an error is the module's failure.
     async fn run(&mut self) -> anyhow::Result<()> {
-        let Schedule { period, timeout, watches } = self.module.schedule();
+        let Schedule {
+            period,
+            timeout,
+            watches,
+        } = self.module.schedule();
         for watch in &watches {
             match &watch.0 {
                 WatchTarget::Value(ep) => ep.subscribe(&self.signal),
@@ -162,15 +208,21 @@ impl<M: Module> Running<M> {
             t
         });
         let mut enabled = self.builtins.enabled.value();
-        self.publish(if enabled { status::RUNNING } else { status::DISABLED });
+        self.publish(if enabled {
+            status::RUNNING
+        } else {
+            status::DISABLED
+        });
         // Every module steps once after init; later steps need an event.
         let mut pending: Option<u8> = Some(0);
         let mut last_step = Instant::now();
         loop {
-            if let (true, Some(causes)) = (enabled, pending.take()) {
-                self.step(causes).await?;
-                last_step = Instant::now();
-                continue;
+            if enabled {
+                if let Some(causes) = pending.take() {
+                    self.step(causes).await?;
+                    last_step = Instant::now();
+                    continue;
+                }
             }
             let causes = tokio::select! {
                 biased;
@@ -184,8 +236,13 @@ impl<M: Module> Running<M> {
                 let now_enabled = self.builtins.enabled.value();
                 if now_enabled != enabled {
                     enabled = now_enabled;
-                    self.span.in_scope(|| tracing::info!(enabled, "enabled changed"));
-                    self.publish(if enabled { status::RUNNING } else { status::DISABLED });
+                    self.span
+                        .in_scope(|| tracing::info!(enabled, "enabled changed"));
+                    self.publish(if enabled {
+                        status::RUNNING
+                    } else {
+                        status::DISABLED
+                    });
                 }
                 continue;
             };
@@ -209,7 +266,10 @@ impl<M: Module> Running<M> {
     fn publish(&mut self, status: &str) {
         if *self.builtins.status.get() != status {
             self.builtins.status.set(status.to_string());
-            self.span.in_scope(|| tracing::info!(status, "status"));
+            self.span.in_scope(|| match status {
+                status::STOPPED | status::DISABLED => tracing::info!(status, "status"),
+                _ => tracing::debug!(status, "status"),
+            });
         }
         self.publish_stats();
     }
@@ -252,7 +312,8 @@ impl StepStats {
         self.last = took;
         self.first_start.get_or_insert(started);
         self.last_start = Some(started);
-        self.published.is_none_or(|p| started.duration_since(p) >= STATS_INTERVAL)
+        self.published
+            .is_none_or(|p| started.duration_since(p) >= STATS_INTERVAL)
     }
 
     fn mean_step_us(&self) -> f64 {
@@ -264,7 +325,9 @@ impl StepStats {
 
     fn mean_interval_ms(&self) -> f64 {
         match (self.first_start, self.last_start) {
-            (Some(a), Some(b)) if self.count > 1 => b.duration_since(a).as_secs_f64() * 1e3 / (self.count - 1) as f64,
+            (Some(a), Some(b)) if self.count > 1 => {
+                b.duration_since(a).as_secs_f64() * 1e3 / (self.count - 1) as f64
+            }
             _ => 0.0,
         }
     }

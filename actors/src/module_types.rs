@@ -10,7 +10,7 @@ use tokio::task::JoinHandle;
 
 use crate::module::Module;
 use crate::module_actor::{declare_builtins, ModuleActor, ModuleArgs, RunLoop};
-use crate::ports::{PropertyDecl, Ports};
+use crate::ports::{Ports, PropertyDecl};
 
 type SpawnResult = Result<(ActorCell, JoinHandle<()>), String>;
 type SpawnFuture = Pin<Box<dyn Future<Output = SpawnResult> + Send>>;
@@ -38,8 +38,9 @@ impl ModuleType {
             },
             spawn: |args, supervisor| {
                 Box::pin(async move {
-                    let name = format!("{}/{}", args.agent, args.name);
-                    Actor::spawn_linked(Some(name), ModuleActor::<M>::new(), args, supervisor)
+                    // Unnamed: ractor's actor names are process-global, and two agents (or
+                    // tests) may run modules of the same name side by side.
+                    Actor::spawn_linked(None, ModuleActor::<M>::new(), args, supervisor)
                         .await
                         .map(|(actor, join): (ActorRef<RunLoop>, _)| (actor.get_cell(), join))
                         .map_err(|e| match e {
@@ -104,11 +105,17 @@ impl ModuleRegistry {
         self.types.values()
     }
 
-    /// Up to three registered names closest to `name`, for "did you mean" hints.
+    /// Up to three registered names within a few edits of `name`, closest first, for
+    /// "did you mean" hints.
     pub fn nearest(&self, name: &str) -> Vec<&'static str> {
-        let mut scored: Vec<(f64, &'static str)> =
-            self.types.keys().map(|k| (strsim::jaro_winkler(name, k), *k)).filter(|(s, _)| *s > 0.7).collect();
-        scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let limit = (name.len() / 4).max(2);
+        let mut scored: Vec<(usize, &'static str)> = self
+            .types
+            .keys()
+            .map(|k| (strsim::levenshtein(name, k), *k))
+            .filter(|(d, _)| *d <= limit)
+            .collect();
+        scored.sort();
         scored.into_iter().take(3).map(|(_, k)| k).collect()
     }
 }

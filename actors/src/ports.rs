@@ -53,7 +53,10 @@ impl PropertyKind {
 
     /// Whether a link may point this property elsewhere.
     pub fn linkable(self) -> bool {
-        matches!(self, PropertyKind::Input | PropertyKind::Param | PropertyKind::QueueIn)
+        matches!(
+            self,
+            PropertyKind::Input | PropertyKind::Param | PropertyKind::QueueIn
+        )
     }
 
     /// Whether this is a queue rather than a last-value property.
@@ -103,7 +106,10 @@ impl PropertyDecl {
     /// The default value as RON text, or `-` for queues.
     pub fn default_text(&self) -> String {
         match &self.default {
-            Some(v) => self.type_info.to_ron(v).unwrap_or_else(|e| format!("<{e}>")),
+            Some(v) => self
+                .type_info
+                .to_ron(v)
+                .unwrap_or_else(|e| format!("<{e}>")),
             None => match self.capacity {
                 Some(c) => format!("queue, capacity {c}"),
                 None => "queue".to_string(),
@@ -134,12 +140,21 @@ pub struct Ports {
 impl Ports {
     /// Declarations that create fresh cells, for a module named `module`.
     pub(crate) fn fresh(module: &str) -> Self {
-        Ports { module: module.to_string(), bound: None, decls: Vec::new(), handles: Vec::new(), errors: Vec::new() }
+        Ports {
+            module: module.to_string(),
+            bound: None,
+            decls: Vec::new(),
+            handles: Vec::new(),
+            errors: Vec::new(),
+        }
     }
 
     /// Declarations that hand out the blackboard's existing cells.
     pub(crate) fn bound(module: &str, handles: HashMap<String, Handle>) -> Self {
-        Ports { bound: Some(handles), ..Ports::fresh(module) }
+        Ports {
+            bound: Some(handles),
+            ..Ports::fresh(module)
+        }
     }
 
     /// The name of the module instance being declared.
@@ -169,7 +184,12 @@ impl Ports {
 
     /// Declares an output queue `out/...` holding at most `capacity` unread items
     /// (configs may change the capacity).
-    pub fn queue_out<T: PropertyType>(&mut self, path: &str, capacity: usize, doc: &str) -> QueueWriter<T> {
+    pub fn queue_out<T: PropertyType>(
+        &mut self,
+        path: &str,
+        capacity: usize,
+        doc: &str,
+    ) -> QueueWriter<T> {
         let ti = TypeInfo::of::<T>();
         self.declare(PropertyKind::QueueOut, path, ti, None, doc, Some(capacity));
         let core = match self.take_bound(path, ti) {
@@ -190,7 +210,12 @@ impl Ports {
                 // An unlinked queue input reads a private queue nobody pushes to.
                 let key = self.key(path);
                 let private = QueueCore::new(&key, ti, DEFAULT_CAPACITY);
-                ReaderEndpoint::new(NEXT_READER.fetch_add(1, Ordering::Relaxed), &key, ti, private)
+                ReaderEndpoint::new(
+                    NEXT_READER.fetch_add(1, Ordering::Relaxed),
+                    &key,
+                    ti,
+                    private,
+                )
             }
         };
         self.handles.push(Handle::QueueIn(reader.clone()));
@@ -198,11 +223,23 @@ impl Ports {
     }
 
     /// Declares a runtime-owned property (`enabled`, `stats/...`).
-    pub(crate) fn builtin<T: PropertyType>(&mut self, kind: PropertyKind, path: &str, default: T, doc: &str) -> Output<T> {
+    pub(crate) fn builtin<T: PropertyType>(
+        &mut self,
+        kind: PropertyKind,
+        path: &str,
+        default: T,
+        doc: &str,
+    ) -> Output<T> {
         Output::new(self.value(kind, path, default, doc))
     }
 
-    fn value<T: PropertyType>(&mut self, kind: PropertyKind, path: &str, default: T, doc: &str) -> Arc<Endpoint> {
+    fn value<T: PropertyType>(
+        &mut self,
+        kind: PropertyKind,
+        path: &str,
+        default: T,
+        doc: &str,
+    ) -> Arc<Endpoint> {
         let ti = TypeInfo::of::<T>();
         let default: AnyValue = Arc::new(default);
         self.declare(kind, path, ti, Some(default.clone()), doc, None);
@@ -218,9 +255,21 @@ impl Ports {
         format!("{}/{}", self.module, path)
     }
 
-    fn declare(&mut self, kind: PropertyKind, path: &str, type_info: TypeInfo, default: Option<AnyValue>, doc: &str, capacity: Option<usize>) {
+    fn declare(
+        &mut self,
+        kind: PropertyKind,
+        path: &str,
+        type_info: TypeInfo,
+        default: Option<AnyValue>,
+        doc: &str,
+        capacity: Option<usize>,
+    ) {
         let well_formed = !path.is_empty()
-            && path.split('/').all(|s| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')));
+            && path.split('/').all(|s| {
+                !s.is_empty()
+                    && s.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+            });
         let prefixed = match kind {
             PropertyKind::Enabled => path == "enabled",
             _ => path.starts_with(kind.prefix()) && path.len() > kind.prefix().len(),
@@ -232,9 +281,19 @@ impl Ports {
                 kind.prefix()
             ));
         } else if self.decls.iter().any(|d| d.path == path) {
-            self.errors.push(format!("property `{path}` of module `{}` is declared twice", self.module));
+            self.errors.push(format!(
+                "property `{path}` of module `{}` is declared twice",
+                self.module
+            ));
         }
-        self.decls.push(PropertyDecl { path: path.to_string(), kind, type_info, default, doc: doc.to_string(), capacity });
+        self.decls.push(PropertyDecl {
+            path: path.to_string(),
+            kind,
+            type_info,
+            default,
+            doc: doc.to_string(),
+            capacity,
+        });
     }
 
     fn take_bound(&mut self, path: &str, type_info: TypeInfo) -> Option<Handle> {
@@ -257,7 +316,10 @@ impl Ports {
                 None
             }
             None => {
-                self.errors.push(format!("property `{path}` of module `{}` is not in the blackboard", self.module));
+                self.errors.push(format!(
+                    "property `{path}` of module `{}` is not in the blackboard",
+                    self.module
+                ));
                 None
             }
         }

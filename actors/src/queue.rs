@@ -48,7 +48,12 @@ impl Inner {
 
     /// Frees the items every reader has consumed.
     fn trim(&mut self) {
-        let min = self.readers.iter().map(|r| r.cursor).min().unwrap_or(self.next_seq);
+        let min = self
+            .readers
+            .iter()
+            .map(|r| r.cursor)
+            .min()
+            .unwrap_or(self.next_seq);
         while self.items.front().is_some_and(|i| i.seq < min) {
             self.items.pop_front();
         }
@@ -124,7 +129,12 @@ impl QueueCore {
     fn attach(&self, id: u64, signal: Option<Arc<Signal>>, dropped: Arc<Endpoint>) {
         let mut inner = self.inner.lock();
         let cursor = inner.next_seq;
-        inner.readers.push(ReaderEntry { id, cursor, signal, dropped });
+        inner.readers.push(ReaderEntry {
+            id,
+            cursor,
+            signal,
+            dropped,
+        });
     }
 
     fn detach(&self, id: u64) {
@@ -147,21 +157,29 @@ impl QueueCore {
     fn take(&self, id: u64, max: usize, out: &mut Vec<QueueItem>) {
         let mut inner = self.inner.lock();
         let head = inner.head_seq();
-        let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) else { return };
+        let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) else {
+            return;
+        };
         let start = (r.cursor - head) as usize;
         let end = inner.items.len().min(start.saturating_add(max));
         if start >= end {
             return;
         }
         out.extend(inner.items.range(start..end).cloned());
-        let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) else { return };
+        let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) else {
+            return;
+        };
         r.cursor = head + end as u64;
         inner.trim();
     }
 
     fn pending(&self, id: u64) -> usize {
         let inner = self.inner.lock();
-        inner.readers.iter().find(|r| r.id == id).map_or(0, |r| (inner.next_seq - r.cursor) as usize)
+        inner
+            .readers
+            .iter()
+            .find(|r| r.id == id)
+            .map_or(0, |r| (inner.next_seq - r.cursor) as usize)
     }
 }
 
@@ -247,7 +265,9 @@ mod tests {
     fn seqs(r: &ReaderEndpoint) -> Vec<i64> {
         let mut out = Vec::new();
         r.take(usize::MAX, &mut out);
-        out.iter().map(|i| *i.value.downcast_ref::<i64>().unwrap()).collect()
+        out.iter()
+            .map(|i| *i.value.downcast_ref::<i64>().unwrap())
+            .collect()
     }
 
     #[test]

@@ -13,9 +13,20 @@ use crate::ports::PropertyKind;
 /// Writes `registry` as RON config text.
 pub(crate) fn write(registry: &Registry) -> String {
     let mut out = String::new();
-    let _ = writeln!(out, "// Snapshot of agent `{}`, written by petrel.", registry.agent());
-    let _ = writeln!(out, "// Run it with `petrel run FILE`, or lay it over a config with `--overlay FILE`.");
-    let _ = writeln!(out, "Agent(\n    name: {:?},\n    modules: [", registry.agent());
+    let _ = writeln!(
+        out,
+        "// Snapshot of agent `{}`, written by petrel.",
+        registry.agent()
+    );
+    let _ = writeln!(
+        out,
+        "// Run it with `petrel run FILE`, or lay it over a config with `--overlay FILE`."
+    );
+    let _ = writeln!(
+        out,
+        "Agent(\n    name: {:?},\n    modules: [",
+        registry.agent()
+    );
     for module in registry.modules() {
         let prefix = format!("{module}/");
         let mut values = Vec::new();
@@ -35,7 +46,9 @@ pub(crate) fn write(registry: &Registry) -> String {
                     }
                 }
                 _ => {
-                    let Some(cell) = Registry::own_cell(entry) else { continue };
+                    let Some(cell) = Registry::own_cell(entry) else {
+                        continue;
+                    };
                     match cell.type_info.to_ron(&cell.value()) {
                         Ok(text) => values.push(format!("{path:?}: {text}")),
                         Err(e) => values.push(format!("// not serializable: {path:?} ({e})")),
@@ -43,8 +56,16 @@ pub(crate) fn write(registry: &Registry) -> String {
                 }
             }
         }
-        let _ = writeln!(out, "        (\n            name: {module:?},\n            type: {:?},", registry.module_type(module).unwrap_or_default());
-        for (field, items) in [("values", values), ("links", links), ("capacities", capacities)] {
+        let _ = writeln!(
+            out,
+            "        (\n            name: {module:?},\n            type: {:?},",
+            registry.module_type(module).unwrap_or_default()
+        );
+        for (field, items) in [
+            ("values", values),
+            ("links", links),
+            ("capacities", capacities),
+        ] {
             if items.is_empty() {
                 continue;
             }

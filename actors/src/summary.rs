@@ -42,12 +42,38 @@ impl RunSummary {
 
 impl fmt::Display for RunSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let w = self.modules.iter().map(|m| m.name.len()).max().unwrap_or(6).max(6);
-        let tw = self.modules.iter().map(|m| m.module_type.len()).max().unwrap_or(4).max(4);
-        writeln!(f, "agent {}: {} modules, {} failures", self.agent, self.modules.len(), self.failures())?;
-        writeln!(f, "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}", "module", "type", "status", "steps", "failures")?;
+        let w = self
+            .modules
+            .iter()
+            .map(|m| m.name.len())
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        let tw = self
+            .modules
+            .iter()
+            .map(|m| m.module_type.len())
+            .max()
+            .unwrap_or(4)
+            .max(4);
+        writeln!(
+            f,
+            "agent {}: {} modules, {} failures",
+            self.agent,
+            self.modules.len(),
+            self.failures()
+        )?;
+        writeln!(
+            f,
+            "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}",
+            "module", "type", "status", "steps", "failures"
+        )?;
         for m in &self.modules {
-            writeln!(f, "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}", m.name, m.module_type, m.status, m.steps, m.failures)?;
+            writeln!(
+                f,
+                "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}",
+                m.name, m.module_type, m.status, m.steps, m.failures
+            )?;
             if let Some(e) = &m.last_error {
                 writeln!(f, "  {:<w$}  last error: {e}", "")?;
             }

@@ -52,11 +52,27 @@ impl Actor for AgentSupervisor {
     type State = SupervisorState;
     type Arguments = SupervisorArgs;
 
-    async fn pre_start(&self, me: ActorRef<SupervisorMsg>, args: SupervisorArgs) -> Result<SupervisorState, ActorProcessingErr> {
-        let mut state = SupervisorState { agent: args.agent, blackboard: args.blackboard, slots: Vec::new() };
+    async fn pre_start(
+        &self,
+        me: ActorRef<SupervisorMsg>,
+        args: SupervisorArgs,
+    ) -> Result<SupervisorState, ActorProcessingErr> {
+        let mut state = SupervisorState {
+            agent: args.agent,
+            blackboard: args.blackboard,
+            slots: Vec::new(),
+        };
         for (name, module_type) in args.modules {
             let (stop, _) = watch::channel(false);
-            state.slots.push(Slot { name, module_type, actor: None, join: None, stop, failures: 0, last_error: None });
+            state.slots.push(Slot {
+                name,
+                module_type,
+                actor: None,
+                join: None,
+                stop,
+                failures: 0,
+                last_error: None,
+            });
             let index = state.slots.len() - 1;
             state.start(index, me.get_cell()).await;
         }
@@ -64,7 +80,12 @@ impl Actor for AgentSupervisor {
         Ok(state)
     }
 
-    async fn handle(&self, _me: ActorRef<SupervisorMsg>, msg: SupervisorMsg, state: &mut SupervisorState) -> Result<(), ActorProcessingErr> {
+    async fn handle(
+        &self,
+        _me: ActorRef<SupervisorMsg>,
+        msg: SupervisorMsg,
+        state: &mut SupervisorState,
+    ) -> Result<(), ActorProcessingErr> {
         match msg {
             SupervisorMsg::StopAll(timeout, reply) => {
                 state.stop_all(timeout).await;
@@ -77,7 +98,12 @@ impl Actor for AgentSupervisor {
         Ok(())
     }
 
-    async fn handle_supervisor_evt(&self, _me: ActorRef<SupervisorMsg>, event: SupervisionEvent, state: &mut SupervisorState) -> Result<(), ActorProcessingErr> {
+    async fn handle_supervisor_evt(
+        &self,
+        _me: ActorRef<SupervisorMsg>,
+        event: SupervisionEvent,
+        state: &mut SupervisorState,
+    ) -> Result<(), ActorProcessingErr> {
         match event {
             SupervisionEvent::ActorFailed(cell, error) => {
                 if let Some(i) = state.slot_of(&cell) {
@@ -98,20 +124,32 @@ impl Actor for AgentSupervisor {
 
 impl SupervisorState {
     fn slot_of(&self, cell: &ActorCell) -> Option<usize> {
-        self.slots.iter().position(|s| s.actor.as_ref().is_some_and(|a| a.get_id() == cell.get_id()))
+        self.slots.iter().position(|s| {
+            s.actor
+                .as_ref()
+                .is_some_and(|a| a.get_id() == cell.get_id())
+        })
     }
 
     async fn start(&mut self, index: usize, supervisor: ActorCell) {
         let slot = &mut self.slots[index];
         let (stop, stop_rx) = watch::channel(false);
         slot.stop = stop;
-        let args = ModuleArgs { agent: self.agent.clone(), name: slot.name.clone(), blackboard: self.blackboard.clone(), stop: stop_rx };
+        let args = ModuleArgs {
+            agent: self.agent.clone(),
+            name: slot.name.clone(),
+            blackboard: self.blackboard.clone(),
+            stop: stop_rx,
+        };
         match slot.module_type.spawn(args, supervisor).await {
             Ok((actor, join)) => {
                 slot.actor = Some(actor);
                 slot.join = Some(join);
             }
-            Err(reason) => self.failed(index, format!("could not start: {reason}")).await,
+            Err(reason) => {
+                self.failed(index, format!("could not start: {reason}"))
+                    .await
+            }
         }
     }
 
@@ -123,14 +161,22 @@ impl SupervisorState {
         let name = slot.name.clone();
         let failures = slot.failures as i64;
         // The blackboard outlives the modules; if it is gone the agent is stopping anyway.
-        let _ = self.blackboard.set_runtime(&format!("{name}/stats/failures"), failures).await;
-        let _ = self.blackboard.set_runtime(&format!("{name}/stats/status"), status::FAILED.to_string()).await;
+        let _ = self
+            .blackboard
+            .set_runtime(&format!("{name}/stats/failures"), failures)
+            .await;
+        let _ = self
+            .blackboard
+            .set_runtime(&format!("{name}/stats/status"), status::FAILED.to_string())
+            .await;
     }
 
     async fn stop_all(&mut self, timeout: Duration) {
         for slot in self.slots.iter_mut().rev() {
             let _ = slot.stop.send(true);
-            let Some(join) = slot.join.take() else { continue };
+            let Some(join) = slot.join.take() else {
+                continue;
+            };
             if tokio::time::timeout(timeout, join).await.is_err() {
                 tracing::warn!(agent = %self.agent, module = %slot.name, ?timeout, "module did not stop in time: killed");
                 if let Some(actor) = slot.actor.take() {
@@ -147,8 +193,18 @@ impl SupervisorState {
             reports.push(ModuleReport {
                 name: slot.name.clone(),
                 module_type: slot.module_type.name().to_string(),
-                status: self.blackboard.get::<String>(&get("stats/status")).await.map(|s| s.to_string()).unwrap_or_default(),
-                steps: self.blackboard.get::<i64>(&get("stats/steps")).await.map(|s| *s).unwrap_or_default() as u64,
+                status: self
+                    .blackboard
+                    .get::<String>(&get("stats/status"))
+                    .await
+                    .map(|s| s.to_string())
+                    .unwrap_or_default(),
+                steps: self
+                    .blackboard
+                    .get::<i64>(&get("stats/steps"))
+                    .await
+                    .map(|s| *s)
+                    .unwrap_or_default() as u64,
                 failures: slot.failures,
                 last_error: slot.last_error.clone(),
             });

@@ -23,7 +23,9 @@ use serde::{Deserialize, Serialize};
 /// struct Battery { volts: f64, charging: bool }
 /// impl petrel_actors::PropertyType for Battery { const TYPE_NAME: &'static str = "my.Battery"; }
 /// ```
-pub trait PropertyType: Clone + Debug + Send + Sync + Serialize + DeserializeOwned + 'static {
+pub trait PropertyType:
+    Clone + Debug + Send + Sync + Serialize + DeserializeOwned + 'static
+{
     /// Stable, unique name of the type.
     const TYPE_NAME: &'static str;
 }
@@ -49,8 +51,20 @@ property_types! {
 }
 
 /// A planar pose (position and heading), an [`Isometry2`] written as `(x: 1.0, y: 2.0, theta: 0.5)`.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, PartialEq, Default)]
 pub struct Pose2(pub Isometry2<f64>);
+
+impl Debug for Pose2 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Pose2(x: {:.3}, y: {:.3}, theta: {:.3})",
+            self.x(),
+            self.y(),
+            self.theta()
+        )
+    }
+}
 
 impl Pose2 {
     /// A pose at `(x, y)` with heading `theta` (radians, counter-clockwise from +x).
@@ -85,7 +99,12 @@ struct PoseRepr {
 
 impl Serialize for Pose2 {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        PoseRepr { x: self.x(), y: self.y(), theta: self.theta() }.serialize(s)
+        PoseRepr {
+            x: self.x(),
+            y: self.y(),
+            theta: self.theta(),
+        }
+        .serialize(s)
     }
 }
 
@@ -97,8 +116,14 @@ impl<'de> Deserialize<'de> for Pose2 {
 }
 
 /// A planar point, written as `(x: 1.0, y: 2.0)`.
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[derive(Clone, Copy, PartialEq, Default)]
 pub struct Point2(pub NaPoint2<f64>);
+
+impl Debug for Point2 {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Point2(x: {:.3}, y: {:.3})", self.0.x, self.0.y)
+    }
+}
 
 impl Point2 {
     /// The point `(x, y)`.
@@ -116,7 +141,11 @@ struct PointRepr {
 
 impl Serialize for Point2 {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        PointRepr { x: self.0.x, y: self.0.y }.serialize(s)
+        PointRepr {
+            x: self.0.x,
+            y: self.0.y,
+        }
+        .serialize(s)
     }
 }
 
@@ -230,7 +259,12 @@ mod tests {
 
     #[test]
     fn cloning_an_image_shares_its_bytes() {
-        let img = Image { width: 2, height: 1, encoding: "mono8".into(), data: vec![1, 2].into() };
+        let img = Image {
+            width: 2,
+            height: 1,
+            encoding: "mono8".into(),
+            data: vec![1, 2].into(),
+        };
         let copy = img.clone();
         assert!(Arc::ptr_eq(&img.data, &copy.data));
     }

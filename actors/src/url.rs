@@ -29,7 +29,10 @@ pub struct UrlError {
 impl PropertyUrl {
     /// Parses the full (`petrel://robot1/scale/in/value`) or short (`scale/in/value`) form.
     pub fn parse(input: &str) -> Result<Self, UrlError> {
-        let err = |reason| UrlError { input: input.to_string(), reason };
+        let err = |reason| UrlError {
+            input: input.to_string(),
+            reason,
+        };
         let (agent, rest) = match input.strip_prefix(SCHEME) {
             Some(rest) => {
                 let (agent, rest) = rest.split_once('/').ok_or_else(|| err("missing module"))?;
@@ -38,10 +41,13 @@ impl PropertyUrl {
             None if input.contains("://") => return Err(err("unknown scheme")),
             None => (None, input),
         };
-        let (module, path) = rest.split_once('/').ok_or_else(|| err("missing property path"))?;
+        let (module, path) = rest
+            .split_once('/')
+            .ok_or_else(|| err("missing property path"))?;
         let valid = |s: &str| {
             !s.is_empty()
-                && s.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+                && s.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
         };
         if let Some(agent) = agent {
             if !valid(agent) {
@@ -54,12 +60,20 @@ impl PropertyUrl {
         if !path.split('/').all(valid) {
             return Err(err("bad path segment"));
         }
-        Ok(PropertyUrl { agent: agent.map(str::to_string), module: module.to_string(), path: path.to_string() })
+        Ok(PropertyUrl {
+            agent: agent.map(str::to_string),
+            module: module.to_string(),
+            path: path.to_string(),
+        })
     }
 
     /// A URL from its parts; `path` is not validated.
     pub fn new(agent: Option<&str>, module: &str, path: &str) -> Self {
-        PropertyUrl { agent: agent.map(str::to_string), module: module.to_string(), path: path.to_string() }
+        PropertyUrl {
+            agent: agent.map(str::to_string),
+            module: module.to_string(),
+            path: path.to_string(),
+        }
     }
 
     /// The same URL, with the agent set to `agent` if it had none.
@@ -115,10 +129,16 @@ mod tests {
         assert_eq!(full.agent(), Some("robot1"));
         assert_eq!(full.module(), "obstacleAvoidance");
         assert_eq!(full.path(), "params/maxSpeed");
-        assert_eq!(full.to_string(), "petrel://robot1/obstacleAvoidance/params/maxSpeed");
+        assert_eq!(
+            full.to_string(),
+            "petrel://robot1/obstacleAvoidance/params/maxSpeed"
+        );
         let short = PropertyUrl::parse("scale/in/value").unwrap();
         assert_eq!(short.agent(), None);
-        assert_eq!(short.in_agent("r2").to_string(), "petrel://r2/scale/in/value");
+        assert_eq!(
+            short.in_agent("r2").to_string(),
+            "petrel://r2/scale/in/value"
+        );
     }
 
     #[test]

@@ -29,7 +29,11 @@ impl TypeInfo {
         TypeInfo {
             name: T::TYPE_NAME,
             id: TypeId::of::<T>,
-            from_ron: |v| v.into_rust::<T>().map(|t| Arc::new(t) as AnyValue).map_err(|e| e.to_string()),
+            from_ron: |v| {
+                v.into_rust::<T>()
+                    .map(|t| Arc::new(t) as AnyValue)
+                    .map_err(|e| e.to_string())
+            },
             to_ron: |v| {
                 let t = v.downcast_ref::<T>().ok_or("value has another type")?;
                 ron::to_string(t).map_err(|e| e.to_string())
@@ -103,7 +107,9 @@ mod tests {
         assert_eq!(*v.downcast_ref::<f64>().unwrap(), 2.0);
         let err = f.from_ron(ron::from_str("\"fast\"").unwrap()).unwrap_err();
         assert!(err.to_lowercase().contains("expected f64"), "{err}");
-        assert!(TypeInfo::of::<i64>().from_ron(ron::from_str("2.5").unwrap()).is_err());
+        assert!(TypeInfo::of::<i64>()
+            .from_ron(ron::from_str("2.5").unwrap())
+            .is_err());
     }
 
     #[test]
@@ -113,6 +119,12 @@ mod tests {
         let text = t.to_ron(&v).unwrap();
         let back = t.from_ron(ron::from_str(&text).unwrap()).unwrap();
         assert_eq!(back.downcast_ref::<Pose2>().unwrap().y(), 2.0);
-        assert_eq!(t.short(&v).len() <= SHORT_LEN + 3, true);
+        assert_eq!(t.short(&v), "Pose2(x: 1.000, y: 2.000, theta: 0.500)");
+        let long: AnyValue = Arc::new(vec![0.5_f64; 100]);
+        let shown = TypeInfo::of::<Vec<f64>>().short(&long);
+        assert!(
+            shown.ends_with('…') && shown.chars().count() == SHORT_LEN + 1,
+            "{shown}"
+        );
     }
 }

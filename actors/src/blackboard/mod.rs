@@ -31,7 +31,13 @@ pub(crate) enum BlackboardMsg {
     Bind(String, Reply<Binding>),
     Link(String, String, Reply<()>),
     Unlink(String, Reply<()>),
-    Set { key: String, type_info: TypeInfo, value: AnyValue, runtime: bool, reply: Reply<()> },
+    Set {
+        key: String,
+        type_info: TypeInfo,
+        value: AnyValue,
+        runtime: bool,
+        reply: Reply<()>,
+    },
     SetRon(String, ron::Value, Reply<()>),
     Get(String, Reply<(TypeInfo, AnyValue)>),
     Snapshot(Reply<String>),
@@ -44,27 +50,47 @@ impl Actor for BlackboardActor {
     type State = Registry;
     type Arguments = Registry;
 
-    async fn pre_start(&self, _me: ActorRef<Self::Msg>, registry: Registry) -> Result<Registry, ActorProcessingErr> {
-        tracing::info!(agent = registry.agent(), modules = registry.modules().len(), "blackboard started");
+    async fn pre_start(
+        &self,
+        _me: ActorRef<Self::Msg>,
+        registry: Registry,
+    ) -> Result<Registry, ActorProcessingErr> {
+        tracing::info!(
+            agent = registry.agent(),
+            modules = registry.modules().len(),
+            "blackboard started"
+        );
         Ok(registry)
     }
 
-    async fn handle(&self, _me: ActorRef<Self::Msg>, msg: Self::Msg, reg: &mut Registry) -> Result<(), ActorProcessingErr> {
+    async fn handle(
+        &self,
+        _me: ActorRef<Self::Msg>,
+        msg: Self::Msg,
+        reg: &mut Registry,
+    ) -> Result<(), ActorProcessingErr> {
         // A reply port whose caller gave up is not the blackboard's failure: ignore send errors.
         match msg {
             BlackboardMsg::Bind(module, reply) => {
-                let binding = reg.handles(&module).zip(reg.module(&module)).map(|(handles, m)| Binding {
-                    handles,
-                    signal: m.signal.clone(),
-                    enabled_signal: m.enabled_signal.clone(),
-                });
-                let _ = reply.send(binding.ok_or_else(|| reg.key_of(&format!("{module}/enabled")).unwrap_err()));
+                let binding = reg
+                    .handles(&module)
+                    .zip(reg.module(&module))
+                    .map(|(handles, m)| Binding {
+                        handles,
+                        signal: m.signal.clone(),
+                        enabled_signal: m.enabled_signal.clone(),
+                    });
+                let _ = reply.send(
+                    binding.ok_or_else(|| reg.key_of(&format!("{module}/enabled")).unwrap_err()),
+                );
             }
             BlackboardMsg::Link(from, to, reply) => {
                 let result = reg.link(&from, &to);
                 match &result {
                     Ok(()) => tracing::info!(agent = reg.agent(), %from, %to, "linked"),
-                    Err(e) => tracing::warn!(agent = reg.agent(), %from, %to, error = %e, "link refused"),
+                    Err(e) => {
+                        tracing::warn!(agent = reg.agent(), %from, %to, error = %e, "link refused")
+                    }
                 }
                 let _ = reply.send(result);
             }
@@ -73,8 +99,18 @@ impl Actor for BlackboardActor {
                 tracing::info!(agent = reg.agent(), %from, ok = result.is_ok(), "unlinked");
                 let _ = reply.send(result);
             }
-            BlackboardMsg::Set { key, type_info, value, runtime, reply } => {
-                let result = if runtime { reg.set_runtime(&key, type_info, value) } else { reg.set(&key, type_info, value) };
+            BlackboardMsg::Set {
+                key,
+                type_info,
+                value,
+                runtime,
+                reply,
+            } => {
+                let result = if runtime {
+                    reg.set_runtime(&key, type_info, value)
+                } else {
+                    reg.set(&key, type_info, value)
+                };
                 let _ = reply.send(result);
             }
             BlackboardMsg::SetRon(key, value, reply) => {
@@ -99,12 +135,19 @@ pub struct Blackboard {
 
 impl Blackboard {
     /// Starts the blackboard actor owning `registry`.
-    pub async fn spawn(registry: Registry) -> Result<(Blackboard, tokio::task::JoinHandle<()>), BlackboardError> {
-        let (actor, join) = Actor::spawn(None, BlackboardActor, registry).await.map_err(|_| BlackboardError::Stopped)?;
+    pub async fn spawn(
+        registry: Registry,
+    ) -> Result<(Blackboard, tokio::task::JoinHandle<()>), BlackboardError> {
+        let (actor, join) = Actor::spawn(None, BlackboardActor, registry)
+            .await
+            .map_err(|_| BlackboardError::Stopped)?;
         Ok((Blackboard { actor }, join))
     }
 
-    async fn call<T: Send + 'static>(&self, msg: impl FnOnce(Reply<T>) -> BlackboardMsg) -> Result<T, BlackboardError> {
+    async fn call<T: Send + 'static>(
+        &self,
+        msg: impl FnOnce(Reply<T>) -> BlackboardMsg,
+    ) -> Result<T, BlackboardError> {
         match self.actor.call(msg, None).await {
             Ok(ractor::rpc::CallResult::Success(result)) => result,
             _ => Err(BlackboardError::Stopped),
@@ -112,29 +155,62 @@ impl Blackboard {
     }
 
     pub(crate) async fn bind(&self, module: &str) -> Result<Binding, BlackboardError> {
-        self.call(|r| BlackboardMsg::Bind(module.to_string(), r)).await
+        self.call(|r| BlackboardMsg::Bind(module.to_string(), r))
+            .await
     }
 
     /// Links `from` to `to` while running; readers of `from` see `to` from their next read.
     pub async fn link(&self, from: &str, to: &str) -> Result<(), BlackboardError> {
-        self.call(|r| BlackboardMsg::Link(from.to_string(), to.to_string(), r)).await
+        self.call(|r| BlackboardMsg::Link(from.to_string(), to.to_string(), r))
+            .await
     }
 
     /// Removes the link of `from`.
     pub async fn unlink(&self, from: &str) -> Result<(), BlackboardError> {
-        self.call(|r| BlackboardMsg::Unlink(from.to_string(), r)).await
+        self.call(|r| BlackboardMsg::Unlink(from.to_string(), r))
+            .await
     }
 
     /// Sets a property (e.g. a parameter, or a module's `enabled`) to a typed value.
-    pub async fn set<T: PropertyType>(&self, address: &str, value: T) -> Result<(), BlackboardError> {
-        let (key, type_info, value) = (address.to_string(), TypeInfo::of::<T>(), Arc::new(value) as AnyValue);
-        self.call(|reply| BlackboardMsg::Set { key, type_info, value, runtime: false, reply }).await
+    pub async fn set<T: PropertyType>(
+        &self,
+        address: &str,
+        value: T,
+    ) -> Result<(), BlackboardError> {
+        let (key, type_info, value) = (
+            address.to_string(),
+            TypeInfo::of::<T>(),
+            Arc::new(value) as AnyValue,
+        );
+        self.call(|reply| BlackboardMsg::Set {
+            key,
+            type_info,
+            value,
+            runtime: false,
+            reply,
+        })
+        .await
     }
 
     /// Sets a runtime-owned property (`stats/...`); for the supervisor.
-    pub(crate) async fn set_runtime<T: PropertyType>(&self, address: &str, value: T) -> Result<(), BlackboardError> {
-        let (key, type_info, value) = (address.to_string(), TypeInfo::of::<T>(), Arc::new(value) as AnyValue);
-        self.call(|reply| BlackboardMsg::Set { key, type_info, value, runtime: true, reply }).await
+    pub(crate) async fn set_runtime<T: PropertyType>(
+        &self,
+        address: &str,
+        value: T,
+    ) -> Result<(), BlackboardError> {
+        let (key, type_info, value) = (
+            address.to_string(),
+            TypeInfo::of::<T>(),
+            Arc::new(value) as AnyValue,
+        );
+        self.call(|reply| BlackboardMsg::Set {
+            key,
+            type_info,
+            value,
+            runtime: true,
+            reply,
+        })
+        .await
     }
 
     /// Sets a property from RON text, checking it against the property's type.
@@ -144,23 +220,35 @@ impl Blackboard {
             expected: "a RON value",
             reason: e.to_string(),
         })?;
-        self.call(|r| BlackboardMsg::SetRon(address.to_string(), value, r)).await
+        self.call(|r| BlackboardMsg::SetRon(address.to_string(), value, r))
+            .await
     }
 
     /// The current value of a property, if it has type `T`.
     pub async fn get<T: PropertyType>(&self, address: &str) -> Result<Arc<T>, BlackboardError> {
-        let (ti, value) = self.call(|r| BlackboardMsg::Get(address.to_string(), r)).await?;
-        value.downcast::<T>().map_err(|_| BlackboardError::BadValue {
-            key: address.to_string(),
-            expected: T::TYPE_NAME,
-            reason: format!("the property is a {}", ti.name()),
-        })
+        let (ti, value) = self
+            .call(|r| BlackboardMsg::Get(address.to_string(), r))
+            .await?;
+        value
+            .downcast::<T>()
+            .map_err(|_| BlackboardError::BadValue {
+                key: address.to_string(),
+                expected: T::TYPE_NAME,
+                reason: format!("the property is a {}", ti.name()),
+            })
     }
 
     /// The current value of a property as RON text.
     pub async fn get_text(&self, address: &str) -> Result<String, BlackboardError> {
-        let (ti, value) = self.call(|r| BlackboardMsg::Get(address.to_string(), r)).await?;
-        ti.to_ron(&value).map_err(|reason| BlackboardError::BadValue { key: address.into(), expected: ti.name(), reason })
+        let (ti, value) = self
+            .call(|r| BlackboardMsg::Get(address.to_string(), r))
+            .await?;
+        ti.to_ron(&value)
+            .map_err(|reason| BlackboardError::BadValue {
+                key: address.into(),
+                expected: ti.name(),
+                reason,
+            })
     }
 
     /// The whole blackboard as a RON agent config (values, links, queue capacities).

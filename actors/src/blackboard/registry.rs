@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::cell::{Cell, Signal};
-use crate::ports::{Handle, PropertyDecl, PropertyKind, Ports};
+use crate::ports::{Handle, Ports, PropertyDecl, PropertyKind};
 use crate::queue::{dropped_path, QueueCore};
 use crate::url::PropertyUrl;
 use crate::value::{AnyValue, TypeInfo};
@@ -39,7 +39,9 @@ pub enum BlackboardError {
     #[error("{0}")]
     BadAddress(String),
     /// Only inputs, parameters and queue inputs can be linked.
-    #[error("`{key}` is a {kind} property: only inputs, parameters and queue inputs can be linked")]
+    #[error(
+        "cannot link `{key}` ({kind}): only inputs, parameters and queue inputs can be linked"
+    )]
     NotLinkable {
         /// The property.
         key: String,
@@ -84,7 +86,9 @@ pub enum BlackboardError {
         reason: String,
     },
     /// The property cannot be set (stats, queues).
-    #[error("`{key}` is a {kind} property and cannot be set")]
+    #[error(
+        "`{key}` ({kind}) cannot be set: only inputs, parameters, outputs, state and `enabled` can"
+    )]
     NotSettable {
         /// The property.
         key: String,
@@ -126,7 +130,12 @@ pub struct Registry {
 impl Registry {
     /// An empty registry for `agent`.
     pub fn new(agent: &str) -> Self {
-        Registry { agent: agent.to_string(), order: Vec::new(), modules: HashMap::new(), entries: BTreeMap::new() }
+        Registry {
+            agent: agent.to_string(),
+            order: Vec::new(),
+            modules: HashMap::new(),
+            entries: BTreeMap::new(),
+        }
     }
 
     /// The agent name.
@@ -144,12 +153,19 @@ impl Registry {
     }
 
     /// Adopts the cells a fresh declaration of `module` created.
-    pub(crate) fn declare(&mut self, module: &str, type_name: &str, ports: Ports) -> Result<(), BlackboardError> {
+    pub(crate) fn declare(
+        &mut self,
+        module: &str,
+        type_name: &str,
+        ports: Ports,
+    ) -> Result<(), BlackboardError> {
         if !ports.errors.is_empty() {
             return Err(BlackboardError::Declaration(ports.errors.join("; ")));
         }
         if self.modules.contains_key(module) {
-            return Err(BlackboardError::Declaration(format!("module `{module}` is declared twice")));
+            return Err(BlackboardError::Declaration(format!(
+                "module `{module}` is declared twice"
+            )));
         }
         for (decl, handle) in ports.decls.into_iter().zip(ports.handles) {
             let own_queue = match &handle {
@@ -163,14 +179,27 @@ impl Registry {
                         capacity: None,
                     };
                     let key = format!("{module}/{}", dropped.path);
-                    let entry = Entry { decl: dropped, handle: Handle::Value(reader.dropped.clone()), link: None, own_queue: None };
+                    let entry = Entry {
+                        decl: dropped,
+                        handle: Handle::Value(reader.dropped.clone()),
+                        link: None,
+                        own_queue: None,
+                    };
                     self.entries.insert(key, entry);
                     Some(reader.source())
                 }
                 _ => None,
             };
             let key = format!("{module}/{}", decl.path);
-            self.entries.insert(key, Entry { decl, handle, link: None, own_queue });
+            self.entries.insert(
+                key,
+                Entry {
+                    decl,
+                    handle,
+                    link: None,
+                    own_queue,
+                },
+            );
         }
         self.order.push(module.to_string());
         let entry = ModuleEntry {
@@ -190,7 +219,10 @@ impl Registry {
             self.entries
                 .range(prefix.clone()..)
                 .take_while(|(k, _)| k.starts_with(&prefix))
-                .filter(|(_, e)| !(e.decl.kind == PropertyKind::Stats && e.decl.path.starts_with("stats/dropped/")))
+                .filter(|(_, e)| {
+                    !(e.decl.kind == PropertyKind::Stats
+                        && e.decl.path.starts_with("stats/dropped/"))
+                })
                 .map(|(k, e)| (k[prefix.len()..].to_string(), e.handle.clone()))
                 .collect(),
         )
@@ -199,7 +231,11 @@ impl Registry {
     /// The declarations of `module`'s properties, in path order.
     pub fn declarations(&self, module: &str) -> Vec<&PropertyDecl> {
         let prefix = format!("{module}/");
-        self.entries.range(prefix.clone()..).take_while(|(k, _)| k.starts_with(&prefix)).map(|(_, e)| &e.decl).collect()
+        self.entries
+            .range(prefix.clone()..)
+            .take_while(|(k, _)| k.starts_with(&prefix))
+            .map(|(_, e)| &e.decl)
+            .collect()
     }
 
     /// The type name of `module`.
@@ -209,7 +245,8 @@ impl Registry {
 
     /// Turns a full or short address into the key `module/path` of an existing property.
     pub fn key_of(&self, address: &str) -> Result<String, BlackboardError> {
-        let url = PropertyUrl::parse(address).map_err(|e| BlackboardError::BadAddress(e.to_string()))?;
+        let url =
+            PropertyUrl::parse(address).map_err(|e| BlackboardError::BadAddress(e.to_string()))?;
         if let Some(agent) = url.agent() {
             if agent != self.agent {
                 return Err(BlackboardError::BadAddress(format!(
@@ -225,13 +262,26 @@ impl Registry {
         if !self.modules.contains_key(url.module()) {
             let mut known: Vec<&str> = self.order.iter().map(String::as_str).collect();
             known.sort_unstable();
-            return Err(BlackboardError::UnknownModule { module: url.module().into(), agent: self.agent.clone(), known: known.join(", ") });
+            return Err(BlackboardError::UnknownModule {
+                module: url.module().into(),
+                agent: self.agent.clone(),
+                known: known.join(", "),
+            });
         }
-        Err(BlackboardError::UnknownProperty { module: url.module().into(), path: url.path().into(), known: self.known_paths(url.module()) })
+        Err(BlackboardError::UnknownProperty {
+            module: url.module().into(),
+            path: url.path().into(),
+            known: self.known_paths(url.module()),
+        })
     }
 
     fn known_paths(&self, module: &str) -> String {
-        self.declarations(module).iter().filter(|d| d.kind != PropertyKind::Stats).map(|d| d.path.as_str()).collect::<Vec<_>>().join(", ")
+        self.declarations(module)
+            .iter()
+            .filter(|d| d.kind != PropertyKind::Stats)
+            .map(|d| d.path.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Links `from` (an input, parameter or queue input) to `to`; reads of `from` then read `to`.
@@ -240,14 +290,27 @@ impl Registry {
         let to = self.key_of(to)?;
         let (f, t) = (&self.entries[&from].decl, &self.entries[&to].decl);
         if !f.kind.linkable() {
-            return Err(BlackboardError::NotLinkable { key: from, kind: f.kind });
+            return Err(BlackboardError::NotLinkable {
+                key: from,
+                kind: f.kind,
+            });
         }
         if f.kind.is_queue() != t.kind.is_queue() {
-            return Err(BlackboardError::KindMismatch { from, from_kind: f.kind, to, to_kind: t.kind });
+            return Err(BlackboardError::KindMismatch {
+                from,
+                from_kind: f.kind,
+                to,
+                to_kind: t.kind,
+            });
         }
         if f.type_info != t.type_info {
             let (from_type, to_type) = (f.type_info.name(), t.type_info.name());
-            return Err(BlackboardError::TypeMismatch { from, from_type, to, to_type });
+            return Err(BlackboardError::TypeMismatch {
+                from,
+                from_type,
+                to,
+                to_type,
+            });
         }
         let mut chain = vec![from.clone(), to.clone()];
         let mut at = to.clone();
@@ -301,15 +364,30 @@ impl Registry {
     }
 
     /// Sets a property from a config value, checking its type.
-    pub fn set_from_ron(&mut self, address: &str, value: ron::Value) -> Result<(), BlackboardError> {
+    pub fn set_from_ron(
+        &mut self,
+        address: &str,
+        value: ron::Value,
+    ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         let ti = self.entries[&key].decl.type_info;
-        let value = ti.from_ron(value).map_err(|reason| BlackboardError::BadValue { key: key.clone(), expected: ti.name(), reason })?;
+        let value = ti
+            .from_ron(value)
+            .map_err(|reason| BlackboardError::BadValue {
+                key: key.clone(),
+                expected: ti.name(),
+                reason,
+            })?;
         self.set(&key, ti, value)
     }
 
     /// Sets a property to a value of type `type_info`.
-    pub(crate) fn set(&self, address: &str, type_info: TypeInfo, value: AnyValue) -> Result<(), BlackboardError> {
+    pub(crate) fn set(
+        &self,
+        address: &str,
+        type_info: TypeInfo,
+        value: AnyValue,
+    ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         let kind = self.entries[&key].decl.kind;
         if !kind.settable() {
@@ -319,11 +397,20 @@ impl Registry {
     }
 
     /// Sets any value property, including runtime-owned `stats/...`.
-    pub(crate) fn set_runtime(&self, address: &str, type_info: TypeInfo, value: AnyValue) -> Result<(), BlackboardError> {
+    pub(crate) fn set_runtime(
+        &self,
+        address: &str,
+        type_info: TypeInfo,
+        value: AnyValue,
+    ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         let entry = &self.entries[&key];
         if entry.decl.type_info != type_info {
-            return Err(BlackboardError::BadValue { key, expected: entry.decl.type_info.name(), reason: format!("got a {}", type_info.name()) });
+            return Err(BlackboardError::BadValue {
+                key,
+                expected: entry.decl.type_info.name(),
+                reason: format!("got a {}", type_info.name()),
+            });
         }
         match &entry.handle {
             // A value set on a linked property goes to its target, like writing through a symlink.
@@ -331,7 +418,10 @@ impl Registry {
                 ep.write(value);
                 Ok(())
             }
-            _ => Err(BlackboardError::NotSettable { key, kind: entry.decl.kind }),
+            _ => Err(BlackboardError::NotSettable {
+                key,
+                kind: entry.decl.kind,
+            }),
         }
     }
 
@@ -340,7 +430,10 @@ impl Registry {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {
             Handle::Value(ep) => Ok((ep.type_info(), ep.value())),
-            _ => Err(BlackboardError::NotSettable { kind: self.entries[&key].decl.kind, key }),
+            _ => Err(BlackboardError::NotSettable {
+                kind: self.entries[&key].decl.kind,
+                key,
+            }),
         }
     }
 
@@ -352,7 +445,11 @@ impl Registry {
                 core.set_capacity(capacity);
                 Ok(())
             }
-            _ => Err(BlackboardError::BadValue { key, expected: "an output queue", reason: "only output queues have a capacity".into() }),
+            _ => Err(BlackboardError::BadValue {
+                key,
+                expected: "an output queue",
+                reason: "only output queues have a capacity".into(),
+            }),
         }
     }
 

@@ -1,0 +1,79 @@
+use petrel_actors::{Context, Module, Output, Param, Ports, QueueReader, Schedule, State};
+
+/// `demo.consumer`: reads numbered items and checks that none is missing or repeated.
+pub struct Consumer {
+    items: QueueReader<i64>,
+    report_every: Param<i64>,
+    last: State<i64>,
+    received: Output<i64>,
+    gaps: Output<i64>,
+    duplicates: Output<i64>,
+}
+
+impl Module for Consumer {
+    const TYPE: &'static str = "demo.consumer";
+    const DESCRIPTION: &'static str =
+        "Consumes numbered items from in/items and counts gaps and duplicates.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        Consumer {
+            items: ports.queue_in("in/items", "numbered items to check"),
+            report_every: ports.param(
+                "params/report_every",
+                0,
+                "print a line every N items (0 = never)",
+            ),
+            last: ports.state(
+                "state/last",
+                -1,
+                "number of the last item seen (kept across restarts)",
+            ),
+            received: ports.output("out/received", 0, "items received"),
+            gaps: ports.output("out/gaps", 0, "items missing between consecutive numbers"),
+            duplicates: ports.output(
+                "out/duplicates",
+                0,
+                "items at or below the last number seen",
+            ),
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.items)
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let batch = self.items.drain();
+        if batch.is_empty() {
+            return Ok(());
+        }
+        let (mut last, mut gaps, mut dups) = (
+            self.last.value(),
+            self.gaps.value(),
+            self.duplicates.value(),
+        );
+        for item in &batch {
+            let n = *item.value;
+            if n <= last {
+                dups += 1;
+            } else {
+                gaps += n - last - 1;
+                last = n;
+            }
+        }
+        let before = self.received.value();
+        let received = before + batch.len() as i64;
+        self.last.set(last);
+        self.gaps.set(gaps);
+        self.duplicates.set(dups);
+        self.received.set(received);
+        let every = self.report_every.value();
+        if every > 0 && received / every != before / every {
+            println!(
+                "[{}] received {received} items, last #{last}, gaps {gaps}, duplicates {dups}",
+                ctx.module()
+            );
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,45 @@
+use petrel_actors::{Context, Input, Module, Output, Param, Ports, Schedule};
+
+/// `demo.scale`: `out = factor * in + offset`, optionally low-pass filtered.
+pub struct Scale {
+    input: Input<f64>,
+    factor: Param<f64>,
+    offset: Param<f64>,
+    smoothing: Param<f64>,
+    out: Output<f64>,
+}
+
+impl Module for Scale {
+    const TYPE: &'static str = "demo.scale";
+    const DESCRIPTION: &'static str =
+        "Writes factor * in/value + offset, low-pass filtered by params/smoothing.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        Scale {
+            input: ports.input("in/value", 0.0, "value to scale"),
+            factor: ports.param("params/factor", 1.0, "multiplier"),
+            offset: ports.param("params/offset", 0.0, "added after scaling"),
+            smoothing: ports.param(
+                "params/smoothing",
+                0.0,
+                "0 = no filter .. 1 = frozen: weight of the previous output",
+            ),
+            out: ports.output("out/value", 0.0, "the scaled (and smoothed) value"),
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new()
+            .on_change(&self.input)
+            .on_change(&self.factor)
+            .on_change(&self.offset)
+    }
+
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let target = self.factor.value() * self.input.value() + self.offset.value();
+        let alpha = self.smoothing.value().clamp(0.0, 1.0);
+        self.out
+            .set(alpha * self.out.value() + (1.0 - alpha) * target);
+        Ok(())
+    }
+}

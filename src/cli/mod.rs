@@ -1,0 +1,152 @@
+//! The `petrel` command line: `run`, `check`, `modules`.
+
+mod logging;
+mod modules;
+mod run;
+
+use std::ffi::OsString;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use petrel_actors::{ConfigErrors, ConfigFile, ModuleRegistry};
+
+/// Exit code for bad input (config errors, unknown names).
+const EXIT_BAD_INPUT: u8 = 2;
+
+#[derive(Parser)]
+#[command(
+    name = "petrel",
+    version,
+    about = "An async, actor-based, context-aware mission runtime for robots."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Runs an agent from a RON config until Ctrl-C or --for elapses.
+    Run(RunArgs),
+    /// Checks a config (and overlays) without running anything; prints every error found.
+    Check {
+        /// The agent config (RON).
+        config: PathBuf,
+        /// Configs or snapshots laid over CONFIG, in order.
+        #[arg(long)]
+        overlay: Vec<PathBuf>,
+    },
+    /// Lists module types, or describes one with `modules describe TYPE`.
+    Modules {
+        #[command(subcommand)]
+        command: Option<ModulesCommand>,
+    },
+}
+
+#[derive(Subcommand)]
+enum ModulesCommand {
+    /// Prints every property of a module type: path, kind, type, default and doc.
+    Describe {
+        /// The module type, e.g. `demo.scale`.
+        type_name: String,
+    },
+}
+
+/// Arguments of `petrel run`.
+#[derive(clap::Args)]
+pub(crate) struct RunArgs {
+    /// The agent config (RON).
+    config: PathBuf,
+    /// Stop after this long (e.g. `10s`, `1m30s`); default: run until Ctrl-C.
+    #[arg(long = "for", value_parser = humantime::parse_duration)]
+    duration: Option<Duration>,
+    /// Configs or snapshots laid over CONFIG, in order.
+    #[arg(long)]
+    overlay: Vec<PathBuf>,
+    /// Write a snapshot of the whole blackboard here when stopping.
+    #[arg(long)]
+    snapshot_out: Option<PathBuf>,
+    /// How long each module gets to stop before it is killed.
+    #[arg(long, value_parser = humantime::parse_duration, default_value = "5s")]
+    stop_timeout: Duration,
+    /// Log format on standard error (filter with RUST_LOG, default `info`).
+    #[arg(long, value_enum, default_value_t = LogFormat::Pretty)]
+    log_format: LogFormat,
+}
+
+/// How logs are written.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum LogFormat {
+    /// Human-readable lines.
+    Pretty,
+    /// One JSON object per line, for tools.
+    Json,
+}
+
+/// Runs the command line given by `args` (including the program name) with module types `registry`.
+pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) -> ExitCode {
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(EXIT_BAD_INPUT)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    match cli.command {
+        Command::Run(args) => run::run(&registry, args),
+        Command::Check { config, overlay } => check(&registry, &config, &overlay),
+        Command::Modules { command: None } => modules::list(&registry),
+        Command::Modules {
+            command: Some(ModulesCommand::Describe { type_name }),
+        } => modules::describe(&registry, &type_name),
+    }
+}
+
+/// Loads a config with its overlays.
+pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile, ConfigErrors> {
+    let mut file = ConfigFile::load(config)?;
+    for overlay in overlays {
+        file.overlay(ConfigFile::load(overlay)?);
+    }
+    Ok(file)
+}
+
+fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[PathBuf]) -> ExitCode {
+    let result =
+        load(config, overlays).and_then(|file| file.build(registry).map(|reg| (file, reg)));
+    match result {
+        Ok((file, reg)) => {
+            let links = file
+                .config
+                .modules
+                .iter()
+                .map(|m| m.links.len())
+                .sum::<usize>();
+            println!(
+                "{}: ok: agent `{}`, {} modules, {links} links",
+                config.display(),
+                reg.agent(),
+                reg.modules().len()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(errors) => bad_input(&errors),
+    }
+}
+
+/// Prints config errors, one per line, and returns the bad-input exit code.
+pub(crate) fn bad_input(errors: &ConfigErrors) -> ExitCode {
+    eprintln!("{errors}");
+    let n = errors.0.len();
+    eprintln!(
+        "{n} error{} found; nothing was started",
+        if n == 1 { "" } else { "s" }
+    );
+    ExitCode::from(EXIT_BAD_INPUT)
+}

@@ -1,0 +1,71 @@
+//! `petrel modules` and `petrel modules describe TYPE`.
+
+use std::process::ExitCode;
+
+use petrel_actors::{ModuleRegistry, PropertyKind};
+
+pub(crate) fn list(registry: &ModuleRegistry) -> ExitCode {
+    let width = registry.types().map(|t| t.name().len()).max().unwrap_or(0);
+    for t in registry.types() {
+        println!("{:<width$}  {}", t.name(), t.description());
+    }
+    println!("\n`petrel modules describe TYPE` lists a type's properties.");
+    ExitCode::SUCCESS
+}
+
+pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
+    let Some(t) = registry.get(type_name) else {
+        let near = registry.nearest(type_name);
+        let hint = if near.is_empty() {
+            String::new()
+        } else {
+            format!("; did you mean {}?", near.join(", "))
+        };
+        eprintln!("error: unknown module type `{type_name}`{hint} (`petrel modules` lists them)");
+        return ExitCode::from(2);
+    };
+    println!("{}: {}\n", t.name(), t.description());
+    // The module's own properties first, then those the runtime adds to every module.
+    let (own, runtime): (Vec<_>, Vec<_>) = t
+        .properties()
+        .into_iter()
+        .partition(|p| !matches!(p.kind, PropertyKind::Enabled | PropertyKind::Stats));
+    let rows: Vec<[String; 5]> = own
+        .iter()
+        .chain(&runtime)
+        .map(|p| {
+            [
+                p.path.clone(),
+                p.kind.to_string(),
+                p.type_info.name().to_string(),
+                p.default_text(),
+                p.doc.clone(),
+            ]
+        })
+        .collect();
+    let header = ["property", "kind", "type", "default", "doc"].map(String::from);
+    let widths: Vec<usize> = (0..4)
+        .map(|i| {
+            rows.iter()
+                .chain([&header])
+                .map(|r| r[i].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    for row in std::iter::once(&header).chain(&rows) {
+        println!(
+            "  {:<w0$}  {:<w1$}  {:<w2$}  {:<w3$}  {}",
+            row[0],
+            row[1],
+            row[2],
+            row[3],
+            row[4],
+            w0 = widths[0],
+            w1 = widths[1],
+            w2 = widths[2],
+            w3 = widths[3]
+        );
+    }
+    ExitCode::SUCCESS
+}

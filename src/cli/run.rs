@@ -1,0 +1,72 @@
+//! `petrel run`: start an agent, wait for Ctrl-C or `--for`, stop cleanly, summarise.
+
+use std::process::ExitCode;
+
+use petrel_actors::{status, Agent, ModuleRegistry, StartError};
+
+use super::{bad_input, load, logging, RunArgs};
+
+pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
+    logging::init(args.log_format);
+    let file = match load(&args.config, &args.overlay) {
+        Ok(file) => file,
+        Err(errors) => return bad_input(&errors),
+    };
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("error: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    runtime.block_on(async move {
+        let agent = match Agent::start(&file, registry).await {
+            Ok(agent) => agent,
+            Err(StartError::Config(errors)) => return bad_input(&errors),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
+            }
+        };
+        let why = match args.duration {
+            Some(d) => tokio::select! {
+                _ = tokio::time::sleep(d) => format!("ran for {}", humantime::format_duration(d)),
+                _ = tokio::signal::ctrl_c() => "interrupted".to_string(),
+            },
+            None => {
+                let _ = tokio::signal::ctrl_c().await;
+                "interrupted".to_string()
+            }
+        };
+        tracing::info!(agent = agent.name(), "stopping: {why}");
+        let summary = agent.stop_modules(args.stop_timeout).await;
+        let mut code = ExitCode::SUCCESS;
+        if let Some(path) = &args.snapshot_out {
+            match agent
+                .snapshot()
+                .await
+                .map_err(|e| e.to_string())
+                .and_then(|s| std::fs::write(path, s).map_err(|e| e.to_string()))
+            {
+                Ok(()) => println!("snapshot written to {}", path.display()),
+                Err(e) => {
+                    eprintln!(
+                        "error: could not write the snapshot to {}: {e}",
+                        path.display()
+                    );
+                    code = ExitCode::FAILURE;
+                }
+            }
+        }
+        agent.shutdown().await;
+        println!("\n{why}\n{summary}");
+        if summary.modules.iter().any(|m| m.status == status::FAILED) {
+            eprintln!("some modules failed: see the summary above and the log");
+            code = ExitCode::FAILURE;
+        }
+        code
+    })
+}

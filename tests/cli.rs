@@ -1,0 +1,135 @@
+//! The `petrel` binary as a user runs it.
+
+use std::process::{Command, Output};
+
+fn petrel(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(args)
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("petrel runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn check_accepts_the_shipped_demo_config() {
+    let out = petrel(&["check", "configs/pipeline.ron"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout),
+        "configs/pipeline.ron: ok: agent `robot1`, 5 modules, 3 links\n"
+    );
+}
+
+#[test]
+fn check_lists_every_error_of_a_broken_config_and_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("broken.ron");
+    std::fs::write(
+        &path,
+        r#"Agent(name: "r1", modules: [
+    (name: "c", type: "demo.countr"),
+    (name: "s", type: "demo.scale", values: {"params/factor": "x"}, links: {"in/value": "s/in/value"}),
+])"#,
+    )
+    .unwrap();
+    let out = petrel(&["check", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    let p = path.display();
+    assert!(err.contains(&format!("{p}:2:23: error: module `c`: unknown module type `demo.countr`; did you mean `demo.counter`?")), "{err}");
+    assert!(err.contains(&format!("{p}:3:46: error: module `s`, `params/factor` (f64): Expected f64 but found the string \"x\" instead")), "{err}");
+    assert!(
+        err.contains("link cycle: s/in/value -> s/in/value"),
+        "{err}"
+    );
+    assert!(
+        err.ends_with("3 errors found; nothing was started\n"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn modules_lists_and_describes_types() {
+    let list = text(&petrel(&["modules"]).stdout);
+    assert!(
+        list.contains("demo.scale") && list.contains("demo.consumer"),
+        "{list}"
+    );
+    let out = petrel(&["modules", "describe", "demo.scale"]);
+    let described = text(&out.stdout);
+    assert!(
+        described.lines().any(|l| l.split_whitespace().take(4).eq([
+            "params/factor",
+            "param",
+            "f64",
+            "1.0"
+        ])),
+        "{described}"
+    );
+    let unknown = petrel(&["modules", "describe", "demo.scal"]);
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(text(&unknown.stderr).contains("did you mean demo.scale?"));
+}
+
+#[test]
+fn run_for_a_while_prints_a_summary_and_writes_a_runnable_snapshot() {
+    let dir = tempfile::tempdir().unwrap();
+    let snap = dir.path().join("snap.ron");
+    let out = petrel(&[
+        "run",
+        "configs/pipeline.ron",
+        "--for",
+        "300ms",
+        "--snapshot-out",
+        snap.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("ran for 300ms"), "{stdout}");
+    assert!(
+        stdout.contains("agent robot1: 5 modules, 0 failures"),
+        "{stdout}"
+    );
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.trim_start().starts_with("consumer") && l.contains("stopped")),
+        "{stdout}"
+    );
+    let check = petrel(&["check", snap.to_str().unwrap()]);
+    assert!(
+        check.status.success(),
+        "the snapshot is a valid config: {}",
+        text(&check.stderr)
+    );
+    let overlay = petrel(&[
+        "check",
+        "configs/pipeline.ron",
+        "--overlay",
+        snap.to_str().unwrap(),
+    ]);
+    assert!(
+        overlay.status.success(),
+        "and a valid overlay: {}",
+        text(&overlay.stderr)
+    );
+}
+
+#[test]
+fn bad_arguments_are_explained() {
+    let out = petrel(&["run", "configs/pipeline.ron", "--for", "soon"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("invalid value 'soon' for '--for <DURATION>'"),
+        "{}",
+        text(&out.stderr)
+    );
+    let missing = petrel(&["run", "configs/nope.ron"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(text(&missing.stderr).starts_with("configs/nope.ron: error: cannot read config:"));
+}

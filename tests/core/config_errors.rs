@@ -1,0 +1,162 @@
+//! Every config error is found before anything starts, located, and says what was expected.
+
+use petrel::actors::ConfigFile;
+
+use crate::support::registry;
+
+/// The errors of config `text`, one string per error.
+fn errors(text: &str) -> Vec<String> {
+    match ConfigFile::parse("bad.ron", text).and_then(|f| f.build(&registry()).map(|_| ())) {
+        Ok(()) => panic!("config should be rejected"),
+        Err(e) => e.0.iter().map(ToString::to_string).collect(),
+    }
+}
+
+#[test]
+fn ron_syntax_errors_give_file_line_and_column() {
+    let e = errors(
+        "Agent(\n    name: \"r1\",\n    modules: [ (name: \"a\" type: \"demo.counter\") ],\n)",
+    );
+    assert_eq!(e.len(), 1);
+    assert!(e[0].starts_with("bad.ron:3:"), "{}", e[0]);
+    assert!(e[0].contains("RON syntax"), "{}", e[0]);
+    let unknown_field = errors("Agent(name: \"r1\", modulez: [])");
+    assert!(unknown_field[0].contains("modulez"), "{}", unknown_field[0]);
+}
+
+#[test]
+fn a_missing_file_is_named() {
+    let e = ConfigFile::load("no/such/config.ron")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("no/such/config.ron: error: cannot read config:"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_unknown_module_type_suggests_the_nearest_names() {
+    let e = errors("Agent(name: \"r1\", modules: [\n  (name: \"c\", type: \"demo.conter\"),\n])");
+    assert_eq!(e, ["bad.ron:2:21: error: module `c`: unknown module type `demo.conter`; did you mean `demo.counter`?"]);
+}
+
+#[test]
+fn an_unknown_property_lists_the_module_properties() {
+    let e = errors(
+        r#"Agent(name: "r1", modules: [(name: "s", type: "demo.scale", values: {"params/factr": 2.0})])"#,
+    );
+    assert_eq!(e.len(), 1);
+    assert!(
+        e[0].starts_with(
+            "bad.ron:1:70: error: module `s` has no property `params/factr`; it has: "
+        ),
+        "{}",
+        e[0]
+    );
+    assert!(
+        e[0].ends_with(
+            "it has: enabled, in/value, out/value, params/factor, params/offset, params/smoothing"
+        ),
+        "{}",
+        e[0]
+    );
+    let link = errors(
+        r#"Agent(name: "r1", modules: [(name: "s", type: "demo.scale", links: {"in/valeu": "s/out/value"})])"#,
+    );
+    assert!(
+        link[0].contains("module `s` has no property `in/valeu`; it has: enabled, in/value,"),
+        "{}",
+        link[0]
+    );
+    let target = errors(
+        r#"Agent(name: "r1", modules: [(name: "s", type: "demo.scale", links: {"in/value": "x/out/value"})])"#,
+    );
+    assert!(
+        target[0].ends_with("module `s`, `in/value`: no module `x` in agent `r1` (modules: s)"),
+        "{}",
+        target[0]
+    );
+}
+
+#[test]
+fn a_wrong_value_type_says_expected_and_found() {
+    let e = errors(
+        r#"Agent(name: "r1", modules: [(name: "s", type: "demo.scale", values: {"params/factor": "big"})])"#,
+    );
+    assert_eq!(e.len(), 1);
+    assert!(
+        e[0].contains("module `s`, `params/factor` (f64): "),
+        "{}",
+        e[0]
+    );
+    assert!(
+        e[0].to_lowercase().contains("found the string \"big\""),
+        "{}",
+        e[0]
+    );
+}
+
+#[test]
+fn link_cycles_and_type_mismatches_are_rejected() {
+    let cycle = errors(
+        r#"Agent(name: "r1", modules: [
+            (name: "a", type: "test.echo", links: {"in/value": "b/in/value"}),
+            (name: "b", type: "test.echo", links: {"in/value": "a/in/value"}),
+        ])"#,
+    );
+    assert_eq!(cycle.len(), 1);
+    assert!(cycle[0].starts_with("bad.ron:3:"), "{}", cycle[0]);
+    assert!(
+        cycle[0].ends_with("link cycle: b/in/value -> a/in/value -> b/in/value"),
+        "{}",
+        cycle[0]
+    );
+    let types = errors(
+        r#"Agent(name: "r1", modules: [
+            (name: "c", type: "demo.counter"),
+            (name: "s", type: "demo.scale", links: {"in/value": "c/params/period_ms"}),
+        ])"#,
+    );
+    assert!(
+        types[0].ends_with(
+            "cannot link `s/in/value` (f64) to `c/params/period_ms` (i64): the types differ"
+        ),
+        "{}",
+        types[0]
+    );
+    let queue = errors(
+        r#"Agent(name: "r1", modules: [
+            (name: "c", type: "demo.counter"),
+            (name: "q", type: "demo.consumer", links: {"in/items": "c/out/value"}),
+        ])"#,
+    );
+    assert!(
+        queue[0].contains("a queue input links to a queue"),
+        "{}",
+        queue[0]
+    );
+}
+
+#[test]
+fn duplicate_module_names_are_rejected() {
+    let e = errors(
+        r#"Agent(name: "r1", modules: [(name: "a", type: "demo.counter"), (name: "a", type: "demo.scale")])"#,
+    );
+    assert_eq!(
+        e,
+        ["bad.ron:1:71: error: duplicate module name `a`: each module needs its own name"]
+    );
+}
+
+#[test]
+fn all_errors_are_reported_in_one_pass() {
+    let e = errors(
+        r#"Agent(name: "r1", modules: [
+            (name: "a", type: "demo.nope"),
+            (name: "b", type: "demo.scale", values: {"params/factor": true, "params/gain": 1.0},
+             links: {"in/value": "a/out/value"}),
+        ])"#,
+    );
+    assert_eq!(e.len(), 4, "{e:#?}");
+}

@@ -1,0 +1,11 @@
+//! Whole-system tests of the runtime core: agents started from RON configs, driven and
+//! observed through the blackboard. Timing uses tokio's paused clock, never wall-clock sleeps.
+
+mod config_errors;
+mod custom_module;
+mod failures;
+mod links;
+mod queues;
+mod scheduling;
+mod snapshot;
+mod support;

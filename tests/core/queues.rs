@@ -1,0 +1,92 @@
+//! Queues: many readers, each sees every item once in order; lagging readers count their losses.
+
+use petrel::actors::DEFAULT_STOP_TIMEOUT;
+
+use crate::support::{advance, start};
+
+#[tokio::test(start_paused = true)]
+async fn every_reader_sees_every_item_exactly_once_in_order() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "producer", type: "demo.producer", values: {"params/period_ms": 10, "params/batch": 7}),
+            (name: "c1", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+            (name: "c2", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+            (name: "c3", type: "demo.consumer", links: {"in/items": "c2/in/items"}),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard().clone();
+    advance(1005).await;
+    bb.set("producer/enabled", false).await.unwrap();
+    advance(20).await;
+    let produced = *bb.get::<i64>("producer/state/next").await.unwrap();
+    assert_eq!(produced, 700);
+    for c in ["c1", "c2", "c3"] {
+        let get = |p: &str| format!("{c}/{p}");
+        assert_eq!(
+            *bb.get::<i64>(&get("out/received")).await.unwrap(),
+            produced,
+            "{c} received all"
+        );
+        assert_eq!(
+            *bb.get::<i64>(&get("out/gaps")).await.unwrap(),
+            0,
+            "{c} saw no gap"
+        );
+        assert_eq!(
+            *bb.get::<i64>(&get("out/duplicates")).await.unwrap(),
+            0,
+            "{c} saw no duplicate"
+        );
+        assert_eq!(
+            *bb.get::<i64>(&get("stats/dropped/in/items")).await.unwrap(),
+            0
+        );
+    }
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_lagging_reader_loses_the_oldest_items_and_the_loss_is_visible() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "producer", type: "demo.producer", values: {"params/period_ms": 10, "params/batch": 10},
+             capacities: {"out/items": 16}),
+            (name: "slow", type: "demo.consumer", values: {"enabled": false}, links: {"in/items": "producer/out/items"}),
+            (name: "fast", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard().clone();
+    advance(105).await;
+    bb.set("producer/enabled", false).await.unwrap();
+    advance(1).await;
+    assert_eq!(*bb.get::<i64>("producer/state/next").await.unwrap(), 100);
+    assert_eq!(
+        *bb.get::<i64>("slow/stats/dropped/in/items").await.unwrap(),
+        84,
+        "drops counted while disabled"
+    );
+    bb.set("slow/enabled", true).await.unwrap();
+    advance(1).await;
+    assert_eq!(
+        *bb.get::<i64>("slow/out/received").await.unwrap(),
+        16,
+        "the newest `capacity` items remain"
+    );
+    assert_eq!(
+        *bb.get::<i64>("slow/out/gaps").await.unwrap(),
+        84,
+        "the consumer sees the hole in the numbering"
+    );
+    assert_eq!(
+        *bb.get::<i64>("fast/out/received").await.unwrap(),
+        100,
+        "a reader keeping up loses nothing"
+    );
+    assert_eq!(
+        *bb.get::<i64>("fast/stats/dropped/in/items").await.unwrap(),
+        0
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

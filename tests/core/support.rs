@@ -1,0 +1,138 @@
+//! Shared helpers and test-only module types.
+
+use std::time::Duration;
+
+use petrel::actors::{
+    Agent, ConfigFile, Context, Input, Module, ModuleRegistry, Output, Ports, Schedule, State,
+};
+
+/// Built-in module types plus the test modules below.
+pub fn registry() -> ModuleRegistry {
+    let mut r = petrel::modules::builtin();
+    r.register::<Echo>()
+        .register::<TickLog>()
+        .register::<Faulty>();
+    r
+}
+
+/// Parses `text` as `test.ron`.
+pub fn config(text: &str) -> ConfigFile {
+    ConfigFile::parse("test.ron", text).unwrap_or_else(|e| panic!("config should parse:\n{e}"))
+}
+
+/// Starts an agent from config text with the test registry.
+pub async fn start(text: &str) -> Agent {
+    Agent::start(&config(text), &registry())
+        .await
+        .unwrap_or_else(|e| panic!("agent should start:\n{e}"))
+}
+
+/// Advances the paused clock by `ms`, letting every ready task run first.
+pub async fn advance(ms: u64) {
+    tokio::time::sleep(Duration::from_millis(ms)).await;
+}
+
+/// `test.echo`: copies `in/value` to `out/value` on every change, counting its steps.
+pub struct Echo {
+    input: Input<f64>,
+    out: Output<f64>,
+    steps: State<i64>,
+}
+
+impl Module for Echo {
+    const TYPE: &'static str = "test.echo";
+    const DESCRIPTION: &'static str = "Copies in/value to out/value on change.";
+    fn declare(ports: &mut Ports) -> Self {
+        Echo {
+            input: ports.input("in/value", 0.0, "value"),
+            out: ports.output("out/value", 0.0, "copy"),
+            steps: ports.state("state/steps", 0, "steps after the first"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input)
+    }
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if !ctx.cause().first() {
+            self.steps.set(self.steps.value() + 1);
+        }
+        self.out.set(self.input.value());
+        Ok(())
+    }
+}
+
+/// `test.ticklog`: records the (paused-clock) time of each periodic step, in ms since init.
+pub struct TickLog {
+    period_ms: Input<i64>,
+    work_ms: Input<i64>,
+    times: Output<Vec<f64>>,
+    origin: Option<tokio::time::Instant>,
+}
+
+impl Module for TickLog {
+    const TYPE: &'static str = "test.ticklog";
+    const DESCRIPTION: &'static str = "Records when each periodic step ran.";
+    fn declare(ports: &mut Ports) -> Self {
+        TickLog {
+            period_ms: ports.param("params/period_ms", 100, "period"),
+            work_ms: ports.param("params/work_ms", 0, "time each step takes"),
+            times: ports.output("out/times", Vec::new(), "step times, ms since init"),
+            origin: None,
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::every(Duration::from_millis(self.period_ms.value() as u64))
+    }
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.origin = Some(tokio::time::Instant::now());
+        Ok(())
+    }
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.cause().period() {
+            let origin = self.origin.expect("set in init");
+            let mut times = (*self.times.get()).clone();
+            times.push(ctx.now().duration_since(origin).as_secs_f64() * 1e3);
+            self.times.set(times);
+            tokio::time::sleep(Duration::from_millis(self.work_ms.value() as u64)).await;
+        }
+        Ok(())
+    }
+}
+
+/// `test.faulty`: counts steps and fails at step `params/fail_at` by panicking or erroring,
+/// or fails its init.
+pub struct Faulty {
+    mode: Input<String>,
+    fail_at: Input<i64>,
+    steps: State<i64>,
+}
+
+impl Module for Faulty {
+    const TYPE: &'static str = "test.faulty";
+    const DESCRIPTION: &'static str = "Fails on purpose.";
+    fn declare(ports: &mut Ports) -> Self {
+        Faulty {
+            mode: ports.param("params/mode", "panic".to_string(), "panic, error or init"),
+            fail_at: ports.param("params/fail_at", 3, "step that fails"),
+            steps: ports.state("state/steps", 0, "steps so far"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::every(Duration::from_millis(10))
+    }
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        anyhow::ensure!(*self.mode.get() != "init", "no such device /dev/laser0");
+        Ok(())
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let steps = self.steps.value() + 1;
+        self.steps.set(steps);
+        if steps == self.fail_at.value() {
+            match self.mode.get().as_str() {
+                "panic" => panic!("wheel encoder exploded at step {steps}"),
+                _ => anyhow::bail!("lost the serial link at step {steps}"),
+            }
+        }
+        Ok(())
+    }
+}
