@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use tokio::time::Instant;
 
-use crate::cell::Endpoint;
+use crate::cell::{Endpoint, Signal};
 use crate::queue::{QueueCore, QueueItem, ReaderEndpoint};
 use crate::types::PropertyType;
 use crate::value::AnyValue;
@@ -145,6 +145,46 @@ impl<T: PropertyType + Copy> Output<T> {
     #[inline]
     pub fn value(&self) -> T {
         *self.get()
+    }
+}
+
+/// A handle to any value property of a running agent, from outside its modules (tools, tests,
+/// benchmarks); see [`Blackboard::handle`](crate::Blackboard::handle).
+pub struct PropertyHandle<T> {
+    ep: Arc<Endpoint>,
+    signal: Arc<Signal>,
+    _t: PhantomData<fn() -> T>,
+}
+
+impl<T: PropertyType> PropertyHandle<T> {
+    pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
+        let signal = Arc::new(Signal::default());
+        ep.subscribe(&signal);
+        PropertyHandle { ep, signal, _t: PhantomData }
+    }
+
+    /// The current value (of the link target, if linked).
+    #[inline]
+    pub fn get(&self) -> Arc<T> {
+        downcast(self.ep.value())
+    }
+
+    /// The current value with its version and write time.
+    pub fn read(&self) -> Sample<T> {
+        let slot = self.ep.read();
+        Sample { value: downcast(slot.value), version: slot.version, written: slot.written }
+    }
+
+    /// Writes a value (to the link target, if linked) and wakes its watchers.
+    #[inline]
+    pub fn set(&self, value: T) {
+        self.ep.write(Arc::new(value))
+    }
+
+    /// Waits until the value seen through this handle changes (returns at once if it changed
+    /// since the last call).
+    pub async fn changed(&self) {
+        self.signal.wait().await;
     }
 }
 

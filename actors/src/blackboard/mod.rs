@@ -12,6 +12,7 @@ use std::sync::Arc;
 use ractor::{Actor, ActorProcessingErr, ActorRef, RpcReplyPort};
 
 use crate::cell::Signal;
+use crate::handle::PropertyHandle;
 use crate::ports::Handle;
 use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
@@ -40,6 +41,7 @@ pub(crate) enum BlackboardMsg {
     },
     SetRon(String, ron::Value, Reply<()>),
     Get(String, Reply<(TypeInfo, AnyValue)>),
+    Endpoint(String, Reply<Arc<crate::cell::Endpoint>>),
     Snapshot(Reply<String>),
 }
 
@@ -118,6 +120,9 @@ impl Actor for BlackboardActor {
             }
             BlackboardMsg::Get(key, reply) => {
                 let _ = reply.send(reg.get(&key));
+            }
+            BlackboardMsg::Endpoint(key, reply) => {
+                let _ = reply.send(reg.endpoint(&key));
             }
             BlackboardMsg::Snapshot(reply) => {
                 let _ = reply.send(Ok(crate::snapshot::write(reg)));
@@ -249,6 +254,20 @@ impl Blackboard {
                 expected: ti.name(),
                 reason,
             })
+    }
+
+    /// A direct handle to a value property, for tools, tests and benchmarks that drive or watch
+    /// a running agent: reads and writes skip the actor, like a module's own handles.
+    pub async fn handle<T: PropertyType>(&self, address: &str) -> Result<PropertyHandle<T>, BlackboardError> {
+        let ep = self.call(|r| BlackboardMsg::Endpoint(address.to_string(), r)).await?;
+        if !ep.type_info().is::<T>() {
+            return Err(BlackboardError::BadValue {
+                key: address.to_string(),
+                expected: T::TYPE_NAME,
+                reason: format!("the property is a {}", ep.type_info().name()),
+            });
+        }
+        Ok(PropertyHandle::new(ep))
     }
 
     /// The whole blackboard as a RON agent config (values, links, queue capacities).

@@ -6,7 +6,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
-use crate::cell::{Cell, Signal};
+use crate::cell::{Cell, Endpoint, Signal};
 use crate::ports::{Handle, Ports, PropertyDecl, PropertyKind};
 use crate::queue::{dropped_path, QueueCore};
 use crate::url::PropertyUrl;
@@ -434,6 +434,15 @@ impl Registry {
                 kind: self.entries[&key].decl.kind,
                 key,
             }),
+        }
+    }
+
+    /// The endpoint of a value property.
+    pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
+        let key = self.key_of(address)?;
+        match &self.entries[&key].handle {
+            Handle::Value(ep) => Ok(ep.clone()),
+            _ => Err(BlackboardError::NotSettable { kind: self.entries[&key].decl.kind, key }),
         }
     }
 

@@ -1,0 +1,186 @@
+//! Bench-only module types and helpers shared by the benchmark targets.
+#![allow(dead_code)] // each bench target uses a different subset
+
+use std::time::Duration;
+
+use petrel::actors::{
+    Agent, ConfigFile, Context, Image, Input, Module, ModuleRegistry, Output, Ports, QueueReader, QueueWriter, Schedule,
+};
+
+/// Short criterion runs: ratios against in-run baselines are what we record.
+pub fn criterion() -> criterion::Criterion {
+    criterion::Criterion::default()
+        .sample_size(30)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+}
+
+/// A two-worker tokio runtime, like `petrel run` on a 2-core machine.
+pub fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap()
+}
+
+/// The built-in types plus the bench modules.
+pub fn registry() -> ModuleRegistry {
+    let mut r = petrel::modules::builtin();
+    r.register::<Echo>().register::<Ping>().register::<QueueSource>().register::<QueueSink>().register::<Idle>();
+    r
+}
+
+/// Starts an agent from config text.
+pub async fn start(text: &str) -> Agent {
+    let file = ConfigFile::parse("bench.ron", text).unwrap_or_else(|e| panic!("{e}"));
+    Agent::start(&file, &registry()).await.unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `bench.echo`: copies `in/value` to `out/value` on change.
+pub struct Echo {
+    input: Input<f64>,
+    out: Output<f64>,
+}
+
+impl Module for Echo {
+    const TYPE: &'static str = "bench.echo";
+    const DESCRIPTION: &'static str = "Copies in/value to out/value on change.";
+    fn declare(ports: &mut Ports) -> Self {
+        Echo { input: ports.input("in/value", 0.0, "value"), out: ports.output("out/value", 0.0, "copy") }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.out.set(self.input.value());
+        Ok(())
+    }
+}
+
+/// `bench.ping`: when `in/go` is set to N, plays N round trips: writes `out/ping`, waits for
+/// `in/pong` to answer, and so on; then increments `out/done`.
+pub struct Ping {
+    go: Input<i64>,
+    pong: Input<f64>,
+    ping: Output<f64>,
+    done: Output<i64>,
+    go_seen: u64,
+    remaining: i64,
+}
+
+impl Module for Ping {
+    const TYPE: &'static str = "bench.ping";
+    const DESCRIPTION: &'static str = "Plays in/go round trips through out/ping and in/pong.";
+    fn declare(ports: &mut Ports) -> Self {
+        Ping {
+            go: ports.input("in/go", 0, "rounds to play"),
+            pong: ports.input("in/pong", 0.0, "the answer"),
+            ping: ports.output("out/ping", 0.0, "the question"),
+            done: ports.output("out/done", 0, "batches finished"),
+            go_seen: 0,
+            remaining: 0,
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.go).on_change(&self.pong)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let go = self.go.read();
+        if go.version != self.go_seen {
+            self.go_seen = go.version;
+            self.remaining = *go;
+        } else if self.remaining > 0 && self.pong.value() == self.ping.value() {
+            self.remaining -= 1;
+            if self.remaining == 0 {
+                self.done.set(self.done.value() + 1);
+                return Ok(());
+            }
+        } else {
+            return Ok(());
+        }
+        self.ping.set(self.ping.value() + 1.0);
+        Ok(())
+    }
+}
+
+/// `bench.qsource`: when `in/go` is set to N, pushes N shared `Image` items of
+/// `params/bytes` bytes.
+pub struct QueueSource {
+    go: Input<i64>,
+    bytes: Input<i64>,
+    items: QueueWriter<Image>,
+    payload: Option<std::sync::Arc<Image>>,
+}
+
+impl Module for QueueSource {
+    const TYPE: &'static str = "bench.qsource";
+    const DESCRIPTION: &'static str = "Pushes in/go images into out/items.";
+    fn declare(ports: &mut Ports) -> Self {
+        QueueSource {
+            go: ports.input("in/go", 0, "items to push"),
+            bytes: ports.param("params/bytes", 1024, "payload size"),
+            items: ports.queue_out("out/items", 1 << 16, "images"),
+            payload: None,
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.go)
+    }
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let n = self.bytes.value() as usize;
+        let data: std::sync::Arc<[u8]> = vec![7u8; n].into();
+        self.payload = Some(std::sync::Arc::new(Image { width: n as u32, height: 1, encoding: "mono8".into(), data }));
+        Ok(())
+    }
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.cause().first() {
+            return Ok(());
+        }
+        let payload = self.payload.as_ref().expect("set in init");
+        for _ in 0..self.go.value() {
+            self.items.push_shared(payload.clone());
+        }
+        Ok(())
+    }
+}
+
+/// `bench.qsink`: drains `in/items`, counting bytes seen in `out/count` (items).
+pub struct QueueSink {
+    items: QueueReader<Image>,
+    count: Output<i64>,
+}
+
+impl Module for QueueSink {
+    const TYPE: &'static str = "bench.qsink";
+    const DESCRIPTION: &'static str = "Counts the items it drains.";
+    fn declare(ports: &mut Ports) -> Self {
+        QueueSink { items: ports.queue_in("in/items", "images"), count: ports.output("out/count", 0, "items seen") }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.items)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let items = self.items.drain();
+        if !items.is_empty() {
+            let first = items[0].data[0] as i64; // touch the payload: it must be readable
+            self.count.set(self.count.value() + items.len() as i64 + first - 7);
+        }
+        Ok(())
+    }
+}
+
+/// `bench.idle`: waits for an input that never changes.
+pub struct Idle {
+    input: Input<f64>,
+}
+
+impl Module for Idle {
+    const TYPE: &'static str = "bench.idle";
+    const DESCRIPTION: &'static str = "Waits for in/value to change.";
+    fn declare(ports: &mut Ports) -> Self {
+        Idle { input: ports.input("in/value", 0.0, "never changes") }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        Ok(())
+    }
+}

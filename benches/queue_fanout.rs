@@ -1,0 +1,54 @@
+//! `queue_fanout`: one producer module pushes images into a queue read by 8 consumer modules;
+//! 1 KiB vs 1 MiB payloads. Items are shared, so the payload size must not matter.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use criterion::{criterion_group, criterion_main, Criterion};
+
+const READERS: usize = 8;
+
+fn config(bytes: usize) -> String {
+    let sinks: String = (0..READERS)
+        .map(|i| format!(r#"(name: "sink{i}", type: "bench.qsink", links: {{"in/items": "src/out/items"}}),"#))
+        .collect();
+    format!(r#"Agent(name: "bench", modules: [(name: "src", type: "bench.qsource", values: {{"params/bytes": {bytes}}}), {sinks}])"#)
+}
+
+fn bench(c: &mut Criterion) {
+    let rt = common::runtime();
+    let mut group = c.benchmark_group("queue_fanout");
+    for (name, bytes) in [("petrel_1k", 1 << 10), ("petrel_1m", 1 << 20)] {
+        let (agent, go, counts) = rt.block_on(async {
+            let agent = common::start(&config(bytes)).await;
+            let bb = agent.blackboard();
+            let go = bb.handle::<i64>("src/in/go").await.unwrap();
+            let mut counts = Vec::new();
+            for i in 0..READERS {
+                counts.push(bb.handle::<i64>(&format!("sink{i}/out/count")).await.unwrap());
+            }
+            (agent, go, counts)
+        });
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                rt.block_on(async {
+                    let target = *counts[0].get() + iters as i64;
+                    let start = Instant::now();
+                    go.set(iters as i64);
+                    for count in &counts {
+                        while *count.get() < target {
+                            count.changed().await;
+                        }
+                    }
+                    start.elapsed()
+                })
+            })
+        });
+        rt.block_on(agent.stop(Duration::from_secs(1)));
+    }
+    group.finish();
+}
+
+criterion_group! { name = benches; config = common::criterion(); targets = bench }
+criterion_main!(benches);
