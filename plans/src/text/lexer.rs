@@ -74,23 +74,13 @@ impl<'a> Lexer<'a> {
         Err(start)
     }
 
-    /// Raw text up to (not including) the first `delim` outside parentheses;
-    /// consumes the delimiter. Returns the text and its byte offset, or
-    /// `None` at end of input.
+    /// Raw text up to (not including) the first `delim` (which conditions
+    /// never contain); consumes the delimiter. Returns the text and its byte
+    /// offset, or `None` at end of input.
     pub fn raw_until(&mut self, delim: char) -> Option<(usize, &'a str)> {
         let start = self.pos;
-        let mut depth = 0i32;
-        for (i, c) in self.src[start..].char_indices() {
-            match c {
-                '(' => depth += 1,
-                ')' => depth -= 1,
-                c if c == delim && depth <= 0 => {
-                    self.pos = start + i + c.len_utf8();
-                    return Some((start, &self.src[start..start + i]));
-                }
-                _ => {}
-            }
-        }
-        None
+        let i = self.src[start..].find(delim)?;
+        self.pos = start + i + delim.len_utf8();
+        Some((start, &self.src[start..start + i]))
     }
 }
