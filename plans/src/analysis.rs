@@ -195,6 +195,7 @@ fn explore(plan: &Plan, r: &mut CheckReport) {
     let mut fired = vec![false; plan.transitions().len()];
     let mut max_tokens = vec![0u32; n];
     let (mut goal_reached, mut unbounded, mut complete) = (false, false, true);
+    let mut deadlock: Option<Vec<u32>> = None;
     let exact =
         |m: &[u32], ps: &[(usize, u32)]| !ps.is_empty() && ps.iter().all(|&(p, k)| m[p] == k);
     while let Some(m) = queue.pop_front() {
@@ -220,6 +221,10 @@ fn explore(plan: &Plan, r: &mut CheckReport) {
                     .all(|e| m[e.place] >= e.weight)
             })
             .collect();
+        if cands.is_empty() {
+            deadlock.get_or_insert_with(|| m.clone());
+            continue;
+        }
         let mut atoms: Vec<Atom> = Vec::new();
         for &ti in &cands {
             plan.transitions()[ti].guard.for_each_atom(&mut |a| {
@@ -269,6 +274,21 @@ fn explore(plan: &Plan, r: &mut CheckReport) {
         r.warnings.push(finding(
             "unbounded",
             format!("some place can hold more than {MAX_TOKENS} tokens"),
+        ));
+    }
+    if let Some(m) = deadlock {
+        let marked: Vec<String> = m
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| **k > 0)
+            .map(|(p, k)| format!("'{}': {k}", plan.places()[p].label))
+            .collect();
+        r.warnings.push(finding(
+            "deadlock",
+            format!(
+                "the plan can get stuck in a marking that is neither goal nor fail: {{{}}}",
+                marked.join(", ")
+            ),
         ));
     }
     for (i, &mx) in max_tokens.iter().enumerate() {
