@@ -23,7 +23,7 @@ const MAX_TOKENS: u32 = 64;
 const MAX_ATOMS: usize = 10;
 
 /// One problem found by [`check`].
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub struct Finding {
     /// A stable short code, e.g. `dead-transition`.
     pub code: &'static str,
@@ -32,8 +32,8 @@ pub struct Finding {
 }
 
 /// The result of [`check`]. Errors mean the plan cannot work (non-zero
-/// exit); warnings deserve a look.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+/// exit); warnings deserve a look. Serialisable, for a `--json` output.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
 pub struct CheckReport {
     /// The plan name.
     pub plan: String,

@@ -21,6 +21,9 @@ use crate::exec::{step, Environment, PlanState, PlanStatus};
 use crate::label::CallKind;
 use crate::model::Plan;
 
+/// The step limit the CLI uses when none is given.
+pub const DEFAULT_MAX_STEPS: u64 = 100;
+
 /// A parsed simulation script.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Script {
@@ -127,7 +130,7 @@ fn marking_json(plan: &Plan, state: &PlanState) -> String {
 }
 
 /// Runs `plan` from its initial state against `script` for at most
-/// `max_steps` steps (stopping at goal or fail), writing the JSON lines
+/// `max_steps` steps (usually [`DEFAULT_MAX_STEPS`]) (stopping at goal or fail), writing the JSON lines
 /// described in the module docs to `out`. Returns the final status.
 pub fn simulate(
     plan: &Plan,

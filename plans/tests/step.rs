@@ -423,3 +423,11 @@ fn subplan_cycles_are_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn plan_and_state_can_move_between_threads() {
+    fn assert<T: Send + Sync>() {}
+    assert::<petrel_plans::Plan>();
+    assert::<PlanState>();
+    let _: &dyn petrel_plans::Environment = &TestEnv::default();
+}
