@@ -18,7 +18,7 @@ use std::collections::{BTreeSet, HashSet};
 use std::fmt;
 
 use crate::label::CallKind;
-use crate::model::{Atom, Plan};
+use crate::model::{Atom, Hot, Plan};
 
 /// What the runtime around a plan provides: external conditions and actions.
 ///
@@ -207,29 +207,34 @@ fn step_into(
         .collect();
     candidates.sort_unstable();
     candidates.dedup();
+    let hot = plan.hot();
     let mut enabled = Vec::with_capacity(candidates.len());
     for ti in candidates {
-        let t = &plan.transitions()[ti as usize];
-        if has_tokens(state, &t.inputs) && guard(plan, state, env, report, ti as usize) {
+        let h = hot.trans[ti as usize];
+        if has_tokens(state, h.inputs(&hot.arcs))
+            && (h.plain || guard(plan, state, env, report, ti as usize))
+        {
             enabled.push(ti as usize);
         }
     }
     for ti in enabled {
-        let t = &plan.transitions()[ti];
-        if !has_tokens(state, &t.inputs) {
+        let h = hot.trans[ti];
+        if !has_tokens(state, h.inputs(&hot.arcs)) {
             continue; // an earlier firing of this step took the tokens
         }
-        for e in &t.inputs {
+        for e in h.inputs(&hot.arcs) {
             state.take(e.place, e.weight);
         }
-        for e in &t.outputs {
+        for e in h.outputs(&hot.arcs) {
             state.add(e.place, e.weight);
         }
         if top {
             report.fired.push(ti);
         }
-        for c in &t.calls {
-            make_call(plan, state, c.exec, c.kind, env, report);
+        if !h.plain {
+            for c in &plan.transitions()[ti].calls {
+                make_call(plan, state, c.exec, c.kind, env, report);
+            }
         }
     }
 }
