@@ -36,10 +36,16 @@ fn ring(places: usize, tokens: usize) -> Plan {
         ));
     }
     for i in 0..places {
-        s.push_str(&format!("<transition id=\"t{i}\"><name><value>[]</value></name></transition>\n"));
+        s.push_str(&format!(
+            "<transition id=\"t{i}\"><name><value>[]</value></name></transition>\n"
+        ));
         let next = (i + 1) % places;
-        s.push_str(&format!("<arc id=\"i{i}\" source=\"p{i}\" target=\"t{i}\"/>\n"));
-        s.push_str(&format!("<arc id=\"o{i}\" source=\"t{i}\" target=\"p{next}\"/>\n"));
+        s.push_str(&format!(
+            "<arc id=\"i{i}\" source=\"p{i}\" target=\"t{i}\"/>\n"
+        ));
+        s.push_str(&format!(
+            "<arc id=\"o{i}\" source=\"t{i}\" target=\"p{next}\"/>\n"
+        ));
     }
     s.push_str("</net></pnml>\n");
     parse_pnml(&s, "ring.pnml", "ring").expect("the synthetic ring loads")

@@ -165,10 +165,13 @@ impl PlanState {
 
     /// Executables with a marked execution place, each once, in index order.
     fn running(&self, plan: &Plan) -> Vec<usize> {
+        let pe = &plan.hot().place_exec;
         let mut ex: Vec<usize> = self
             .marked
             .iter()
-            .filter_map(|&p| plan.places()[p as usize].exec)
+            .map(|&p| pe[p as usize])
+            .filter(|&e| e != Hot::NO_EXEC)
+            .map(|e| e as usize)
             .collect();
         ex.sort_unstable();
         ex.dedup();
