@@ -17,8 +17,9 @@
 use std::collections::{BTreeSet, HashSet};
 use std::fmt;
 
+use crate::hot::Hot;
 use crate::label::CallKind;
-use crate::model::{Atom, Hot, Plan};
+use crate::model::{Atom, Plan};
 
 /// What the runtime around a plan provides: external conditions and actions.
 ///

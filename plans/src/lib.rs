@@ -44,10 +44,12 @@
 #![warn(missing_docs)]
 
 mod analysis;
+mod build;
 mod condition;
 mod dot;
 mod error;
 mod exec;
+mod hot;
 mod label;
 mod load;
 mod model;

@@ -9,8 +9,9 @@
 
 use roxmltree::{Document, Node};
 
+use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
 use crate::error::PlanError;
-use crate::model::{Comment, Plan, Position, RawArc, RawNet, RawPlace, RawTransition};
+use crate::model::{Comment, Plan, Position};
 
 /// Parses PNML text into a plan.
 ///

@@ -6,8 +6,9 @@ use super::layout::layout;
 use super::parse::{Item, Parser};
 use super::rules::{parse_rules, Rule, RuleEnd};
 use super::syntax_error;
+use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
 use crate::error::PlanError;
-use crate::model::{Plan, RawArc, RawNet, RawPlace, RawTransition};
+use crate::model::Plan;
 
 /// Where a plan action sits, for execution rules.
 struct Occurrence {

@@ -4,7 +4,8 @@
 
 use std::collections::{HashMap, VecDeque};
 
-use crate::model::{Position, RawNet};
+use crate::build::RawNet;
+use crate::model::Position;
 
 pub(crate) fn layout(net: &mut RawNet) {
     let mut succ: HashMap<&str, Vec<&str>> = HashMap::new();
