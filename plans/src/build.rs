@@ -187,7 +187,7 @@ impl Builder<'_> {
             };
             // Parallel arcs between the same pair add up, as in a multiset.
             match side.iter_mut().find(|e| e.place == edge.place) {
-                Some(e) => e.weight += edge.weight,
+                Some(e) => e.weight = e.weight.saturating_add(edge.weight),
                 None => side.push(edge),
             }
         }

@@ -139,6 +139,20 @@ impl PlanState {
         self.subs.get(exec).and_then(|s| s.as_deref())
     }
 
+    /// Names of the actions whose execution place is marked, sub-plans'
+    /// included (e.g. to interrupt them when a mission is aborted).
+    pub fn running_actions(&self, plan: &Plan) -> Vec<String> {
+        let mut out = Vec::new();
+        for e in self.running(plan) {
+            let exe = &plan.executables()[e];
+            match (&exe.subplan, self.subs[e].as_deref()) {
+                (Some(sp), Some(sub)) => out.extend(sub.running_actions(sp)),
+                _ => out.push(exe.name.clone()),
+            }
+        }
+        out
+    }
+
     /// Goal, fail or running, from the current marking.
     pub fn status(&self, plan: &Plan) -> PlanStatus {
         let exact =
@@ -153,7 +167,7 @@ impl PlanState {
     }
 
     fn add(&mut self, place: usize, n: u32) {
-        self.tokens[place] += n;
+        self.tokens[place] = self.tokens[place].saturating_add(n);
         self.marked.insert(place as u32);
     }
 

@@ -396,6 +396,7 @@ fn subplan_interrupt_passes_on_and_start_resets() {
     let mut env = TestEnv::default().cond("stop", false).cond("again", false);
     assert_eq!(run(&p, &mut st, &mut env), ["child.start"]);
     assert_eq!(run(&p, &mut st, &mut env), ["grasp.start"]);
+    assert_eq!(st.running_actions(&p), ["grasp"]);
     env.conditions.insert("stop".into(), true);
     assert_eq!(
         run(&p, &mut st, &mut env),

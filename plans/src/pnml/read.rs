@@ -154,13 +154,14 @@ fn children<'a, 'i>(n: Node<'a, 'i>, tag: &'static str) -> impl Iterator<Item = 
         .filter(move |c| c.is_element() && c.tag_name().name() == tag)
 }
 
-/// The text at a child path, e.g. `name/value`.
-fn value(n: Node, path: &[&'static str]) -> Option<String> {
-    let mut cur = n;
-    for tag in path {
-        cur = children(cur, tag).next()?;
-    }
-    Some(cur.text().unwrap_or("").to_string())
+/// The text at a child path, e.g. `name/value`; standard PNML's `text`
+/// stands for PNP's `value`.
+fn value(n: Node, path: &[&'static str; 2]) -> Option<String> {
+    let parent = children(n, path[0]).next()?;
+    let leaf = children(parent, path[1])
+        .next()
+        .or_else(|| children(parent, "text").next())?;
+    Some(leaf.text().unwrap_or("").to_string())
 }
 
 /// `N` or PIPE's `Default,N`.
@@ -199,13 +200,14 @@ mod tests {
         let text = r#"<pnml><net id="x"><page id="pg">
             <place id="n0"><name><value>init</value></name><initialMarking><value>Default,1</value></initialMarking></place>
             <transition id="n1"><name><value>a.start</value></name></transition>
-            <place id="n2"><name><value>a.exec</value></name></place>
+            <place id="n2"><name><text>a.exec</text></name></place>
             <arc id="n3" source="n0" target="n1"/><arc id="n4" source="n1" target="n2"><inscription><value>2</value></inscription></arc>
             </page></net></pnml>"#;
         let p = parse_pnml(text, "mem", "gen").unwrap();
         assert_eq!(p.name(), "gen");
         assert_eq!(p.places()[0].initial, 1);
         assert_eq!(p.places()[1].initial, 0);
+        assert_eq!(p.places()[1].label, "a.exec");
         assert_eq!(p.transitions()[0].outputs[0].weight, 2);
     }
 }

@@ -84,11 +84,15 @@ pub(crate) fn parse_rule(
             "expected a rule '*if* COND *during* ACTION *do* ...'".into(),
         ));
     }
-    let do_at = text
-        .find("*do*")
-        .ok_or_else(|| err(text.len(), "expected '*do*' after the condition".into()))?;
     let cond_start = lead + 4;
-    let (cond_end, during) = match text[..do_at].find("*during*") {
+    let do_at = text[cond_start..]
+        .find("*do*")
+        .map(|i| i + cond_start)
+        .ok_or_else(|| err(text.len(), "expected '*do*' after the condition".into()))?;
+    let during_at = text[cond_start..do_at]
+        .find("*during*")
+        .map(|i| i + cond_start);
+    let (cond_end, during) = match during_at {
         Some(d) => {
             let action = text[d + 8..do_at].trim();
             if action.is_empty() || action.contains(char::is_whitespace) {
