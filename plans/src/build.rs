@@ -1,0 +1,284 @@
+//! Building a [`Plan`] from raw nodes: ids, labels, guards and calls are
+//! resolved and checked here, so every label or guard error shows at load time.
+
+use std::collections::HashMap;
+
+use crate::condition::{parse_condition, Cond};
+use crate::error::PlanError;
+use crate::hot::Hot;
+use crate::label::{parse_place_label, parse_transition_label, CallKind, CallTarget};
+use crate::model::{
+    Atom, Call, Comment, Condition, Edge, Executable, Place, Plan, Position, Transition,
+};
+
+impl Plan {
+    /// Builds and validates a plan from raw nodes; `file` names the source in errors.
+    pub(crate) fn build(raw: RawNet, file: &str) -> Result<Plan, PlanError> {
+        Builder {
+            file,
+            exec_ix: HashMap::new(),
+            cond_ix: HashMap::new(),
+            executables: vec![],
+            conditions: vec![],
+        }
+        .build(raw)
+    }
+}
+
+/// Nodes as read from a file or produced by the text compiler.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RawNet {
+    pub name: String,
+    pub places: Vec<RawPlace>,
+    pub transitions: Vec<RawTransition>,
+    pub arcs: Vec<RawArc>,
+    pub comments: Vec<Comment>,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct RawPlace {
+    pub id: String,
+    pub label: String,
+    pub initial: u32,
+    pub position: Option<Position>,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct RawTransition {
+    pub id: String,
+    pub label: String,
+    pub position: Option<Position>,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct RawArc {
+    pub id: String,
+    pub source: String,
+    pub target: String,
+    pub weight: u32,
+}
+
+struct Builder<'a> {
+    file: &'a str,
+    exec_ix: HashMap<String, usize>,
+    cond_ix: HashMap<String, usize>,
+    executables: Vec<Executable>,
+    conditions: Vec<String>,
+}
+
+enum Node {
+    Place(usize),
+    Transition(usize),
+}
+
+impl Builder<'_> {
+    fn exec(&mut self, name: &str) -> usize {
+        if let Some(&i) = self.exec_ix.get(name) {
+            return i;
+        }
+        self.executables.push(Executable {
+            name: name.to_string(),
+            subplan: None,
+        });
+        self.exec_ix
+            .insert(name.to_string(), self.executables.len() - 1);
+        self.executables.len() - 1
+    }
+
+    fn atom(&mut self, text: &str) -> Atom {
+        match text.rsplit_once('.') {
+            Some((name, "finished")) if !name.is_empty() => Atom::Finished(self.exec(name)),
+            Some((name, "failed")) if !name.is_empty() => Atom::Failed(self.exec(name)),
+            _ => {
+                let n = self.conditions.len();
+                let i = *self.cond_ix.entry(text.to_string()).or_insert(n);
+                if i == n {
+                    self.conditions.push(text.to_string());
+                }
+                Atom::External(i)
+            }
+        }
+    }
+
+    fn pnml_err(&self, element: String, message: String) -> PlanError {
+        PlanError::Pnml {
+            file: self.file.to_string(),
+            element,
+            message,
+        }
+    }
+
+    fn build(mut self, raw: RawNet) -> Result<Plan, PlanError> {
+        let mut ids: HashMap<&str, Node> = HashMap::new();
+        let mut places = Vec::with_capacity(raw.places.len());
+        for (i, p) in raw.places.iter().enumerate() {
+            if ids.insert(&p.id, Node::Place(i)).is_some() {
+                return Err(self.pnml_err(format!("place '{}'", p.id), "duplicate node id".into()));
+            }
+            let l = parse_place_label(&p.label).map_err(|message| PlanError::Label {
+                file: self.file.to_string(),
+                kind: "place",
+                id: p.id.clone(),
+                label: p.label.clone(),
+                message,
+            })?;
+            let exec = l.exec.map(|n| self.exec(&n));
+            places.push(Place {
+                id: p.id.clone(),
+                label: p.label.clone(),
+                initial: p.initial,
+                exec,
+                goal: l.goal,
+                fail: l.fail,
+                position: p.position,
+            });
+        }
+        let mut transitions = Vec::with_capacity(raw.transitions.len());
+        for (i, t) in raw.transitions.iter().enumerate() {
+            if ids.insert(&t.id, Node::Transition(i)).is_some() {
+                return Err(
+                    self.pnml_err(format!("transition '{}'", t.id), "duplicate node id".into())
+                );
+            }
+            transitions.push(Transition {
+                id: t.id.clone(),
+                label: t.label.clone(),
+                inputs: vec![],
+                outputs: vec![],
+                guard: Cond::True,
+                explicit_guard: false,
+                calls: vec![],
+                position: t.position,
+            });
+        }
+        for a in &raw.arcs {
+            let find = |id: &str, end: &str| {
+                ids.get(id).ok_or_else(|| {
+                    self.pnml_err(
+                        format!("arc '{}'", a.id),
+                        format!("{end} '{id}' is not a place or transition id"),
+                    )
+                })
+            };
+            let (s, t) = (find(&a.source, "source")?, find(&a.target, "target")?);
+            let (tr, edge, input) = match (s, t) {
+                (Node::Place(p), Node::Transition(t)) => (*t, Edge { place: *p, weight: a.weight }, true),
+                (Node::Transition(t), Node::Place(p)) => (*t, Edge { place: *p, weight: a.weight }, false),
+                (Node::Place(_), Node::Place(_)) => {
+                    return Err(self.pnml_err(
+                        format!("arc '{}'", a.id),
+                        format!("joins two places ('{}' -> '{}'); an arc must join a place and a transition", a.source, a.target),
+                    ))
+                }
+                (Node::Transition(_), Node::Transition(_)) => {
+                    return Err(self.pnml_err(
+                        format!("arc '{}'", a.id),
+                        format!(
+                            "joins two transitions ('{}' -> '{}'); an arc must join a place and a transition",
+                            a.source, a.target
+                        ),
+                    ))
+                }
+            };
+            let side = if input {
+                &mut transitions[tr].inputs
+            } else {
+                &mut transitions[tr].outputs
+            };
+            // Parallel arcs between the same pair add up, as in a multiset.
+            match side.iter_mut().find(|e| e.place == edge.place) {
+                Some(e) => e.weight = e.weight.saturating_add(edge.weight),
+                None => side.push(edge),
+            }
+        }
+        for t in &mut transitions {
+            self.resolve_label(t, &places)?;
+        }
+        let hot = Hot::new(&places, &transitions);
+        let goal = places
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.goal > 0)
+            .map(|(i, p)| (i, p.goal))
+            .collect();
+        let fail = places
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.fail > 0)
+            .map(|(i, p)| (i, p.fail))
+            .collect();
+        Ok(Plan {
+            name: raw.name,
+            places,
+            transitions,
+            executables: self.executables,
+            conditions: self.conditions,
+            hot,
+            goal,
+            fail,
+            comments: raw.comments,
+        })
+    }
+
+    fn resolve_label(&mut self, t: &mut Transition, places: &[Place]) -> Result<(), PlanError> {
+        let l = parse_transition_label(&t.label).map_err(|message| PlanError::Label {
+            file: self.file.to_string(),
+            kind: "transition",
+            id: t.id.clone(),
+            label: t.label.clone(),
+            message,
+        })?;
+        for (target, kind) in l.calls {
+            match target {
+                CallTarget::Named(n) => {
+                    let exec = self.exec(&n);
+                    t.calls.push(Call { exec, kind });
+                }
+                CallTarget::Bare => {
+                    let side = if kind.bare_uses_outputs() {
+                        &t.outputs
+                    } else {
+                        &t.inputs
+                    };
+                    for e in side {
+                        if let Some(exec) = places[e.place].exec {
+                            if !t.calls.contains(&Call { exec, kind }) {
+                                t.calls.push(Call { exec, kind });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(g) = l.guard {
+            let parsed = parse_condition(&g).map_err(|e| PlanError::Guard {
+                file: self.file.to_string(),
+                id: t.id.clone(),
+                label: t.label.clone(),
+                message: e.to_string(),
+            })?;
+            t.guard = parsed
+                .try_map::<_, ()>(&mut |a| Ok(self.atom(a)))
+                .expect("atom resolution cannot fail");
+            t.explicit_guard = true;
+        } else {
+            let mut atoms: Vec<Condition> = Vec::new();
+            for c in &t.calls {
+                let a = match c.kind {
+                    CallKind::End => Atom::Finished(c.exec),
+                    CallKind::Fail => Atom::Failed(c.exec),
+                    _ => continue,
+                };
+                if !atoms.contains(&Cond::Atom(a)) {
+                    atoms.push(Cond::Atom(a));
+                }
+            }
+            t.guard = match atoms.len() {
+                0 => Cond::True,
+                1 => atoms.pop().expect("one atom"),
+                _ => Cond::And(atoms),
+            };
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,104 @@
+//! The one error type of the crate.
+//!
+//! Every variant names the file it comes from (or the name given to an
+//! in-memory source) and, where there is one, the location inside it, so the
+//! CLI can print the error as is.
+
+use std::path::PathBuf;
+
+/// Anything that can go wrong while reading, compiling or loading a plan, a
+/// rules file or a simulation script.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// The file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The PNML file is not well-formed XML.
+    #[error("{file}:{line}:{column}: malformed XML: {message}")]
+    Xml {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: u32,
+        /// 1-based column.
+        column: u32,
+        /// What the XML parser expected.
+        message: String,
+    },
+    /// The XML is well-formed but is not a Petri net as PNP writes it
+    /// (missing net, arc between two places, unknown node id, bad marking...).
+    #[error("{file}: {element}: {message}")]
+    Pnml {
+        /// The file.
+        file: String,
+        /// The element concerned, e.g. `arc 'a3'` or `place 'p1'`.
+        element: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A place or transition label could not be understood
+    /// (e.g. a dotted word with an unknown function, or two guards).
+    #[error("{file}: {kind} '{id}' with label '{label}': {message}")]
+    Label {
+        /// The file.
+        file: String,
+        /// `place` or `transition`.
+        kind: &'static str,
+        /// The node id.
+        id: String,
+        /// The full label.
+        label: String,
+        /// What is wrong and what was expected.
+        message: String,
+    },
+    /// A transition guard does not parse.
+    #[error("{file}: transition '{id}' with label '{label}': bad guard: {message}")]
+    Guard {
+        /// The file.
+        file: String,
+        /// The transition id.
+        id: String,
+        /// The full label.
+        label: String,
+        /// The condition parser's message, with the column inside the guard.
+        message: String,
+    },
+    /// A syntax error in a text plan or a rules file.
+    #[error("{file}:{line}:{column}: {message}")]
+    Syntax {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: u32,
+        /// 1-based column.
+        column: u32,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// A bad line in a simulation script.
+    #[error("{file}:{line}: {message}")]
+    Script {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: u32,
+        /// What was found and what was expected.
+        message: String,
+    },
+    /// Sub-plans include each other.
+    #[error("{file}: sub-plan '{name}' includes itself (through {chain})")]
+    SubPlanCycle {
+        /// The file that closes the cycle.
+        file: String,
+        /// The sub-plan name.
+        name: String,
+        /// The chain of plan names, `a -> b -> a`.
+        chain: String,
+    },
+}

@@ -1,0 +1,323 @@
+//! The step semantics: a pure function of the plan, the state and the
+//! environment's answers.
+//!
+//! One step: (1) nothing if the plan is in its goal or fail state; (2) step
+//! once every executable with a marked execution place (shared by name; a
+//! sub-plan steps its own net); (3) compute the enabled transitions once, on
+//! the marking after (2); (4) fire them in document order, skipping those an
+//! earlier firing of this step disabled, each firing moving the tokens and
+//! then making its calls in label order. Transitions enabled by this step's
+//! firings wait for the next step.
+//!
+//! Cost: only the output transitions of marked places are examined; the set
+//! of marked places is kept incrementally. Nothing is proportional to the
+//! net size, except the goal / fail check (proportional to the number of
+//! goal / fail places).
+
+use std::collections::{BTreeSet, HashSet};
+use std::fmt;
+
+use crate::hot::Hot;
+use crate::label::CallKind;
+use crate::model::{Atom, Plan};
+
+/// What the runtime around a plan provides: external conditions and actions.
+///
+/// Sub-plans are handled inside the executor; the environment only sees
+/// actions. Object-safe, so the mission module can pass `&mut dyn Environment`.
+pub trait Environment {
+    /// The value of an external condition; `None` when the condition is
+    /// unknown (it then counts as false and is reported once per plan state).
+    fn condition(&mut self, name: &str) -> Option<bool>;
+    /// Steps action `name` once (its execution place is marked).
+    fn step_action(&mut self, name: &str);
+    /// Whether action `name` finished (the atom `name.finished`).
+    fn action_finished(&mut self, name: &str) -> bool;
+    /// Whether action `name` failed (the atom `name.failed`).
+    fn action_failed(&mut self, name: &str) -> bool;
+    /// A transition called `name.kind`. `Start` means the action restarts
+    /// from scratch (step count 0); after `End` / `Fail` it is done with;
+    /// after `Interrupt` it is kept for a later `Resume` or `Start`.
+    fn call(&mut self, name: &str, kind: CallKind);
+}
+
+/// Where a plan stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PlanStatus {
+    /// Neither goal nor fail.
+    Running,
+    /// Every goal place holds exactly its goal marking.
+    Goal,
+    /// Every fail place holds exactly its fail marking.
+    Fail,
+}
+
+impl PlanStatus {
+    /// `running`, `goal` or `fail`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PlanStatus::Running => "running",
+            PlanStatus::Goal => "goal",
+            PlanStatus::Fail => "fail",
+        }
+    }
+}
+
+/// A call made during a step (sub-plans included).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CallRecord {
+    /// Executable name.
+    pub executable: String,
+    /// The call.
+    pub kind: CallKind,
+}
+
+impl fmt::Display for CallRecord {
+    /// `name.kind`, e.g. `azione1.start`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}.{}", self.executable, self.kind)
+    }
+}
+
+/// What one step did.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct StepReport {
+    /// Top-level transitions fired, as indices into [`Plan::transitions`], in order.
+    pub fired: Vec<usize>,
+    /// Every call made, sub-plans included, in order.
+    pub calls: Vec<CallRecord>,
+    /// External conditions found unknown for the first time.
+    pub unknown_conditions: Vec<String>,
+}
+
+/// The run-time state of a plan: marking and sub-plan states.
+#[derive(Debug, Clone)]
+pub struct PlanState {
+    tokens: Vec<u32>,
+    marked: BTreeSet<u32>,
+    subs: Vec<Option<Box<PlanState>>>,
+    reported: HashSet<String>,
+}
+
+impl PlanState {
+    /// The initial state of `plan` (sub-plans at their initial marking).
+    pub fn new(plan: &Plan) -> PlanState {
+        let tokens: Vec<u32> = plan.places().iter().map(|p| p.initial).collect();
+        let marked = tokens
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| **t > 0)
+            .map(|(i, _)| i as u32)
+            .collect();
+        let subs = plan
+            .executables()
+            .iter()
+            .map(|e| e.subplan.as_ref().map(|sp| Box::new(PlanState::new(sp))))
+            .collect();
+        PlanState {
+            tokens,
+            marked,
+            subs,
+            reported: HashSet::new(),
+        }
+    }
+
+    /// Tokens in place `place` (index into [`Plan::places`]).
+    pub fn tokens(&self, place: usize) -> u32 {
+        self.tokens[place]
+    }
+
+    /// Marked places with their tokens, in document order.
+    pub fn marked(&self) -> impl Iterator<Item = (usize, u32)> + '_ {
+        self.marked
+            .iter()
+            .map(|&p| (p as usize, self.tokens[p as usize]))
+    }
+
+    /// The state of sub-plan executable `exec`, if it is a sub-plan.
+    pub fn subplan_state(&self, exec: usize) -> Option<&PlanState> {
+        self.subs.get(exec).and_then(|s| s.as_deref())
+    }
+
+    /// Names of the actions whose execution place is marked, sub-plans'
+    /// included (e.g. to interrupt them when a mission is aborted).
+    pub fn running_actions(&self, plan: &Plan) -> Vec<String> {
+        let mut out = Vec::new();
+        for e in self.running(plan) {
+            let exe = &plan.executables()[e];
+            match (&exe.subplan, self.subs[e].as_deref()) {
+                (Some(sp), Some(sub)) => out.extend(sub.running_actions(sp)),
+                _ => out.push(exe.name.clone()),
+            }
+        }
+        out
+    }
+
+    /// Goal, fail or running, from the current marking.
+    pub fn status(&self, plan: &Plan) -> PlanStatus {
+        let exact =
+            |ps: &[(usize, u32)]| !ps.is_empty() && ps.iter().all(|&(p, n)| self.tokens[p] == n);
+        if exact(plan.goal_places()) {
+            PlanStatus::Goal
+        } else if exact(plan.fail_places()) {
+            PlanStatus::Fail
+        } else {
+            PlanStatus::Running
+        }
+    }
+
+    fn add(&mut self, place: usize, n: u32) {
+        self.tokens[place] = self.tokens[place].saturating_add(n);
+        self.marked.insert(place as u32);
+    }
+
+    fn take(&mut self, place: usize, n: u32) {
+        self.tokens[place] -= n;
+        if self.tokens[place] == 0 {
+            self.marked.remove(&(place as u32));
+        }
+    }
+
+    /// Executables with a marked execution place, each once, in index order.
+    fn running(&self, plan: &Plan) -> Vec<usize> {
+        let pe = &plan.hot().place_exec;
+        let mut ex: Vec<usize> = self
+            .marked
+            .iter()
+            .map(|&p| pe[p as usize])
+            .filter(|&e| e != Hot::NO_EXEC)
+            .map(|e| e as usize)
+            .collect();
+        ex.sort_unstable();
+        ex.dedup();
+        ex
+    }
+}
+
+/// Performs one step of `plan` (see the module docs) and returns what it did.
+pub fn step(plan: &Plan, state: &mut PlanState, env: &mut dyn Environment) -> StepReport {
+    let mut report = StepReport::default();
+    step_into(plan, state, env, &mut report, true);
+    report
+}
+
+fn step_into(
+    plan: &Plan,
+    state: &mut PlanState,
+    env: &mut dyn Environment,
+    report: &mut StepReport,
+    top: bool,
+) {
+    if state.status(plan) != PlanStatus::Running {
+        return;
+    }
+    for e in state.running(plan) {
+        let exe = &plan.executables()[e];
+        match (&exe.subplan, state.subs[e].as_deref_mut()) {
+            (Some(sp), Some(sub)) => step_into(sp, sub, env, report, false),
+            _ => env.step_action(&exe.name),
+        }
+    }
+    let mut candidates: Vec<u32> = state
+        .marked
+        .iter()
+        .flat_map(|&p| plan.output_transitions(p as usize).iter().copied())
+        .collect();
+    candidates.sort_unstable();
+    candidates.dedup();
+    let hot = plan.hot();
+    let mut enabled = Vec::with_capacity(candidates.len());
+    for ti in candidates {
+        let h = hot.trans[ti as usize];
+        if has_tokens(state, h.inputs(&hot.arcs))
+            && (h.plain || guard(plan, state, env, report, ti as usize))
+        {
+            enabled.push(ti as usize);
+        }
+    }
+    for ti in enabled {
+        let h = hot.trans[ti];
+        if !has_tokens(state, h.inputs(&hot.arcs)) {
+            continue; // an earlier firing of this step took the tokens
+        }
+        for e in h.inputs(&hot.arcs) {
+            state.take(e.place, e.weight);
+        }
+        for e in h.outputs(&hot.arcs) {
+            state.add(e.place, e.weight);
+        }
+        if top {
+            report.fired.push(ti);
+        }
+        if !h.plain {
+            for c in &plan.transitions()[ti].calls {
+                make_call(plan, state, c.exec, c.kind, env, report);
+            }
+        }
+    }
+}
+
+fn has_tokens(state: &PlanState, inputs: &[crate::model::Edge]) -> bool {
+    inputs.iter().all(|e| state.tokens[e.place] >= e.weight)
+}
+
+fn guard(
+    plan: &Plan,
+    state: &mut PlanState,
+    env: &mut dyn Environment,
+    report: &mut StepReport,
+    t: usize,
+) -> bool {
+    plan.transitions()[t].guard.eval(&mut |a: &Atom| match *a {
+        Atom::Finished(e) | Atom::Failed(e) => {
+            let exe = &plan.executables()[e];
+            let want = if matches!(a, Atom::Finished(_)) {
+                PlanStatus::Goal
+            } else {
+                PlanStatus::Fail
+            };
+            match (&exe.subplan, state.subs[e].as_deref()) {
+                (Some(sp), Some(sub)) => sub.status(sp) == want,
+                _ if want == PlanStatus::Goal => env.action_finished(&exe.name),
+                _ => env.action_failed(&exe.name),
+            }
+        }
+        Atom::External(c) => {
+            let name = &plan.conditions()[c];
+            env.condition(name).unwrap_or_else(|| {
+                if state.reported.insert(name.clone()) {
+                    report.unknown_conditions.push(name.clone());
+                }
+                false
+            })
+        }
+    })
+}
+
+fn make_call(
+    plan: &Plan,
+    state: &mut PlanState,
+    e: usize,
+    kind: CallKind,
+    env: &mut dyn Environment,
+    report: &mut StepReport,
+) {
+    let exe = &plan.executables()[e];
+    report.calls.push(CallRecord {
+        executable: exe.name.clone(),
+        kind,
+    });
+    let (Some(sp), Some(sub)) = (&exe.subplan, state.subs[e].as_deref_mut()) else {
+        env.call(&exe.name, kind);
+        return;
+    };
+    if kind == CallKind::Start {
+        *sub = PlanState::new(sp);
+    } else {
+        // end / interrupt / fail (and resume, symmetrically) pass on to the
+        // sub-plan's running executables.
+        for inner in sub.running(sp) {
+            make_call(sp, sub, inner, kind, env, report);
+        }
+    }
+}

@@ -1,0 +1,121 @@
+//! Loading plan files: PNML or text plans, with sub-plans resolved next to
+//! the file (`subplan.exec` -> `subplan.pnml` in the same directory).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::error::PlanError;
+use crate::model::Plan;
+use crate::pnml::{parse_pnml, write_pnml};
+use crate::text::compile_text;
+
+/// A plan loaded from a file, sub-plans attached.
+#[derive(Debug, Clone)]
+pub struct LoadedPlan {
+    /// The plan.
+    pub plan: Arc<Plan>,
+    /// The file it came from.
+    pub path: PathBuf,
+}
+
+/// Reads a file as text; PNML files are often ISO-8859-1, so bytes that are
+/// not UTF-8 are read as Latin-1.
+pub(crate) fn read_text(path: &Path) -> Result<String, PlanError> {
+    let bytes = std::fs::read(path).map_err(|source| PlanError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(match String::from_utf8(bytes) {
+        Ok(s) => s,
+        Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
+    })
+}
+
+/// The file name up to its first dot.
+fn stem(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    name.split('.').next().unwrap_or_default().to_string()
+}
+
+fn is_pnml(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pnml"))
+}
+
+/// Loads a plan: a `.pnml` file, or a text plan (any other extension) with
+/// an optional execution-rules file. Executables whose name matches a
+/// `NAME.pnml` next to the file become sub-plans (recursively).
+pub fn load_plan(path: &Path, rules: Option<&Path>) -> Result<LoadedPlan, PlanError> {
+    let plan = if is_pnml(path) {
+        if let Some(r) = rules {
+            return Err(PlanError::Syntax {
+                file: r.display().to_string(),
+                line: 1,
+                column: 1,
+                message: format!(
+                    "execution rules apply to text plans only, not to {}",
+                    path.display()
+                ),
+            });
+        }
+        parse_pnml(&read_text(path)?, &path.display().to_string(), &stem(path))?
+    } else {
+        compile_file(path, rules)?
+    };
+    let mut chain = vec![stem(path)];
+    let plan = attach_subplans(plan, path, &mut chain)?;
+    Ok(LoadedPlan {
+        plan: Arc::new(plan),
+        path: path.to_path_buf(),
+    })
+}
+
+fn compile_file(path: &Path, rules: Option<&Path>) -> Result<Plan, PlanError> {
+    let text = read_text(path)?;
+    let rules_text = rules
+        .map(|r| read_text(r).map(|t| (t, r.display().to_string())))
+        .transpose()?;
+    compile_text(
+        &text,
+        &path.display().to_string(),
+        &stem(path),
+        rules_text.as_ref().map(|(t, f)| (t.as_str(), f.as_str())),
+    )
+}
+
+fn attach_subplans(
+    mut plan: Plan,
+    path: &Path,
+    chain: &mut Vec<String>,
+) -> Result<Plan, PlanError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    for e in 0..plan.executables().len() {
+        let name = plan.executables()[e].name.clone();
+        let file = dir.join(format!("{name}.pnml"));
+        if name.contains(['/', '\\']) || !file.is_file() {
+            continue;
+        }
+        if chain.contains(&name) {
+            chain.push(name.clone());
+            return Err(PlanError::SubPlanCycle {
+                file: path.display().to_string(),
+                name,
+                chain: chain.join(" -> "),
+            });
+        }
+        chain.push(name.clone());
+        let sub = parse_pnml(&read_text(&file)?, &file.display().to_string(), &name)?;
+        let sub = attach_subplans(sub, &file, chain)?;
+        chain.pop();
+        plan.set_subplan(e, Arc::new(sub));
+    }
+    Ok(plan)
+}
+
+/// Compiles a text plan (plus optional rules file) to JARP-openable PNML.
+pub fn compile_to_pnml(path: &Path, rules: Option<&Path>) -> Result<String, PlanError> {
+    Ok(write_pnml(&compile_file(path, rules)?))
+}

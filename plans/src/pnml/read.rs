@@ -1,0 +1,213 @@
+//! Reading PNML.
+//!
+//! Only `place`, `transition`, `arc` and the JARP `comment` children of the
+//! first `net` (or of its `page`s) matter; `graphics` is read for positions,
+//! `toolspecific` is ignored. Editor style (`p1`/`t1` ids, explicit zero
+//! markings and weights) and generator style (`n0...` ids, no
+//! `initialMarking` for empty places, arcs without inscription) are both
+//! accepted; values may use the PIPE form `Default,N`.
+
+use roxmltree::{Document, Node};
+
+use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
+use crate::error::PlanError;
+use crate::model::{Comment, Plan, Position};
+
+/// Parses PNML text into a plan.
+///
+/// `file` names the source in errors; `default_name` is the plan name when
+/// no `PLAN NAME:` comment gives one (the loader passes the file name up to
+/// its first dot). Sub-plans are not resolved here (see [`crate::load_plan`]).
+pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, PlanError> {
+    let doc = Document::parse(text).map_err(|e| {
+        let pos = e.pos();
+        PlanError::Xml {
+            file: file.to_string(),
+            line: pos.row,
+            column: pos.col,
+            message: e.to_string(),
+        }
+    })?;
+    let err = |element: &str, message: String| PlanError::Pnml {
+        file: file.to_string(),
+        element: element.to_string(),
+        message,
+    };
+    let root = doc.root_element();
+    if root.tag_name().name() != "pnml" {
+        return Err(err(
+            root.tag_name().name(),
+            "expected the root element <pnml>".into(),
+        ));
+    }
+    let net = children(root, "net")
+        .next()
+        .ok_or_else(|| err("pnml", "no <net> element".into()))?;
+    let mut raw = RawNet {
+        name: default_name.to_string(),
+        ..RawNet::default()
+    };
+    read_nodes(net, &mut raw, file)?;
+    for c in &raw.comments {
+        if let Some(name) = c.text.trim().strip_prefix("PLAN NAME:") {
+            raw.name = name.trim().to_string();
+            break;
+        }
+    }
+    Plan::build(raw, file)
+}
+
+fn read_nodes(parent: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
+    for n in parent.children().filter(Node::is_element) {
+        let id = || n.attribute("id").unwrap_or("").to_string();
+        let need_id = |kind: &str| -> Result<String, PlanError> {
+            match n.attribute("id") {
+                Some(id) if !id.is_empty() => Ok(id.to_string()),
+                _ => Err(PlanError::Pnml {
+                    file: file.to_string(),
+                    element: format!("{kind} at line {}", line_of(n)),
+                    message: "missing 'id' attribute".into(),
+                }),
+            }
+        };
+        match n.tag_name().name() {
+            "page" => read_nodes(n, raw, file)?,
+            "place" => {
+                let id = need_id("place")?;
+                let initial = match value(n, &["initialMarking", "value"]) {
+                    Some(v) => count(&v).ok_or_else(|| PlanError::Pnml {
+                        file: file.to_string(),
+                        element: format!("place '{id}'"),
+                        message: format!(
+                            "initial marking '{v}' is not a number (expected N or Default,N)"
+                        ),
+                    })?,
+                    None => 0,
+                };
+                let label = value(n, &["name", "value"]).unwrap_or_default();
+                raw.places.push(RawPlace {
+                    id,
+                    label,
+                    initial,
+                    position: position(n),
+                });
+            }
+            "transition" => {
+                let id = need_id("transition")?;
+                let label = value(n, &["name", "value"]).unwrap_or_default();
+                raw.transitions.push(RawTransition {
+                    id,
+                    label,
+                    position: position(n),
+                });
+            }
+            "arc" => {
+                let element = format!("arc '{}'", id());
+                let attr = |a: &str| {
+                    n.attribute(a)
+                        .map(str::to_string)
+                        .ok_or_else(|| PlanError::Pnml {
+                            file: file.to_string(),
+                            element: element.clone(),
+                            message: format!("missing '{a}' attribute"),
+                        })
+                };
+                let (source, target) = (attr("source")?, attr("target")?);
+                let weight = match value(n, &["inscription", "value"]) {
+                    Some(v) => count(&v)
+                        .filter(|w| *w > 0)
+                        .ok_or_else(|| PlanError::Pnml {
+                            file: file.to_string(),
+                            element: element.clone(),
+                            message: format!(
+                                "weight '{v}' is not a positive number (expected N or Default,N)"
+                            ),
+                        })?,
+                    None => 1,
+                };
+                raw.arcs.push(RawArc {
+                    id: id(),
+                    source,
+                    target,
+                    weight,
+                });
+            }
+            "comment" => {
+                let text = value(n, &["text", "value"]).unwrap_or_default();
+                raw.comments.push(Comment {
+                    text,
+                    position: position(n),
+                });
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn line_of(n: Node) -> u32 {
+    n.document().text_pos_at(n.range().start).row
+}
+
+fn children<'a, 'i>(n: Node<'a, 'i>, tag: &'static str) -> impl Iterator<Item = Node<'a, 'i>> {
+    n.children()
+        .filter(move |c| c.is_element() && c.tag_name().name() == tag)
+}
+
+/// The text at a child path, e.g. `name/value`; standard PNML's `text`
+/// stands for PNP's `value`.
+fn value(n: Node, path: &[&'static str; 2]) -> Option<String> {
+    let parent = children(n, path[0]).next()?;
+    let leaf = children(parent, path[1])
+        .next()
+        .or_else(|| children(parent, "text").next())?;
+    Some(leaf.text().unwrap_or("").to_string())
+}
+
+/// `N` or PIPE's `Default,N`.
+fn count(v: &str) -> Option<u32> {
+    let v = v.trim();
+    let v = v.rsplit_once(',').map_or(v, |(_, n)| n.trim());
+    if v.is_empty() {
+        return Some(0);
+    }
+    v.parse().ok()
+}
+
+fn position(n: Node) -> Option<Position> {
+    let p = children(n, "graphics")
+        .next()
+        .and_then(|g| children(g, "position").next())?;
+    let x = p.attribute("x")?.trim().parse().ok()?;
+    let y = p.attribute("y")?.trim().parse().ok()?;
+    Some(Position { x, y })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts() {
+        assert_eq!(count("1"), Some(1));
+        assert_eq!(count(" Default,2 "), Some(2));
+        assert_eq!(count(""), Some(0));
+        assert_eq!(count("x"), None);
+    }
+
+    #[test]
+    fn generator_style_and_pages() {
+        let text = r#"<pnml><net id="x"><page id="pg">
+            <place id="n0"><name><value>init</value></name><initialMarking><value>Default,1</value></initialMarking></place>
+            <transition id="n1"><name><value>a.start</value></name></transition>
+            <place id="n2"><name><text>a.exec</text></name></place>
+            <arc id="n3" source="n0" target="n1"/><arc id="n4" source="n1" target="n2"><inscription><value>2</value></inscription></arc>
+            </page></net></pnml>"#;
+        let p = parse_pnml(text, "mem", "gen").unwrap();
+        assert_eq!(p.name(), "gen");
+        assert_eq!(p.places()[0].initial, 1);
+        assert_eq!(p.places()[1].initial, 0);
+        assert_eq!(p.places()[1].label, "a.exec");
+        assert_eq!(p.transitions()[0].outputs[0].weight, 2);
+    }
+}

@@ -1,0 +1,308 @@
+//! Compiling the syntax tree into a net with PNPgen's structure.
+
+use std::collections::HashMap;
+
+use super::layout::layout;
+use super::parse::{Item, Parser};
+use super::rules::{parse_rules, Rule, RuleEnd};
+use super::syntax_error;
+use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
+use crate::error::PlanError;
+use crate::model::Plan;
+
+/// Where a plan action sits, for execution rules.
+struct Occurrence {
+    name: String,
+    before: usize,
+    exec: usize,
+    after: usize,
+}
+
+struct Net<'a> {
+    raw: RawNet,
+    src: &'a str,
+    file: &'a str,
+    init: usize,
+    goal: Option<usize>,
+    fail: Option<usize>,
+    labels: HashMap<String, usize>,
+    gotos: Vec<(usize, String, usize)>,
+    occurrences: Vec<Occurrence>,
+    inline: Vec<(usize, Rule)>,
+}
+
+impl Net<'_> {
+    fn place(&mut self, label: &str) -> usize {
+        let i = self.raw.places.len();
+        let label = if label.is_empty() {
+            format!("X{i}")
+        } else {
+            label.to_string()
+        };
+        self.raw.places.push(RawPlace {
+            id: format!("p{i}"),
+            label,
+            initial: 0,
+            position: None,
+        });
+        i
+    }
+
+    fn arc(&mut self, source: String, target: String) {
+        let id = format!("a{}", self.raw.arcs.len());
+        self.raw.arcs.push(RawArc {
+            id,
+            source,
+            target,
+            weight: 1,
+        });
+    }
+
+    fn trans(&mut self, label: &str, ins: &[usize], outs: &[usize]) -> usize {
+        let i = self.raw.transitions.len();
+        let id = format!("t{i}");
+        self.raw.transitions.push(RawTransition {
+            id: id.clone(),
+            label: label.to_string(),
+            position: None,
+        });
+        for &p in ins {
+            self.arc(format!("p{p}"), id.clone());
+        }
+        for &p in outs {
+            self.arc(id.clone(), format!("p{p}"));
+        }
+        i
+    }
+
+    /// `cur -> A.start -> A.exec -> A.end -> after`; returns (exec, after).
+    fn action(&mut self, cur: usize, name: &str) -> (usize, usize) {
+        let exec = self.place(&format!("{name}.exec"));
+        self.trans(&format!("{name}.start"), &[cur], &[exec]);
+        let after = self.place("");
+        self.trans(&format!("{name}.end"), &[exec], &[after]);
+        (exec, after)
+    }
+
+    fn seq(&mut self, mut cur: Option<usize>, items: &[Item]) -> Result<Option<usize>, PlanError> {
+        for item in items {
+            if let Item::Label { name, at } = item {
+                let here = match cur {
+                    Some(p) => p,
+                    None => self.place(""),
+                };
+                if self.labels.insert(name.clone(), here).is_some() {
+                    return Err(syntax_error(
+                        self.src,
+                        self.file,
+                        *at,
+                        format!("label '{name}' defined twice"),
+                    ));
+                }
+                cur = Some(here);
+                continue;
+            }
+            // Only reachable through a conditional whose branches all jump.
+            let c = match cur {
+                Some(p) => p,
+                None => self.place(""),
+            };
+            cur = self.item(c, item)?;
+        }
+        Ok(cur)
+    }
+
+    fn item(&mut self, cur: usize, item: &Item) -> Result<Option<usize>, PlanError> {
+        Ok(match item {
+            Item::Action {
+                name,
+                timeout: None,
+                rules,
+            } => {
+                let (exec, after) = self.action(cur, name);
+                self.occurrence(name, cur, exec, after, rules);
+                Some(after)
+            }
+            Item::Action {
+                name,
+                timeout: Some(secs),
+                rules,
+            } => {
+                let (pa, pw) = (self.place(""), self.place(""));
+                self.trans("[]", &[cur], &[pa, pw]);
+                let (exec, end_a) = self.action(pa, name);
+                self.occurrence(name, pa, exec, end_a, rules);
+                let wait = format!("wait_{secs}");
+                let (wexec, end_w) = self.action(pw, &wait);
+                let next = self.place("");
+                self.trans(&format!("{wait}.interrupt []"), &[wexec, end_a], &[next]);
+                self.trans(&format!("{name}.interrupt []"), &[exec, end_w], &[next]);
+                Some(next)
+            }
+            Item::Choice(branches) => {
+                let mut ends = Vec::new();
+                for (cond, body) in branches {
+                    let start = self.place("");
+                    self.trans(&format!("[{cond}]"), &[cur], &[start]);
+                    ends.extend(self.seq(Some(start), body)?);
+                }
+                let merge = self.place("");
+                for e in ends {
+                    self.trans(" ", &[e], &[merge]);
+                }
+                Some(merge)
+            }
+            Item::Block(body) => self.seq(Some(cur), body)?,
+            Item::Parallel(branches) => {
+                let starts: Vec<usize> = branches.iter().map(|_| self.place("")).collect();
+                self.trans("[]", &[cur], &starts);
+                let mut ends = Vec::new();
+                for (s, body) in starts.iter().zip(branches) {
+                    ends.extend(self.seq(Some(*s), body)?);
+                }
+                let next = self.place("");
+                self.trans("[]", &ends, &[next]);
+                Some(next)
+            }
+            Item::Goto { label, at } => {
+                let t = self.trans(" ", &[cur], &[]);
+                self.gotos.push((t, label.clone(), *at));
+                None
+            }
+            Item::RestartPlan => {
+                let init = self.init;
+                self.trans(" ", &[cur], &[init]);
+                None
+            }
+            Item::FailPlan => {
+                let fail = self.fail_place();
+                self.trans(" ", &[cur], &[fail]);
+                None
+            }
+            Item::Label { .. } => Some(cur),
+        })
+    }
+
+    fn occurrence(&mut self, name: &str, before: usize, exec: usize, after: usize, rules: &[Rule]) {
+        self.occurrences.push(Occurrence {
+            name: name.to_string(),
+            before,
+            exec,
+            after,
+        });
+        let i = self.occurrences.len() - 1;
+        self.inline.extend(rules.iter().map(|r| (i, r.clone())));
+    }
+
+    fn fail_place(&mut self) -> usize {
+        match self.fail {
+            Some(f) => f,
+            None => {
+                let f = self.place("fail");
+                self.fail = Some(f);
+                f
+            }
+        }
+    }
+
+    fn apply_rule(&mut self, occ: usize, rule: &Rule) {
+        let (name, before, exec, after) = {
+            let o = &self.occurrences[occ];
+            (o.name.clone(), o.before, o.exec, o.after)
+        };
+        let mut cur = self.place("");
+        let label = match &rule.cond {
+            None => format!("{name}.fail"),
+            Some(c) => format!("{name}.interrupt [{c}]"),
+        };
+        self.trans(&label, &[exec], &[cur]);
+        for r in &rule.recovery {
+            cur = self.action(cur, r).1;
+        }
+        let target = match rule.end {
+            RuleEnd::RestartAction => before,
+            RuleEnd::SkipAction => after,
+            RuleEnd::RestartPlan => self.init,
+            RuleEnd::FailPlan => self.fail_place(),
+            RuleEnd::Goal => match self.goal {
+                Some(g) => g,
+                None => {
+                    let g = self.place("goal");
+                    self.goal = Some(g);
+                    g
+                }
+            },
+        };
+        self.trans(" ", &[cur], &[target]);
+    }
+}
+
+/// Compiles a text plan into a [`Plan`] with PNPgen's net structure (see the
+/// `text` module docs for the language and the choices made).
+///
+/// `file` names the plan in errors, `name` is the plan name, `rules` an
+/// optional rules file as (text, file name).
+pub fn compile_text(
+    src: &str,
+    file: &str,
+    name: &str,
+    rules: Option<(&str, &str)>,
+) -> Result<Plan, PlanError> {
+    let items = Parser::new(src, file).plan()?;
+    if items.is_empty() {
+        return Err(syntax_error(
+            src,
+            file,
+            src.len(),
+            "empty plan; expected at least one action",
+        ));
+    }
+    let rules = match rules {
+        Some((text, f)) => parse_rules(text, f)?,
+        None => Vec::new(),
+    };
+    let mut net = Net {
+        raw: RawNet {
+            name: name.to_string(),
+            ..RawNet::default()
+        },
+        src,
+        file,
+        init: 0,
+        goal: None,
+        fail: None,
+        labels: HashMap::new(),
+        gotos: Vec::new(),
+        occurrences: Vec::new(),
+        inline: Vec::new(),
+    };
+    let init = net.place("init");
+    net.raw.places[init].initial = 1;
+    if let Some(end) = net.seq(Some(init), &items)? {
+        net.raw.places[end].label = "goal".into();
+        net.goal = Some(end);
+    }
+    for (t, label, at) in std::mem::take(&mut net.gotos) {
+        let Some(&p) = net.labels.get(&label) else {
+            return Err(syntax_error(
+                src,
+                file,
+                at,
+                format!("no {label} in the plan"),
+            ));
+        };
+        net.arc(format!("t{t}"), format!("p{p}"));
+    }
+    for rule in &rules {
+        for occ in 0..net.occurrences.len() {
+            if rule.matches(&net.occurrences[occ].name) {
+                net.apply_rule(occ, rule);
+            }
+        }
+    }
+    for (occ, rule) in std::mem::take(&mut net.inline) {
+        net.apply_rule(occ, &rule);
+    }
+    layout(&mut net.raw);
+    Plan::build(net.raw, file)
+}

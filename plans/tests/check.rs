@@ -1,0 +1,143 @@
+//! Static analysis.
+mod common;
+
+use common::*;
+use petrel_plans::{check, compile_text, load_plan, to_dot};
+
+fn codes(r: &petrel_plans::CheckReport) -> (Vec<&str>, Vec<&str>) {
+    (
+        r.errors.iter().map(|f| f.code).collect(),
+        r.warnings.iter().map(|f| f.code).collect(),
+    )
+}
+
+#[test]
+fn a_good_plan_is_clean() {
+    let l = load_plan(&fixture("editor_patrol.pnml"), None).unwrap();
+    let r = check(&l.plan);
+    assert_eq!(codes(&r), (vec![], vec![]), "{r}");
+    assert!(r.is_ok() && r.complete);
+    assert_eq!(r.actions, ["patrol"]);
+    assert_eq!(r.conditions, ["battery_low"]);
+    let text = r.to_string();
+    assert!(
+        text.starts_with("plan 'patrol_demo': 0 errors, 0 warnings ("),
+        "{text}"
+    );
+    assert!(
+        text.contains("actions: patrol\n") && text.contains("conditions: battery_low\n"),
+        "{text}"
+    );
+}
+
+#[test]
+fn missing_goal_is_an_error() {
+    let p = net(
+        &[("P", 1), ("a.ex", 0)],
+        &["a.start"],
+        &[("n0", "t0", 1), ("t0", "n1", 1)],
+    );
+    let r = check(&p);
+    assert!(!r.is_ok());
+    assert_eq!(codes(&r).0, ["no-goal"]);
+    assert!(
+        r.to_string()
+            .contains("error[no-goal]: the plan has no goal place"),
+        "{r}"
+    );
+}
+
+#[test]
+fn dead_transitions_dead_ends_and_multiple_tokens() {
+    let p = net(
+        &[("P", 1), ("Q", 0), ("goal", 0), ("never", 0), ("stuck", 0)],
+        &["[]", "[]", "[]", "[x]"],
+        &[
+            ("n0", "t0", 1),
+            ("t0", "n1", 1),
+            ("t0", "n1", 1),
+            ("n1", "t1", 2),
+            ("t1", "n2", 1),
+            ("n3", "t2", 1),
+            ("t2", "n2", 1),
+            ("n1", "t3", 1),
+            ("t3", "n4", 1),
+        ],
+    );
+    let r = check(&p);
+    let (errors, warnings) = codes(&r);
+    assert!(errors.is_empty(), "{r}");
+    // t3 is token-enabled with Q, but t1 comes first and takes both tokens.
+    assert_eq!(
+        warnings,
+        [
+            "dead-end-place",
+            "multiple-tokens",
+            "dead-transition",
+            "dead-transition"
+        ],
+        "{r}"
+    );
+    assert_eq!(
+        r.warnings[0].message,
+        "place 'n4' ('stuck') is neither a goal nor a fail place and has no outgoing transition"
+    );
+    assert_eq!(r.warnings[1].message, "place 'n1' ('Q') can hold 2 tokens");
+    assert_eq!(
+        r.warnings[2].message,
+        "transition 't2' ('[]') can never fire"
+    );
+    assert_eq!(
+        r.warnings[3].message,
+        "transition 't3' ('[x]') can never fire"
+    );
+}
+
+#[test]
+fn structural_errors() {
+    let p = net(&[("P", 0), ("goal", 0)], &["[]"], &[("t0", "n1", 1)]);
+    assert_eq!(
+        codes(&check(&p)).0,
+        ["no-initial-marking", "source-transition"]
+    );
+}
+
+#[test]
+fn timed_actions_that_end_together_block() {
+    let p = compile_text("a|5", "t.plan", "t", None).unwrap();
+    let r = check(&p);
+    assert!(r.warnings.iter().any(|w| w.code == "deadlock"), "{r}");
+}
+
+#[test]
+fn subplans_are_checked_too() {
+    let l = load_plan(&fixture("parent.pnml"), None).unwrap();
+    let r = check(&l.plan);
+    assert!(r.is_ok(), "{r}");
+    assert_eq!(r.subplans, ["child"]);
+    assert_eq!(r.actions, ["report"]);
+}
+
+#[test]
+fn dot_output() {
+    let l = load_plan(&fixture("editor_three.pnml"), None).unwrap();
+    let d = to_dot(&l.plan);
+    assert!(
+        d.starts_with("digraph \"editor_three\" {\n  rankdir=LR;\n"),
+        "{d}"
+    );
+    assert!(
+        d.contains("p1 [shape=doublecircle, label=\"goal\", tooltip=\"p2\"];"),
+        "{d}"
+    );
+    assert!(
+        d.contains("p2 [shape=circle, label=\"P (1)\", tooltip=\"p3\"];"),
+        "{d}"
+    );
+    assert!(
+        d.contains("t0 [shape=box, height=0.2, label=\"azione1.start\", tooltip=\"t1\"];"),
+        "{d}"
+    );
+    assert!(d.contains("  p2 -> t0;\n  t0 -> p0;\n"), "{d}");
+    assert!(d.ends_with("}\n"));
+}

@@ -1,0 +1,79 @@
+//! Random and mutated inputs give errors, never panics.
+use petrel_plans::*;
+
+#[test]
+fn random_inputs_never_panic() {
+    let mut seed: u64 = 12345;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 33) as usize
+    };
+    let alphabet: Vec<char> = "ab_c1 ;|<>?:{}()!*#\n.GOTO_LABEL_x andnot[]é$,*if**during**do*"
+        .chars()
+        .collect();
+    let frags = [
+        "a",
+        "b_1",
+        "|5",
+        ";",
+        "<",
+        ">",
+        "?",
+        ":",
+        "{",
+        "}",
+        "||",
+        "!",
+        "*if*",
+        "*do*",
+        "*during*",
+        "(not x)",
+        "LABEL_x",
+        "GOTO_LABEL_x",
+        "restart_action",
+        "skip_action",
+        "fail_plan",
+        " ",
+        "\n",
+        "#c\n",
+        "(and a",
+        ")",
+        "é",
+    ];
+    let pn = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/editor_patrol.pnml"
+    ))
+    .unwrap();
+    for _ in 0..3000 {
+        let n = rnd() % 12;
+        let s: String = (0..n).map(|_| frags[rnd() % frags.len()]).collect();
+        let _ = compile_text(&s, "f", "f", None);
+        let _ = compile_text("a; b", "f", "f", Some((&s, "r")));
+        let c: String = (0..rnd() % 15)
+            .map(|_| alphabet[rnd() % alphabet.len()])
+            .collect();
+        let _ = parse_condition(&c);
+        let _ = compile_text(&c, "f", "f", None);
+        let _ = Script::parse(&c, "s");
+        let mut b = pn.clone().into_bytes();
+        for _ in 0..3 {
+            let i = rnd() % b.len();
+            b[i] = b"<>/\"= 0a[]."[rnd() % 11];
+        }
+        if let Ok(t) = String::from_utf8(b) {
+            if let Ok(p) = parse_pnml(&t, "x", "x") {
+                let _ = check(&p);
+                let mut o = Vec::new();
+                let _ = simulate(&p, &Script::default(), 20, &mut o);
+            }
+        }
+        if let Ok(p) = compile_text(&s, "f", "f", None) {
+            let _ = check(&p);
+            let mut o = Vec::new();
+            let _ = simulate(&p, &Script::default(), 20, &mut o);
+        }
+    }
+}

@@ -1,0 +1,116 @@
+//! The scripted simulator.
+mod common;
+
+use common::*;
+use petrel_plans::{load_plan, simulate, PlanStatus, Script};
+
+fn lines(plan: &petrel_plans::Plan, script: &str, max: u64) -> (Vec<String>, PlanStatus) {
+    let script = Script::parse(script, "script.txt").unwrap();
+    let mut out = Vec::new();
+    let status = simulate(plan, &script, max, &mut out).unwrap();
+    (
+        String::from_utf8(out)
+            .unwrap()
+            .lines()
+            .map(str::to_string)
+            .collect(),
+        status,
+    )
+}
+
+#[test]
+fn worked_example() {
+    let p = load_plan(&fixture("editor_three.pnml"), None).unwrap().plan;
+    let (out, status) = lines(&p, "", 100);
+    assert_eq!(
+        out,
+        [
+            r#"{"step":0,"marking":{"P":1}}"#,
+            r#"{"step":1,"calls":["azione1.start"],"marking":{"azione1.ex":1}}"#,
+            r#"{"step":2,"calls":[],"marking":{"azione1.ex":1}}"#,
+            r#"{"step":3,"calls":["azione1.end"],"marking":{"goal":1}}"#,
+            r#"{"result":"goal","step":3}"#,
+        ]
+    );
+    assert_eq!(status, PlanStatus::Goal);
+}
+
+#[test]
+fn finish_counts_and_never() {
+    let p = load_plan(&fixture("editor_three.pnml"), None).unwrap().plan;
+    let (out, _) = lines(&p, "# slow\nfinish azione1 4\n", 100);
+    assert_eq!(out.last().unwrap(), r#"{"result":"goal","step":5}"#);
+    let (out, status) = lines(&p, "finish azione1 -1", 10);
+    assert_eq!(out.len(), 12);
+    assert_eq!(out.last().unwrap(), r#"{"result":"running","step":10}"#);
+    assert_eq!(status, PlanStatus::Running);
+}
+
+#[test]
+fn conditions_hold_in_their_window_and_fail_ends_the_plan() {
+    let p = net(
+        &[("P", 1), ("a.ex", 0), ("fail", 0), ("goal", 0)],
+        &["[go] a.start", "a.fail", "a.end"],
+        &[
+            ("n0", "t0", 1),
+            ("t0", "n1", 1),
+            ("n1", "t1", 1),
+            ("t1", "n2", 1),
+            ("n1", "t2", 1),
+            ("t2", "n3", 1),
+        ],
+    );
+    let (out, status) = lines(&p, "cond go 3 4\nfail a 1\n", 100);
+    assert_eq!(
+        out,
+        [
+            r#"{"step":0,"marking":{"P":1}}"#,
+            r#"{"step":1,"calls":[],"marking":{"P":1}}"#,
+            r#"{"step":2,"calls":[],"marking":{"P":1}}"#,
+            r#"{"step":3,"calls":["a.start"],"marking":{"a.ex":1}}"#,
+            r#"{"step":4,"calls":["a.fail"],"marking":{"fail":1}}"#,
+            r#"{"result":"fail","step":4}"#,
+        ]
+    );
+    assert_eq!(status, PlanStatus::Fail);
+}
+
+#[test]
+fn subplan_calls_are_listed() {
+    let p = load_plan(&fixture("parent.pnml"), None).unwrap().plan;
+    let (out, status) = lines(&p, "", 100);
+    assert_eq!(status, PlanStatus::Goal);
+    let all = out.join("\n");
+    assert!(
+        all.contains(r#""calls":["grasp.start"],"marking":{"child.exec":1}"#),
+        "{all}"
+    );
+    assert!(
+        all.contains(r#""calls":["grasp.end","child.end"],"marking":{"after":1}"#),
+        "{all}"
+    );
+}
+
+#[test]
+fn labels_shared_by_places_add_up() {
+    let p = net(&[("x", 1), ("x", 2)], &[], &[]);
+    let (out, _) = lines(&p, "", 1);
+    assert_eq!(out[0], r#"{"step":0,"marking":{"x":3}}"#);
+}
+
+#[test]
+fn script_errors_name_the_line() {
+    let e = Script::parse("finish a 2\n\nfinsh b 3\n", "s.txt")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "s.txt:3: cannot read 'finsh b 3'; expected 'finish ACTION N', 'fail ACTION N' or 'cond NAME FROM TO'");
+    let e = Script::parse("fail a x", "s.txt").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "s.txt:1: 'x' is not a step count; expected a number >= 0, or -1 for never"
+    );
+    let e = Script::parse("cond c 1 z", "s.txt")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "s.txt:1: 'z' is not a step number");
+}
