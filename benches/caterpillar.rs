@@ -14,7 +14,10 @@ const LENGTH: usize = 17;
 fn config() -> String {
     let mut modules = String::from(r#"(name: "m0", type: "bench.echo"),"#);
     for i in 1..LENGTH {
-        modules.push_str(&format!(r#"(name: "m{i}", type: "bench.echo", links: {{"in/value": "m{}/out/value"}}),"#, i - 1));
+        modules.push_str(&format!(
+            r#"(name: "m{i}", type: "bench.echo", links: {{"in/value": "m{}/out/value"}}),"#,
+            i - 1
+        ));
     }
     format!(r#"Agent(name: "bench", modules: [{modules}])"#)
 }
@@ -24,8 +27,16 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("caterpillar");
     let (agent, head, tail) = rt.block_on(async {
         let agent = common::start(&config()).await;
-        let head = agent.blackboard().handle::<f64>("m0/in/value").await.unwrap();
-        let tail = agent.blackboard().handle::<f64>(&format!("m{}/out/value", LENGTH - 1)).await.unwrap();
+        let head = agent
+            .blackboard()
+            .handle::<f64>("m0/in/value")
+            .await
+            .unwrap();
+        let tail = agent
+            .blackboard()
+            .handle::<f64>(&format!("m{}/out/value", LENGTH - 1))
+            .await
+            .unwrap();
         (agent, head, tail)
     });
     let mut value = 0.0;

@@ -19,13 +19,19 @@ fn bench(c: &mut Criterion) {
             ])"#,
         )
         .await;
-        let input = agent.blackboard().handle::<f64>("b/in/value").await.unwrap();
+        let input = agent
+            .blackboard()
+            .handle::<f64>("b/in/value")
+            .await
+            .unwrap();
         (agent, input)
     });
     assert_eq!(*input.get(), 1.5);
     group.bench_function("petrel", |b| b.iter(|| *std::hint::black_box(&input).get()));
     let floor = parking_lot::RwLock::new(Arc::new(1.5_f64));
-    group.bench_function("floor", |b| b.iter(|| *std::hint::black_box(&floor).read().clone()));
+    group.bench_function("floor", |b| {
+        b.iter(|| *std::hint::black_box(&floor).read().clone())
+    });
     group.finish();
     rt.block_on(agent.stop(Duration::from_secs(1)));
 }

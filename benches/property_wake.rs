@@ -22,7 +22,11 @@ fn bench(c: &mut Criterion) {
     let (agent, go, done) = rt.block_on(async {
         let agent = common::start(PING_PONG).await;
         let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
-        let done = agent.blackboard().handle::<i64>("a/out/done").await.unwrap();
+        let done = agent
+            .blackboard()
+            .handle::<i64>("a/out/done")
+            .await
+            .unwrap();
         (agent, go, done)
     });
     group.bench_function("petrel", |b| {
@@ -40,10 +44,14 @@ fn bench(c: &mut Criterion) {
     });
 
     let floor = rt.block_on(async { spawn_watch_pair() });
-    group.bench_function("tokio_watch_floor", |b| b.iter_custom(|iters| rt.block_on(run_batch(&floor, iters))));
+    group.bench_function("tokio_watch_floor", |b| {
+        b.iter_custom(|iters| rt.block_on(run_batch(&floor, iters)))
+    });
 
     let ractor_pair = rt.block_on(spawn_ractor_pair());
-    group.bench_function("ractor_call", |b| b.iter_custom(|iters| rt.block_on(run_batch(&ractor_pair, iters))));
+    group.bench_function("ractor_call", |b| {
+        b.iter_custom(|iters| rt.block_on(run_batch(&ractor_pair, iters)))
+    });
 
     group.finish();
     rt.block_on(agent.stop(Duration::from_secs(1)));
@@ -93,7 +101,12 @@ impl Actor for Holder {
     async fn pre_start(&self, _: ActorRef<Self::Msg>, _: ()) -> Result<f64, ActorProcessingErr> {
         Ok(0.0)
     }
-    async fn handle(&self, _: ActorRef<Self::Msg>, (v, reply): Self::Msg, state: &mut f64) -> Result<(), ActorProcessingErr> {
+    async fn handle(
+        &self,
+        _: ActorRef<Self::Msg>,
+        (v, reply): Self::Msg,
+        state: &mut f64,
+    ) -> Result<(), ActorProcessingErr> {
         *state = v;
         let _ = reply.send(*state);
         Ok(())

@@ -11,9 +11,15 @@ const READERS: usize = 8;
 
 fn config(bytes: usize) -> String {
     let sinks: String = (0..READERS)
-        .map(|i| format!(r#"(name: "sink{i}", type: "bench.qsink", links: {{"in/items": "src/out/items"}}),"#))
+        .map(|i| {
+            format!(
+                r#"(name: "sink{i}", type: "bench.qsink", links: {{"in/items": "src/out/items"}}),"#
+            )
+        })
         .collect();
-    format!(r#"Agent(name: "bench", modules: [(name: "src", type: "bench.qsource", values: {{"params/bytes": {bytes}}}), {sinks}])"#)
+    format!(
+        r#"Agent(name: "bench", modules: [(name: "src", type: "bench.qsource", values: {{"params/bytes": {bytes}}}), {sinks}])"#
+    )
 }
 
 fn bench(c: &mut Criterion) {
@@ -26,7 +32,11 @@ fn bench(c: &mut Criterion) {
             let go = bb.handle::<i64>("src/in/go").await.unwrap();
             let mut counts = Vec::new();
             for i in 0..READERS {
-                counts.push(bb.handle::<i64>(&format!("sink{i}/out/count")).await.unwrap());
+                counts.push(
+                    bb.handle::<i64>(&format!("sink{i}/out/count"))
+                        .await
+                        .unwrap(),
+                );
             }
             (agent, go, counts)
         });

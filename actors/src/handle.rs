@@ -160,7 +160,11 @@ impl<T: PropertyType> PropertyHandle<T> {
     pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
         let signal = Arc::new(Signal::default());
         ep.subscribe(&signal);
-        PropertyHandle { ep, signal, _t: PhantomData }
+        PropertyHandle {
+            ep,
+            signal,
+            _t: PhantomData,
+        }
     }
 
     /// The current value (of the link target, if linked).
@@ -172,7 +176,11 @@ impl<T: PropertyType> PropertyHandle<T> {
     /// The current value with its version and write time.
     pub fn read(&self) -> Sample<T> {
         let slot = self.ep.read();
-        Sample { value: downcast(slot.value), version: slot.version, written: slot.written }
+        Sample {
+            value: downcast(slot.value),
+            version: slot.version,
+            written: slot.written,
+        }
     }
 
     /// Writes a value (to the link target, if linked) and wakes its watchers.

@@ -28,7 +28,9 @@ mod value;
 pub use agent::{Agent, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{Blackboard, BlackboardError, Registry};
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
-pub use handle::{Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State};
+pub use handle::{
+    Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
+};
 pub use module::{Cause, Context, Module, Schedule, Watchable};
 pub use module_actor::status;
 pub use module_types::{ModuleRegistry, ModuleType};

@@ -4,7 +4,8 @@
 use std::time::Duration;
 
 use petrel::actors::{
-    Agent, ConfigFile, Context, Image, Input, Module, ModuleRegistry, Output, Ports, QueueReader, QueueWriter, Schedule,
+    Agent, ConfigFile, Context, Image, Input, Module, ModuleRegistry, Output, Ports, QueueReader,
+    QueueWriter, Schedule,
 };
 
 /// Short criterion runs: ratios against in-run baselines are what we record.
@@ -17,20 +18,30 @@ pub fn criterion() -> criterion::Criterion {
 
 /// A two-worker tokio runtime, like `petrel run` on a 2-core machine.
 pub fn runtime() -> tokio::runtime::Runtime {
-    tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap()
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap()
 }
 
 /// The built-in types plus the bench modules.
 pub fn registry() -> ModuleRegistry {
     let mut r = petrel::modules::builtin();
-    r.register::<Echo>().register::<Ping>().register::<QueueSource>().register::<QueueSink>().register::<Idle>();
+    r.register::<Echo>()
+        .register::<Ping>()
+        .register::<QueueSource>()
+        .register::<QueueSink>()
+        .register::<Idle>();
     r
 }
 
 /// Starts an agent from config text.
 pub async fn start(text: &str) -> Agent {
     let file = ConfigFile::parse("bench.ron", text).unwrap_or_else(|e| panic!("{e}"));
-    Agent::start(&file, &registry()).await.unwrap_or_else(|e| panic!("{e}"))
+    Agent::start(&file, &registry())
+        .await
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// `bench.echo`: copies `in/value` to `out/value` on change.
@@ -43,7 +54,10 @@ impl Module for Echo {
     const TYPE: &'static str = "bench.echo";
     const DESCRIPTION: &'static str = "Copies in/value to out/value on change.";
     fn declare(ports: &mut Ports) -> Self {
-        Echo { input: ports.input("in/value", 0.0, "value"), out: ports.output("out/value", 0.0, "copy") }
+        Echo {
+            input: ports.input("in/value", 0.0, "value"),
+            out: ports.output("out/value", 0.0, "copy"),
+        }
     }
     fn schedule(&self) -> Schedule {
         Schedule::new().on_change(&self.input)
@@ -126,7 +140,12 @@ impl Module for QueueSource {
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let n = self.bytes.value() as usize;
         let data: std::sync::Arc<[u8]> = vec![7u8; n].into();
-        self.payload = Some(std::sync::Arc::new(Image { width: n as u32, height: 1, encoding: "mono8".into(), data }));
+        self.payload = Some(std::sync::Arc::new(Image {
+            width: n as u32,
+            height: 1,
+            encoding: "mono8".into(),
+            data,
+        }));
         Ok(())
     }
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -151,7 +170,10 @@ impl Module for QueueSink {
     const TYPE: &'static str = "bench.qsink";
     const DESCRIPTION: &'static str = "Counts the items it drains.";
     fn declare(ports: &mut Ports) -> Self {
-        QueueSink { items: ports.queue_in("in/items", "images"), count: ports.output("out/count", 0, "items seen") }
+        QueueSink {
+            items: ports.queue_in("in/items", "images"),
+            count: ports.output("out/count", 0, "items seen"),
+        }
     }
     fn schedule(&self) -> Schedule {
         Schedule::new().on_items(&self.items)
@@ -160,7 +182,8 @@ impl Module for QueueSink {
         let items = self.items.drain();
         if !items.is_empty() {
             let first = items[0].data[0] as i64; // touch the payload: it must be readable
-            self.count.set(self.count.value() + items.len() as i64 + first - 7);
+            self.count
+                .set(self.count.value() + items.len() as i64 + first - 7);
         }
         Ok(())
     }
@@ -175,7 +198,9 @@ impl Module for Idle {
     const TYPE: &'static str = "bench.idle";
     const DESCRIPTION: &'static str = "Waits for in/value to change.";
     fn declare(ports: &mut Ports) -> Self {
-        Idle { input: ports.input("in/value", 0.0, "never changes") }
+        Idle {
+            input: ports.input("in/value", 0.0, "never changes"),
+        }
     }
     fn schedule(&self) -> Schedule {
         Schedule::new().on_change(&self.input)

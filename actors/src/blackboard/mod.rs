@@ -258,8 +258,13 @@ impl Blackboard {
 
     /// A direct handle to a value property, for tools, tests and benchmarks that drive or watch
     /// a running agent: reads and writes skip the actor, like a module's own handles.
-    pub async fn handle<T: PropertyType>(&self, address: &str) -> Result<PropertyHandle<T>, BlackboardError> {
-        let ep = self.call(|r| BlackboardMsg::Endpoint(address.to_string(), r)).await?;
+    pub async fn handle<T: PropertyType>(
+        &self,
+        address: &str,
+    ) -> Result<PropertyHandle<T>, BlackboardError> {
+        let ep = self
+            .call(|r| BlackboardMsg::Endpoint(address.to_string(), r))
+            .await?;
         if !ep.type_info().is::<T>() {
             return Err(BlackboardError::BadValue {
                 key: address.to_string(),

@@ -442,7 +442,10 @@ impl Registry {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {
             Handle::Value(ep) => Ok(ep.clone()),
-            _ => Err(BlackboardError::NotSettable { kind: self.entries[&key].decl.kind, key }),
+            _ => Err(BlackboardError::NotSettable {
+                kind: self.entries[&key].decl.kind,
+                key,
+            }),
         }
     }
 
