@@ -1,0 +1,47 @@
+//! Your own module type in your own `petrel` binary.
+//!
+//! ```text
+//! cargo run --example custom_module -- modules describe user.moving_average
+//! cargo run --example custom_module -- run examples/custom_module.ron --for 3s
+//! ```
+
+use petrel::actors::{Context, Input, Module, Output, Ports, Schedule};
+
+/// Publishes the mean of the last `params/window` values of `in/value`.
+struct MovingAverage {
+    input: Input<f64>,
+    window: Input<i64>,
+    mean: Output<f64>,
+    recent: std::collections::VecDeque<f64>,
+}
+
+impl Module for MovingAverage {
+    const TYPE: &'static str = "user.moving_average";
+    const DESCRIPTION: &'static str = "Mean of the last params/window values of in/value.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        MovingAverage {
+            input: ports.input("in/value", 0.0, "value to average"),
+            window: ports.param("params/window", 4, "how many recent values"),
+            mean: ports.output("out/mean", 0.0, "the moving average"),
+            recent: Default::default(),
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input) // step whenever the input changes
+    }
+
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.recent.push_back(self.input.value());
+        while self.recent.len() > self.window.value().max(1) as usize {
+            self.recent.pop_front();
+        }
+        self.mean.set(self.recent.iter().sum::<f64>() / self.recent.len() as f64);
+        Ok(())
+    }
+}
+
+fn main() -> std::process::ExitCode {
+    petrel::Petrel::new().module::<MovingAverage>().main()
+}
