@@ -133,3 +133,26 @@ fn bad_arguments_are_explained() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(text(&missing.stderr).starts_with("configs/nope.ron: error: cannot read config:"));
 }
+
+#[test]
+fn plan_simulate_prints_one_json_line_per_step() {
+    let out = petrel(&["plan", "simulate", "plans/tests/fixtures/editor_three.pnml"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stdout),
+        concat!(
+            "{\"step\":0,\"marking\":{\"P\":1}}\n",
+            "{\"step\":1,\"calls\":[\"azione1.start\"],\"marking\":{\"azione1.ex\":1}}\n",
+            "{\"step\":2,\"calls\":[],\"marking\":{\"azione1.ex\":1}}\n",
+            "{\"step\":3,\"calls\":[\"azione1.end\"],\"marking\":{\"goal\":1}}\n",
+            "{\"result\":\"goal\",\"step\":3}\n",
+        )
+    );
+    let broken = petrel(&["plan", "check", "plans/tests/fixtures/malformed.pnml"]);
+    assert_eq!(broken.status.code(), Some(2));
+    assert!(
+        text(&broken.stderr).starts_with("error: "),
+        "{}",
+        text(&broken.stderr)
+    );
+}

@@ -26,8 +26,43 @@ pub enum StartError {
     Spawn(String),
 }
 
+/// Why an agent's run should end, as requested by one of its modules or its supervisor.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AgentExit {
+    /// Process exit code for `petrel run` (0 = success).
+    pub code: u8,
+    /// What happened, for people.
+    pub reason: String,
+}
+
+/// Lets modules and the supervisor ask for the end of the run; the first request wins.
+#[derive(Clone)]
+pub(crate) struct AgentControl {
+    exit: Arc<tokio::sync::watch::Sender<Option<AgentExit>>>,
+}
+
+impl AgentControl {
+    pub fn new() -> Self {
+        AgentControl {
+            exit: Arc::new(tokio::sync::watch::channel(None).0),
+        }
+    }
+
+    pub fn stop(&self, code: u8, reason: String) {
+        self.exit.send_if_modified(|exit| {
+            if exit.is_some() {
+                return false;
+            }
+            tracing::info!(code, %reason, "agent stop requested");
+            *exit = Some(AgentExit { code, reason });
+            true
+        });
+    }
+}
+
 /// A running agent: one blackboard, one supervisor, its modules.
 pub struct Agent {
+    control: AgentControl,
     name: String,
     blackboard: Blackboard,
     supervisor: ActorRef<SupervisorMsg>,
@@ -49,20 +84,39 @@ impl Agent {
         let (blackboard, bb_join) = Blackboard::spawn(registry)
             .await
             .map_err(|e| StartError::Spawn(e.to_string()))?;
+        let control = AgentControl::new();
         let args = SupervisorArgs {
             agent: Arc::from(name.as_str()),
             blackboard: blackboard.clone(),
+            control: control.clone(),
             modules,
         };
         let (supervisor, sup_join) = Actor::spawn(None, AgentSupervisor, args)
             .await
             .map_err(|e| StartError::Spawn(e.to_string()))?;
         Ok(Agent {
+            control,
             name,
             blackboard,
             supervisor,
             joins: vec![sup_join, bb_join],
         })
+    }
+
+    /// Waits until a module (e.g. a mission that reached its goal) or the supervisor asks for
+    /// the run to end, and says why. Pending forever if nobody asks.
+    pub async fn finished(&self) -> AgentExit {
+        let mut rx = self.control.exit.subscribe();
+        let exit = rx
+            .wait_for(Option::is_some)
+            .await
+            .ok()
+            .and_then(|exit| exit.clone());
+        match exit {
+            Some(exit) => exit,
+            // The sender lives in `self`, so this cannot happen while the agent exists.
+            None => std::future::pending().await,
+        }
     }
 
     /// The agent's name.

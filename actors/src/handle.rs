@@ -25,7 +25,7 @@ fn downcast<T: PropertyType>(value: AnyValue) -> Arc<T> {
 
 /// A value read from a property, with its version and write time.
 #[derive(Debug, Clone)]
-pub struct Sample<T> {
+pub struct Sample<T: ?Sized> {
     /// The value, shared with the blackboard.
     pub value: Arc<T>,
     /// Number of writes to the cell read since it was declared.
@@ -34,7 +34,7 @@ pub struct Sample<T> {
     pub written: Instant,
 }
 
-impl<T> Deref for Sample<T> {
+impl<T: ?Sized> Deref for Sample<T> {
     type Target = T;
     fn deref(&self) -> &T {
         &self.value
@@ -193,6 +193,60 @@ impl<T: PropertyType> PropertyHandle<T> {
     /// since the last call).
     pub async fn changed(&self) {
         self.signal.wait().await;
+    }
+}
+
+/// An untyped handle to a value property, for code that learns property types at run time
+/// (expression evaluation, context rules, plan bindings); see
+/// [`Blackboard::any_handle`](crate::Blackboard::any_handle). A module can wait on it with
+/// [`Schedule::on_change`](crate::Schedule::on_change).
+#[derive(Clone)]
+pub struct AnyHandle {
+    pub(crate) ep: Arc<Endpoint>,
+}
+
+impl AnyHandle {
+    /// The property's value type.
+    pub fn type_info(&self) -> crate::TypeInfo {
+        self.ep.type_info()
+    }
+
+    /// The current value (of the link target, if linked).
+    pub fn value(&self) -> AnyValue {
+        self.ep.value()
+    }
+
+    /// The current value with its version and write time.
+    pub fn read(&self) -> Sample<dyn std::any::Any + Send + Sync> {
+        let slot = self.ep.read();
+        Sample {
+            value: slot.value,
+            version: slot.version,
+            written: slot.written,
+        }
+    }
+
+    /// The current value, if it is a `T`.
+    pub fn get<T: PropertyType>(&self) -> Option<Arc<T>> {
+        self.ep.value().downcast::<T>().ok()
+    }
+
+    /// Writes a value, which must have the property's type.
+    pub fn set(&self, value: AnyValue) -> Result<(), crate::BlackboardError> {
+        if !self.ep.type_info().is_type_of(value.as_ref()) {
+            return Err(crate::BlackboardError::BadValue {
+                key: self.ep.key.to_string(),
+                expected: self.ep.type_info().name(),
+                reason: "got a value of another type".into(),
+            });
+        }
+        self.ep.write(value);
+        Ok(())
+    }
+
+    /// The property's `module/path`.
+    pub fn key(&self) -> &str {
+        &self.ep.key
     }
 }
 

@@ -25,7 +25,7 @@ pub mod types;
 pub mod url;
 mod value;
 
-pub use agent::{Agent, StartError, DEFAULT_STOP_TIMEOUT};
+pub use agent::{Agent, AgentExit, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{Blackboard, BlackboardError, Registry};
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{

@@ -13,8 +13,10 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
+use crate::agent::AgentControl;
+use crate::blackboard::Blackboard;
 use crate::cell::{cause, Endpoint};
-use crate::handle::{Input, Output, QueueReader};
+use crate::handle::{AnyHandle, Input, Output, QueueReader};
 use crate::ports::Ports;
 use crate::queue::ReaderEndpoint;
 use crate::types::PropertyType;
@@ -103,6 +105,12 @@ impl<T: PropertyType> Watchable for Output<T> {
     }
 }
 
+impl Watchable for AnyHandle {
+    fn watch(&self) -> Watch {
+        Watch(WatchTarget::Value(self.ep.clone()))
+    }
+}
+
 impl<T: PropertyType> Watchable for QueueReader<T> {
     fn watch(&self) -> Watch {
         Watch(WatchTarget::Queue(self.reader.clone()))
@@ -183,6 +191,8 @@ impl Cause {
 
 /// What the runtime tells a module while it runs.
 pub struct Context {
+    pub(crate) blackboard: Blackboard,
+    pub(crate) control: AgentControl,
     pub(crate) agent: Arc<str>,
     pub(crate) module: Arc<str>,
     pub(crate) cause: Cause,
@@ -191,14 +201,34 @@ pub struct Context {
 }
 
 impl Context {
-    pub(crate) fn new(agent: &str, module: &str) -> Self {
+    pub(crate) fn new(
+        agent: &str,
+        module: &str,
+        blackboard: Blackboard,
+        control: AgentControl,
+    ) -> Self {
         Context {
+            blackboard,
+            control,
             agent: agent.into(),
             module: module.into(),
             cause: Cause(0),
             steps: 0,
             now: Instant::now(),
         }
+    }
+
+    /// The agent's blackboard: to look up other properties by address ([`Blackboard::any_handle`],
+    /// [`Blackboard::handle`]), set them, or relink while running. Each call is a message to the
+    /// blackboard actor: keep it out of hot loops; keep the handles it returns instead.
+    pub fn blackboard(&self) -> &Blackboard {
+        &self.blackboard
+    }
+
+    /// Asks the agent to stop: `petrel run` then stops every module and exits with `code`
+    /// (0 = success), printing `reason`. For modules that decide when a run is over (a mission).
+    pub fn stop_agent(&self, code: u8, reason: impl Into<String>) {
+        self.control.stop(code, reason.into());
     }
 
     /// The agent this module runs in.

@@ -14,6 +14,7 @@ use tokio::sync::watch;
 use tokio::time::{Instant, MissedTickBehavior};
 use tracing::Instrument;
 
+use crate::agent::AgentControl;
 use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
 use crate::handle::Output;
@@ -90,6 +91,7 @@ pub(crate) struct ModuleArgs {
     pub agent: Arc<str>,
     pub name: String,
     pub blackboard: Blackboard,
+    pub control: AgentControl,
     pub stop: watch::Receiver<bool>,
 }
 
@@ -134,7 +136,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             return Err(ports.errors.join("; ").into());
         }
         builtins.status.set(status::INITIALIZING.into());
-        let mut ctx = Context::new(&args.agent, &args.name);
+        let mut ctx = Context::new(&args.agent, &args.name, args.blackboard, args.control);
         if let Err(e) = module.init(&mut ctx).instrument(span.clone()).await {
             builtins.status.set(status::FAILED.into());
             return Err(format!("init failed: {e:#}").into());

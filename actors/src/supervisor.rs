@@ -11,6 +11,7 @@ use ractor::{Actor, ActorCell, ActorProcessingErr, ActorRef, RpcReplyPort, Super
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
+use crate::agent::AgentControl;
 use crate::blackboard::Blackboard;
 use crate::module_actor::{status, ModuleArgs};
 use crate::module_types::ModuleType;
@@ -29,12 +30,14 @@ struct Slot {
 pub(crate) struct SupervisorArgs {
     pub agent: Arc<str>,
     pub blackboard: Blackboard,
+    pub control: AgentControl,
     pub modules: Vec<(String, ModuleType)>,
 }
 
 pub(crate) struct SupervisorState {
     agent: Arc<str>,
     blackboard: Blackboard,
+    control: AgentControl,
     slots: Vec<Slot>,
 }
 
@@ -60,6 +63,7 @@ impl Actor for AgentSupervisor {
         let mut state = SupervisorState {
             agent: args.agent,
             blackboard: args.blackboard,
+            control: args.control,
             slots: Vec::new(),
         };
         for (name, module_type) in args.modules {
@@ -139,6 +143,7 @@ impl SupervisorState {
             agent: self.agent.clone(),
             name: slot.name.clone(),
             blackboard: self.blackboard.clone(),
+            control: self.control.clone(),
             stop: stop_rx,
         };
         match slot.module_type.spawn(args, supervisor).await {

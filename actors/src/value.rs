@@ -50,6 +50,11 @@ impl TypeInfo {
         self.name
     }
 
+    /// Whether `value` is of this type.
+    pub fn is_type_of(&self, value: &(dyn Any + Send + Sync)) -> bool {
+        value.type_id() == (self.id)()
+    }
+
     /// Whether this describes `T`.
     pub fn is<T: 'static>(&self) -> bool {
         (self.id)() == TypeId::of::<T>()

@@ -2,6 +2,7 @@
 
 mod logging;
 mod modules;
+mod plan;
 mod run;
 
 use std::ffi::OsString;
@@ -42,6 +43,11 @@ enum Command {
     Modules {
         #[command(subcommand)]
         command: Option<ModulesCommand>,
+    },
+    /// Petri Net Plans: check, draw, compile and simulate PNML or text plans.
+    Plan {
+        #[command(subcommand)]
+        command: plan::PlanCommand,
     },
 }
 
@@ -105,6 +111,7 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
         Command::Modules {
             command: Some(ModulesCommand::Describe { type_name }),
         } => modules::describe(&registry, &type_name),
+        Command::Plan { command } => plan::run(command),
     }
 }
 

@@ -31,19 +31,19 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
                 return ExitCode::FAILURE;
             }
         };
-        let why = match args.duration {
-            Some(d) => tokio::select! {
-                _ = tokio::time::sleep(d) => format!("ran for {}", humantime::format_duration(d)),
-                _ = tokio::signal::ctrl_c() => "interrupted".to_string(),
-            },
-            None => {
-                let _ = tokio::signal::ctrl_c().await;
-                "interrupted".to_string()
-            }
+        let forever = std::future::pending::<()>();
+        let (why, mut code) = tokio::select! {
+            exit = agent.finished() => (exit.reason, ExitCode::from(exit.code)),
+            _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), ExitCode::SUCCESS),
+            _ = async {
+                match args.duration {
+                    Some(d) => tokio::time::sleep(d).await,
+                    None => forever.await,
+                }
+            } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), ExitCode::SUCCESS),
         };
         tracing::info!(agent = agent.name(), "stopping: {why}");
         let summary = agent.stop_modules(args.stop_timeout).await;
-        let mut code = ExitCode::SUCCESS;
         if let Some(path) = &args.snapshot_out {
             match agent
                 .snapshot()

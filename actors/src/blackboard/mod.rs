@@ -12,7 +12,7 @@ use std::sync::Arc;
 use ractor::{Actor, ActorProcessingErr, ActorRef, RpcReplyPort};
 
 use crate::cell::Signal;
-use crate::handle::PropertyHandle;
+use crate::handle::{AnyHandle, PropertyHandle};
 use crate::ports::Handle;
 use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
@@ -273,6 +273,14 @@ impl Blackboard {
             });
         }
         Ok(PropertyHandle::new(ep))
+    }
+
+    /// An untyped direct handle to a value property (see [`AnyHandle`]).
+    pub async fn any_handle(&self, address: &str) -> Result<AnyHandle, BlackboardError> {
+        let ep = self
+            .call(|r| BlackboardMsg::Endpoint(address.to_string(), r))
+            .await?;
+        Ok(AnyHandle { ep })
     }
 
     /// The whole blackboard as a RON agent config (values, links, queue capacities).

@@ -1,0 +1,144 @@
+//! `petrel plan ...`: load, check, draw, compile and simulate Petri Net Plans.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Subcommand;
+use petrel_plans::{
+    check, compile_to_pnml, load_plan, simulate, to_dot, LoadedPlan, PlanStatus, Script,
+    DEFAULT_MAX_STEPS,
+};
+
+use super::EXIT_BAD_INPUT;
+
+/// Exit code when a plan loads but its analysis finds errors, or a simulation ends in fail.
+const EXIT_PLAN_FAILED: u8 = 1;
+
+#[derive(Subcommand)]
+pub(crate) enum PlanCommand {
+    /// Loads a plan (PNML or text), resolves sub-plans, lists actions and conditions, and
+    /// analyses it: unreachable transitions, dead ends, unsafe places, unreachable goal.
+    Check {
+        /// The plan: `.pnml`, or a text plan (any other extension).
+        plan: PathBuf,
+        /// Execution rules for a text plan.
+        #[arg(long)]
+        rules: Option<PathBuf>,
+    },
+    /// Prints the plan as a Graphviz graph (`petrel plan dot P | dot -Tsvg > p.svg`).
+    Dot {
+        /// The plan.
+        plan: PathBuf,
+        /// Execution rules for a text plan.
+        #[arg(long)]
+        rules: Option<PathBuf>,
+    },
+    /// Compiles a text plan (and rules) to PNML that the JARP editor opens.
+    Compile {
+        /// The text plan.
+        plan: PathBuf,
+        /// Execution rules.
+        #[arg(long)]
+        rules: Option<PathBuf>,
+        /// Where to write the PNML.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Runs the plan against a scripted environment; prints one JSON object per step.
+    Simulate {
+        /// The plan.
+        plan: PathBuf,
+        /// Execution rules for a text plan.
+        #[arg(long)]
+        rules: Option<PathBuf>,
+        /// The script (`finish A N`, `fail A N`, `cond NAME FROM TO`); none = every action
+        /// finishes after 2 steps, every condition is false.
+        #[arg(long)]
+        script: Option<PathBuf>,
+        /// Stop after this many steps if the plan has not ended.
+        #[arg(long, default_value_t = DEFAULT_MAX_STEPS)]
+        steps: u64,
+    },
+}
+
+pub(crate) fn run(command: PlanCommand) -> ExitCode {
+    match command {
+        PlanCommand::Check { plan, rules } => with_plan(&plan, rules.as_deref(), |loaded| {
+            let report = check(&loaded.plan);
+            print!("{report}");
+            if report.is_ok() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(EXIT_PLAN_FAILED)
+            }
+        }),
+        PlanCommand::Dot { plan, rules } => with_plan(&plan, rules.as_deref(), |loaded| {
+            print!("{}", to_dot(&loaded.plan));
+            ExitCode::SUCCESS
+        }),
+        PlanCommand::Compile {
+            plan,
+            rules,
+            output,
+        } => match compile_to_pnml(&plan, rules.as_deref()) {
+            Ok(pnml) => match std::fs::write(&output, pnml) {
+                Ok(()) => {
+                    println!("wrote {}", output.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => bad_input(format!("{}: cannot write: {e}", output.display())),
+            },
+            Err(e) => bad_input(e.to_string()),
+        },
+        PlanCommand::Simulate {
+            plan,
+            rules,
+            script,
+            steps,
+        } => with_plan(&plan, rules.as_deref(), |loaded| {
+            let script = match &script {
+                None => Script::default(),
+                Some(path) => {
+                    let text = match std::fs::read_to_string(path) {
+                        Ok(text) => text,
+                        Err(e) => {
+                            return bad_input(format!(
+                                "{}: cannot read script: {e}",
+                                path.display()
+                            ))
+                        }
+                    };
+                    match Script::parse(&text, &path.display().to_string()) {
+                        Ok(script) => script,
+                        Err(e) => return bad_input(e.to_string()),
+                    }
+                }
+            };
+            let mut out = std::io::stdout().lock();
+            let status = simulate(&loaded.plan, &script, steps, &mut out);
+            let _ = out.flush();
+            match status {
+                Ok(PlanStatus::Fail) => ExitCode::from(EXIT_PLAN_FAILED),
+                Ok(_) => ExitCode::SUCCESS,
+                Err(e) => bad_input(format!("cannot write the simulation: {e}")),
+            }
+        }),
+    }
+}
+
+fn with_plan(
+    path: &Path,
+    rules: Option<&Path>,
+    then: impl FnOnce(LoadedPlan) -> ExitCode,
+) -> ExitCode {
+    match load_plan(path, rules) {
+        Ok(loaded) => then(loaded),
+        Err(e) => bad_input(e.to_string()),
+    }
+}
+
+fn bad_input(message: String) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::from(EXIT_BAD_INPUT)
+}
