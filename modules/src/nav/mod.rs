@@ -1,0 +1,1 @@
+//! Navigation algorithms: localization, mapping, planning, obstacle avoidance, goal sequencing.
