@@ -1,1 +1,15 @@
 //! Navigation algorithms: localization, mapping, planning, obstacle avoidance, goal sequencing.
+//!
+//! Each is a plain struct with a `step`-style method from inputs to outputs, using the
+//! built-in property types, so a module actor only has to read, call and publish.
+
+pub mod astar;
+pub mod costmap;
+pub mod localizer;
+pub mod mapper;
+pub mod planner;
+
+pub use costmap::CostParams;
+pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
+pub use mapper::{Mapper, MapperParams};
+pub use planner::{Planner, PlannerOutput, PlannerParams};
