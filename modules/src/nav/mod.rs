@@ -4,12 +4,16 @@
 //! built-in property types, so a module actor only has to read, call and publish.
 
 pub mod astar;
+pub mod avoidance;
 pub mod costmap;
 pub mod localizer;
 pub mod mapper;
 pub mod planner;
+pub mod sequencer;
 
+pub use avoidance::{Avoidance, AvoidanceParams};
 pub use costmap::CostParams;
 pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
 pub use mapper::{Mapper, MapperParams};
 pub use planner::{Planner, PlannerOutput, PlannerParams};
+pub use sequencer::{GoalSequencer, SequencerOutput};

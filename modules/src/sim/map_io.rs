@@ -3,10 +3,10 @@
 //! # ASCII world format (`.txt`)
 //!
 //! ```text
-//! # resolution: 0.1          metres per cell (default 0.1)
-//! # origin: 0.0, 0.0         world x, y of the grid's lower-left corner (default 0, 0)
-//! # heading: 90              start heading of `R` robots, degrees (default 0 = +x)
-//! # Any other header text is a comment.
+//! # A small world: two rooms.
+//! # resolution: 0.1
+//! # origin: 0.0, 0.0
+//! # heading: 90
 //! ##########
 //! #R  .   1#
 //! #  ###   #
@@ -14,9 +14,13 @@
 //! ##########
 //! ```
 //!
-//! * Header lines come before the grid and start with `#`, a space and a lowercase letter
-//!   (grid rows never contain lowercase letters, so the two cannot be confused). A header of
-//!   the form `# word: value` must use one of the keys above; anything else is a comment.
+//! * Header keys (all optional): `resolution` metres per cell (default 0.1), `origin` world
+//!   `x, y` of the grid's lower-left corner (default `0, 0`), `heading` start heading of the
+//!   `R` robots in degrees (default 0 = +x).
+//! * Header lines come before the grid, start with `# ` and contain at least one character
+//!   that is not a grid character (any word does), which tells them apart from a grid row
+//!   such as `# R  #`. A header of the form `# word: value` must use one of the keys above;
+//!   anything else (e.g. `# A hall with two rooms.`) is a comment.
 //! * Grid rows: `#` solid, `.` or space free, `R` robot start, `1`..`9` goals (free cells,
 //!   visited in digit order; digits must run 1, 2, .. without gaps or repeats). The first text
 //!   row is the top of the world (largest y). Short rows are padded with free cells. Markers
@@ -166,9 +170,10 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
 
 /// The header text after `# ` if `line` is a header line (see the module docs).
 fn header_text(line: &str) -> Option<&str> {
-    let rest = line.strip_prefix("# ")?.trim_start();
-    rest.starts_with(|c: char| c.is_ascii_lowercase())
-        .then_some(rest)
+    let rest = line.strip_prefix("# ")?;
+    let is_grid_char = |c: char| matches!(c, '#' | '.' | ' ' | 'R' | '1'..='9');
+    rest.contains(|c: char| !is_grid_char(c))
+        .then_some(rest.trim())
 }
 
 fn parse_header(
@@ -250,7 +255,7 @@ mod tests {
 
     #[test]
     fn parses_headers_markers_and_orientation() {
-        let w = parse("# a test world\n# resolution: 0.5\n# origin: 1, -1\n# heading: 90\n#####\n#R 2#\n#1..#\n#####\n").unwrap();
+        let w = parse("# A test world.\n# R  # is a grid row, this is not\n# resolution: 0.5\n# origin: 1, -1\n# heading: 90\n#####\n#R 2#\n#1..#\n#####\n").unwrap();
         assert_eq!(
             (w.grid.width(), w.grid.height(), w.grid.resolution()),
             (5, 4, 0.5)
@@ -267,7 +272,8 @@ mod tests {
 
     #[test]
     fn short_rows_are_padded_free_and_default_resolution_is_used() {
-        let w = parse("###\n#\n###\n").unwrap();
+        let w = parse("# R #\n#\n###\n").unwrap();
+        assert_eq!(w.starts.len(), 1, "`# R #` is a grid row, not a comment");
         assert_eq!(w.grid.resolution(), DEFAULT_RESOLUTION);
         assert!(!w.grid.is_solid(2, 1));
     }
