@@ -6,6 +6,7 @@
 pub mod astar;
 pub mod avoidance;
 pub mod costmap;
+pub mod headless;
 pub mod localizer;
 pub mod mapper;
 pub mod planner;
@@ -13,6 +14,7 @@ pub mod sequencer;
 
 pub use avoidance::{Avoidance, AvoidanceParams};
 pub use costmap::CostParams;
+pub use headless::{run_mission, MissionParams, MissionSummary};
 pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
 pub use mapper::{Mapper, MapperParams};
 pub use planner::{Planner, PlannerOutput, PlannerParams};
