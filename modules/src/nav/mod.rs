@@ -3,6 +3,8 @@
 //! Each is a plain struct with a `step`-style method from inputs to outputs, using the
 //! built-in property types, so a module actor only has to read, call and publish.
 
+#![warn(missing_docs)]
+
 pub mod astar;
 pub mod avoidance;
 pub mod costmap;

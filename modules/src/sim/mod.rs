@@ -4,6 +4,8 @@
 //! robot, odometry, a laser scan, the actual speed and the collision count. Fixed `dt` and a
 //! fixed seed give bit-identical runs; mapping simulated time to wall time is the caller's job.
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod grid;
 pub mod kinematics;

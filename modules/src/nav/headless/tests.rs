@@ -76,3 +76,79 @@ fn three_goals_in_the_warehouse_without_collisions() {
     );
     assert!(s.sim_time < 240.0, "bounded time: {}", s.sim_time);
 }
+
+fn noisy_short_mission() -> MissionSummary {
+    let text = "# resolution: 0.1\n".to_string()
+        + &"#".repeat(60)
+        + "\n"
+        + &format!("#{}#\n", " ".repeat(58)).repeat(12)
+        + &format!("#{}{}{}#\n", " ".repeat(25), "#".repeat(6), " ".repeat(27)).repeat(14)
+        + &format!("#{}#\n", " ".repeat(58)).repeat(12)
+        + &"#".repeat(60);
+    let world = crate::sim::parse_ascii(Path::new("inline.txt"), &text).unwrap();
+    let params = MissionParams {
+        seed: 9,
+        robot: crate::sim::RobotConfig {
+            odom_noise: Some(crate::sim::OdomNoise {
+                trans_std: 0.01,
+                rot_std: 0.01,
+                rot_per_trans_std: 0.005,
+            }),
+            laser: Some(crate::sim::LaserConfig {
+                range_noise_std: 0.01,
+                ..Default::default()
+            }),
+            ..Default::default()
+        },
+        localizer: LocalizerParams {
+            lost_episodes: vec![(3.0, 4.0)],
+            lost_drift_speed: 0.05,
+            lost_heading_rate: 0.02,
+            ..Default::default()
+        },
+        ..MissionParams::default()
+    };
+    run_mission(
+        &world.grid,
+        Pose2::new(1.0, 1.9, 0.0),
+        &[Pose2::new(5.0, 1.9, 0.0)],
+        &params,
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_noisy_mission_is_reproducible_bit_for_bit_and_reports_lost_localization() {
+    let (a, b) = (noisy_short_mission(), noisy_short_mission());
+    assert!(
+        a.done && a.collisions == 0,
+        "{} reached, {} collisions",
+        a.reached,
+        a.collisions
+    );
+    assert_eq!(a.trajectory, b.trajectory);
+    assert_eq!(
+        (a.steps, a.final_pose, a.replans),
+        (b.steps, b.final_pose, b.replans)
+    );
+    assert_eq!(a.map, b.map);
+    assert!(
+        a.min_quality < 0.9,
+        "the lost episode shows in the quality: {}",
+        a.min_quality
+    );
+}
+
+#[test]
+fn mission_parameters_are_validated() {
+    let grid = crate::sim::Grid::new(10, 10, 0.1, 0.0, 0.0);
+    let bad = MissionParams {
+        control_hz: 30.0,
+        ..MissionParams::default()
+    };
+    let e = run_mission(&grid, Pose2::new(0.5, 0.5, 0.0), &[], &bad).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "invalid parameter `control_hz`: expected a divisor of sim_hz = 100, got 30"
+    );
+}
