@@ -25,7 +25,9 @@ fn circling(config: RobotConfig) -> World {
     let id = world
         .add_robot(config, Pose2::new(9.75, 8.5, 0.0))
         .expect("free start");
-    world.set_command(id, Twist2::new(0.3, 1.0));
+    world
+        .set_command(id, Twist2::new(0.3, 1.0))
+        .expect("robot exists");
     world
 }
 

@@ -182,7 +182,7 @@ pub fn run_mission(
             } else {
                 avoidance.step(&scan, plan.local_target)
             };
-            world.set_command(id, cmd);
+            world.set_command(id, cmd)?;
             trajectory.push(out.ground_truth.position());
             if progress.done {
                 break;

@@ -53,7 +53,8 @@ impl Default for MapperParams {
 impl MapperParams {
     /// Checks every parameter.
     pub fn validate(&self) -> Result<(), ParamError> {
-        if self.width == 0 || self.height == 0 {
+        let cells = self.width as u64 * self.height as u64;
+        if cells == 0 || cells > crate::sim::Grid::MAX_CELLS as u64 {
             return Err(ParamError {
                 param: "width".into(),
                 message: format!(
@@ -207,7 +208,7 @@ mod tests {
     #[test]
     fn one_scan_marks_free_along_rays_and_occupied_at_hits() {
         // 4 m x 4 m room with 0.1 m cells; robot in the middle facing +x.
-        let mut g = Grid::new(40, 40, 0.1, 0.0, 0.0);
+        let mut g = Grid::new(40, 40, 0.1, 0.0, 0.0).unwrap();
         g.fill_rect(3.0, 0.0, 3.1, 4.0);
         let mut w = World::new(g, 0);
         let laser = LaserConfig {

@@ -106,6 +106,14 @@ impl Planner {
             .as_ref()
             .is_none_or(|m| !Arc::ptr_eq(m, &map.data));
         self.goal = Some(goal);
+        if !well_formed(map) {
+            // A malformed map (data length not width x height, bad resolution) cannot be
+            // planned on; report failure rather than index out of bounds.
+            self.path = Arc::from(Vec::new());
+            self.failed = true;
+            self.checked_map = None;
+            return self.output(Pose2::default(), false, true, false);
+        }
         let to_goal = (goal.0.translation.vector - robot.0.translation.vector).norm();
         if to_goal <= self.params.goal_tolerance {
             self.path = Arc::from(Vec::new());
@@ -260,6 +268,15 @@ impl Planner {
         let world = Isometry2::new(point.coords, dir.y.atan2(dir.x));
         Pose2(robot.0.inverse() * world)
     }
+}
+
+/// Whether `map` is consistent enough to index: data length, resolution and origin.
+pub fn well_formed(map: &OccupancyGrid) -> bool {
+    map.data.len() == map.width as usize * map.height as usize
+        && map.resolution.is_finite()
+        && map.resolution > 0.0
+        && map.origin.x().is_finite()
+        && map.origin.y().is_finite()
 }
 
 #[cfg(test)]

@@ -4,6 +4,8 @@ use std::sync::Arc;
 
 use petrel_actors::{OccupancyGrid, Point2, Pose2};
 
+use super::error::{finite, positive, ParamError};
+
 /// A binary occupancy grid: the simulator's ground truth.
 ///
 /// Cell `(col, row)` covers `[ox + col*res, ox + (col+1)*res) x [oy + row*res, oy + (row+1)*res)`;
@@ -24,23 +26,42 @@ impl Grid {
     /// An all-free grid of `width x height` cells of `resolution` metres, lower-left corner at
     /// `(origin_x, origin_y)`.
     ///
-    /// Panics if `resolution` is not finite and positive or the grid is empty: callers
-    /// (the file loaders) validate first, so this is a programming error.
-    pub fn new(width: usize, height: usize, resolution: f64, origin_x: f64, origin_y: f64) -> Self {
-        assert!(
-            resolution.is_finite() && resolution > 0.0,
-            "grid resolution must be > 0"
-        );
-        assert!(width > 0 && height > 0, "grid must have at least one cell");
-        Grid {
+    /// Fails if the resolution is not finite and positive, the origin is not finite, or the
+    /// grid is empty or larger than [`Grid::MAX_CELLS`].
+    pub fn new(
+        width: usize,
+        height: usize,
+        resolution: f64,
+        origin_x: f64,
+        origin_y: f64,
+    ) -> Result<Self, ParamError> {
+        positive("resolution", resolution)?;
+        finite("origin_x", origin_x)?;
+        finite("origin_y", origin_y)?;
+        match width.checked_mul(height) {
+            Some(n) if n > 0 && n <= Self::MAX_CELLS => {}
+            _ => {
+                return Err(ParamError {
+                    param: "size".into(),
+                    message: format!(
+                        "expected between 1 and {} cells, got {width} x {height}",
+                        Self::MAX_CELLS
+                    ),
+                })
+            }
+        }
+        Ok(Grid {
             width,
             height,
             resolution,
             origin_x,
             origin_y,
             cells: vec![0; width * height],
-        }
+        })
     }
+
+    /// Largest number of cells a grid may have (256 Mi): a guard against absurd file headers.
+    pub const MAX_CELLS: usize = 1 << 28;
 
     /// Cells along x.
     pub fn width(&self) -> usize {
@@ -182,7 +203,7 @@ mod tests {
 
     #[test]
     fn outside_is_solid_and_cells_map_to_coordinates() {
-        let g = Grid::new(10, 5, 0.5, -1.0, 2.0);
+        let g = Grid::new(10, 5, 0.5, -1.0, 2.0).unwrap();
         assert!(g.is_solid(-1, 0) && g.is_solid(0, 5) && !g.is_solid(9, 4));
         assert_eq!(g.cell_of(-1.0, 2.0), (0, 0));
         assert_eq!(g.cell_of(-0.01, 2.49), (1, 0));
@@ -192,7 +213,7 @@ mod tests {
 
     #[test]
     fn disc_collision_is_exact_against_cell_squares() {
-        let mut g = Grid::new(20, 20, 0.1, 0.0, 0.0);
+        let mut g = Grid::new(20, 20, 0.1, 0.0, 0.0).unwrap();
         g.set(10, 10, true); // square [1.0,1.1] x [1.0,1.1]
         assert!(!g.disc_collides(0.79, 1.05, 0.2));
         assert!(g.disc_collides(0.81, 1.05, 0.2));

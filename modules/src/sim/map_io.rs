@@ -116,7 +116,8 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
         .max()
         .unwrap_or(0);
     let height = rows.len();
-    let mut grid = Grid::new(width, height, resolution, origin.0, origin.1);
+    let mut grid = Grid::new(width, height, resolution, origin.0, origin.1)
+        .map_err(|e| WorldFileError::file(file, e.to_string()))?;
     let mut starts = Vec::new();
     let mut goals: [Option<Pose2>; 9] = [None; 9];
     let heading = heading_deg.to_radians();
@@ -313,5 +314,26 @@ mod tests {
         assert!(e.starts_with("/nonexistent/w.txt: cannot read:"), "{e}");
         let e = load_world(Path::new("w.png")).unwrap_err().to_string();
         assert!(e.contains("unknown world file extension"), "{e}");
+    }
+
+    #[test]
+    fn shipped_worlds_load() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/worlds");
+        let c = load_world(&dir.join("cluttered.txt")).unwrap();
+        assert_eq!(
+            (c.grid.width(), c.grid.height(), c.grid.resolution()),
+            (100, 100, 0.2)
+        );
+        assert_eq!((c.starts.len(), c.goals.len()), (1, 3));
+        let w = load_world(&dir.join("warehouse.yaml")).unwrap();
+        assert_eq!(
+            (w.grid.width(), w.grid.height(), w.grid.resolution()),
+            (400, 400, 0.05)
+        );
+        // The grey (unknown, value 205) patch in the office corner is solid; the aisle is free.
+        let (col, row) = w.grid.cell_of(0.7, 19.2);
+        assert!(w.grid.is_solid(col, row));
+        let (col, row) = w.grid.cell_of(9.75, 8.5);
+        assert!(!w.grid.is_solid(col, row));
     }
 }

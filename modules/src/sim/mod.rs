@@ -113,11 +113,15 @@ impl World {
     }
 
     /// Sets the velocity command robot `id` follows from the next step on (clamped to its
-    /// limits). Unknown ids are ignored.
-    pub fn set_command(&mut self, id: RobotId, cmd: Twist2) {
-        if let Some(r) = self.robots.get_mut(id) {
-            r.command = cmd;
-        }
+    /// limits); fails if there is no such robot.
+    pub fn set_command(&mut self, id: RobotId, cmd: Twist2) -> Result<(), ParamError> {
+        let count = self.robots.len();
+        let robot = self.robots.get_mut(id).ok_or_else(|| ParamError {
+            param: "robot".into(),
+            message: format!("expected a robot id below {count}, got {id}"),
+        })?;
+        robot.command = cmd;
+        Ok(())
     }
 
     /// Advances simulated time by `dt` seconds and returns each robot's outputs, by id.

@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::error::WorldFileError;
+use super::error::{ParamError, WorldFileError};
 use super::grid::Grid;
 use super::map_io::WorldMap;
 
@@ -44,7 +44,8 @@ pub fn load_map_yaml(path: &Path) -> Result<WorldMap, WorldFileError> {
     })?;
     let image = parse_pgm(&meta.image, &bytes)?;
     Ok(WorldMap {
-        grid: image_to_grid(&meta, &image),
+        grid: image_to_grid(&meta, &image)
+            .map_err(|e| WorldFileError::file(&meta.image, e.to_string()))?,
         starts: Vec::new(),
         goals: Vec::new(),
     })
@@ -185,7 +186,20 @@ pub fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<PgmImage, WorldFileError> 
     if width == 0 || height == 0 || max == 0 || max > 65535 {
         return Err(WorldFileError::at(path, t.line, format!("expected width, height > 0 and 0 < max <= 65535, got {width} x {height}, max {max}")));
     }
-    let n = width * height;
+    // Every pixel takes at least one byte of the file, so a header claiming more pixels than
+    // there are bytes is truncated; checking first avoids allocating for absurd headers.
+    let n = width
+        .checked_mul(height)
+        .filter(|&n| n <= bytes.len())
+        .ok_or_else(|| {
+            WorldFileError::file(
+                path,
+                format!(
+                    "truncated image data: {width} x {height} pixels do not fit in {} bytes",
+                    bytes.len()
+                ),
+            )
+        })?;
     let mut pixels = Vec::with_capacity(n);
     if ascii {
         for _ in 0..n {
@@ -285,14 +299,16 @@ impl Tokens<'_> {
 }
 
 /// Converts an image to the simulator's grid with map_server's trinary thresholds.
-pub fn image_to_grid(meta: &MapYaml, image: &PgmImage) -> Grid {
+///
+/// Fails only if the image is too large for a [`Grid`].
+pub fn image_to_grid(meta: &MapYaml, image: &PgmImage) -> Result<Grid, ParamError> {
     let mut grid = Grid::new(
         image.width,
         image.height,
         meta.resolution,
         meta.origin[0],
         meta.origin[1],
-    );
+    )?;
     let max = image.max as f64;
     for (i, &v) in image.pixels.iter().enumerate() {
         let (col, top_row) = (i % image.width, i / image.width);
@@ -305,7 +321,7 @@ pub fn image_to_grid(meta: &MapYaml, image: &PgmImage) -> Grid {
             grid.set(col as i64, (image.height - 1 - top_row) as i64, true);
         }
     }
-    grid
+    Ok(grid)
 }
 
 #[cfg(test)]
@@ -327,7 +343,7 @@ mod tests {
         p5.extend([0u8, 255, 128, 255, 255, 0]);
         let p5 = parse_pgm(Path::new("b"), &p5).unwrap();
         assert_eq!(p2, p5);
-        let g = image_to_grid(&meta, &p2);
+        let g = image_to_grid(&meta, &p2).unwrap();
         // Top image row is grid row 1: black (solid), white (free), grey (unknown -> solid).
         assert!(g.is_solid(0, 1) && !g.is_solid(1, 1) && g.is_solid(2, 1));
         assert!(!g.is_solid(0, 0) && g.is_solid(2, 0));

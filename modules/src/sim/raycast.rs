@@ -83,7 +83,7 @@ mod tests {
 
     /// A 10 m x 10 m room (0.1 m cells) whose walls are the outermost cells.
     fn room() -> Grid {
-        let mut g = Grid::new(100, 100, 0.1, 0.0, 0.0);
+        let mut g = Grid::new(100, 100, 0.1, 0.0, 0.0).unwrap();
         for i in 0..100 {
             g.set(i, 0, true);
             g.set(i, 99, true);
@@ -117,7 +117,7 @@ mod tests {
 
     #[test]
     fn rays_stop_at_the_grid_border_and_inside_solid_is_zero() {
-        let g = Grid::new(10, 10, 1.0, 0.0, 0.0);
+        let g = Grid::new(10, 10, 1.0, 0.0, 0.0).unwrap();
         assert!((cast_ray(&g, 2.5, 2.5, 0.0, 100.0) - 7.5).abs() < 1e-12);
         let mut g = g;
         g.set(2, 2, true);

@@ -36,7 +36,12 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
     let mut img = RgbImage::new(w * scale, h * scale);
     for row in 0..h {
         for col in 0..w {
-            let colour = match grid.get(col as i64, row as i64) {
+            // Read defensively: a malformed grid (short data) renders as unknown, not a panic.
+            let value = grid
+                .data
+                .get(row as usize * grid.width as usize + col as usize)
+                .copied();
+            let colour = match value {
                 Some(v) if v >= 0 => {
                     let t = v.min(100) as f64 / 100.0;
                     // Dark walls, light free space, with a visible step at 50 %.

@@ -114,7 +114,7 @@ impl RobotConfig {
 
 /// Dynamic state of one simulated robot.
 #[derive(Clone, Debug)]
-pub struct Robot {
+pub(crate) struct Robot {
     pub(crate) config: RobotConfig,
     pub(crate) pose: Pose2,
     pub(crate) odom: Pose2,

@@ -4,7 +4,7 @@ use super::*;
 
 /// 10 m x 6 m, 0.1 m cells, walls on the border and a wall column at x in [6.0, 6.1].
 fn corridor() -> Grid {
-    let mut g = Grid::new(100, 60, 0.1, 0.0, 0.0);
+    let mut g = Grid::new(100, 60, 0.1, 0.0, 0.0).unwrap();
     for i in 0..100 {
         g.set(i, 0, true);
         g.set(i, 59, true);
@@ -29,7 +29,7 @@ fn robot_driven_into_a_wall_stops_counts_and_never_enters_it() {
         ..RobotConfig::default()
     };
     let id = w.add_robot(cfg, Pose2::new(3.0, 3.0, 0.0)).unwrap();
-    w.set_command(id, Twist2::new(2.0, 0.0));
+    w.set_command(id, Twist2::new(2.0, 0.0)).unwrap();
     let mut max_x: f64 = 0.0;
     for _ in 0..300 {
         let out = &w.step(0.05).unwrap()[id];
@@ -48,11 +48,11 @@ fn robot_driven_into_a_wall_stops_counts_and_never_enters_it() {
         "stopped close to the wall, got {max_x}"
     );
     // Back off, then hit again: a second event.
-    w.set_command(id, Twist2::new(-1.0, 0.0));
+    w.set_command(id, Twist2::new(-1.0, 0.0)).unwrap();
     for _ in 0..20 {
         w.step(0.05).unwrap();
     }
-    w.set_command(id, Twist2::new(2.0, 0.0));
+    w.set_command(id, Twist2::new(2.0, 0.0)).unwrap();
     for _ in 0..40 {
         w.step(0.05).unwrap();
     }
@@ -73,7 +73,7 @@ fn a_fast_robot_cannot_tunnel_through_a_thin_wall_in_one_step() {
         ..RobotConfig::default()
     };
     let id = w.add_robot(cfg, Pose2::new(5.0, 3.0, 0.0)).unwrap();
-    w.set_command(id, Twist2::new(50.0, 0.0));
+    w.set_command(id, Twist2::new(50.0, 0.0)).unwrap();
     // 50 m/s for 0.1 s would end at x = 10 m, far beyond the wall.
     let out = &w.step(0.1).unwrap()[id];
     assert!(out.ground_truth.x() <= 5.8 + 1e-9 && out.collisions == 1);
@@ -92,7 +92,7 @@ fn scans_see_walls_and_odometry_follows_motion() {
     assert!((scan.ranges[90] - 4.0).abs() < 1e-9, "wall face at x = 6.0");
     assert!((scan.ranges[0] - 2.9).abs() < 1e-9 && (scan.ranges[180] - 2.9).abs() < 1e-9);
     assert_eq!(out.odometry.stamp, 0.01);
-    w.set_command(id, Twist2::new(0.5, 0.0));
+    w.set_command(id, Twist2::new(0.5, 0.0)).unwrap();
     for _ in 0..200 {
         w.step(0.01).unwrap();
     }
@@ -144,8 +144,9 @@ fn noisy_run(seed: u64) -> Vec<RobotOutput> {
     let b = w.add_robot(cfg, Pose2::new(2.0, 1.0, 0.0)).unwrap();
     let mut log = Vec::new();
     for k in 0..300 {
-        w.set_command(a, Twist2::new(0.6, (k as f64 * 0.05).sin()));
-        w.set_command(b, Twist2::new(0.4, -0.3));
+        w.set_command(a, Twist2::new(0.6, (k as f64 * 0.05).sin()))
+            .unwrap();
+        w.set_command(b, Twist2::new(0.4, -0.3)).unwrap();
         log.extend_from_slice(w.step(0.02).unwrap());
     }
     log
@@ -181,4 +182,54 @@ fn invalid_robots_and_steps_are_rejected() {
         "invalid parameter `radius`: expected a finite value > 0, got 0"
     );
     assert_eq!(w.step(-1.0).unwrap_err().param, "dt");
+}
+
+#[test]
+fn holonomic_base_moves_sideways_and_stops_at_a_wall() {
+    let mut w = World::new(corridor(), 1);
+    let cfg = RobotConfig {
+        drive: DriveKind::Holonomic,
+        laser: None,
+        ..RobotConfig::default()
+    };
+    let id = w.add_robot(cfg, Pose2::new(3.0, 3.0, 0.0)).unwrap();
+    w.set_command(
+        id,
+        Twist2 {
+            v: 0.0,
+            vy: 0.5,
+            omega: 0.0,
+        },
+    )
+    .unwrap();
+    for _ in 0..200 {
+        w.step(0.05).unwrap();
+    }
+    let out = &w.step(0.05).unwrap()[id];
+    // Slid along +y (left of a robot facing +x) up to the wall face at y = 5.9.
+    assert!((out.ground_truth.x() - 3.0).abs() < 1e-9);
+    assert!(out.ground_truth.y() <= 5.7 + 1e-9 && out.ground_truth.y() > 5.69);
+    assert_eq!(out.collisions, 1);
+    assert!(w.set_command(7, Twist2::default()).is_err());
+}
+
+#[test]
+fn a_mounted_laser_measures_from_its_mounting_pose() {
+    let mut w = World::new(corridor(), 1);
+    let laser = LaserConfig {
+        mount: Pose2::new(0.1, 0.0, std::f64::consts::PI),
+        ..LaserConfig::default()
+    };
+    let id = w
+        .add_robot(
+            RobotConfig {
+                laser: Some(laser),
+                ..RobotConfig::default()
+            },
+            Pose2::new(2.0, 3.0, 0.0),
+        )
+        .unwrap();
+    let scan = w.step(1e-3).unwrap()[id].scan.clone().unwrap();
+    // Mounted 0.1 m forward, looking backward: the wall face at x = 0.1 is 2.0 m away.
+    assert!((scan.ranges[90] - 2.0).abs() < 1e-9, "{}", scan.ranges[90]);
 }

@@ -97,7 +97,7 @@ fn chosen_arcs_keep_the_disc_off_every_laser_point_in_random_clutter() {
     let mut a = Avoidance::new(params.clone()).unwrap();
     let mut moved = 0;
     for _ in 0..60 {
-        let mut g = Grid::new(80, 80, 0.05, -2.0, -2.0);
+        let mut g = Grid::new(80, 80, 0.05, -2.0, -2.0).unwrap();
         for _ in 0..12 {
             let (x, y) = (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0));
             g.fill_rect(

@@ -141,7 +141,7 @@ fn a_noisy_mission_is_reproducible_bit_for_bit_and_reports_lost_localization() {
 
 #[test]
 fn mission_parameters_are_validated() {
-    let grid = crate::sim::Grid::new(10, 10, 0.1, 0.0, 0.0);
+    let grid = crate::sim::Grid::new(10, 10, 0.1, 0.0, 0.0).unwrap();
     let bad = MissionParams {
         control_hz: 30.0,
         ..MissionParams::default()
