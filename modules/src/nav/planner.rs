@@ -168,8 +168,9 @@ impl Planner {
             let row = ((p.y() - map.origin.y()) / map.resolution).floor() as i64;
             cost.index(col, row)
         };
-        let found = match (cell(&robot), cell(&goal)) {
-            (Some(s), Some(g)) => astar(&cost, s, g, map.resolution),
+        let target = cell(&goal).and_then(|g| self.reachable_goal_cell(&cost, g, map.resolution));
+        let found = match (cell(&robot), target) {
+            (Some(s), Some((g, _))) => astar(&cost, s, g, map.resolution),
             _ => None,
         };
         self.failed = found.is_none();
@@ -187,9 +188,39 @@ impl Planner {
                 )
             })
             .collect();
-        // End exactly at the goal rather than at its cell centre.
-        *points.last_mut().expect("a path has at least one cell") = goal.position();
+        // End exactly at the goal rather than at its cell centre, unless the goal itself is
+        // too close to an obstacle and a nearby cell stands in for it.
+        if target.is_some_and(|(_, exact)| exact) {
+            *points.last_mut().expect("a path has at least one cell") = goal.position();
+        }
         self.path = points.into();
+    }
+
+    /// The cell to plan to for goal cell `g`: `g` itself if the robot may stand there
+    /// (`true`), else the cell with the most clearance that is still within
+    /// `goal_tolerance` of it (`false`), so that a goal placed close to a wall stays reachable.
+    fn reachable_goal_cell(&self, cost: &CostMap, g: usize, res: f64) -> Option<(usize, bool)> {
+        if cost.cost[g].is_finite() {
+            return Some((g, true));
+        }
+        let reach = (self.params.goal_tolerance / res).floor() as i64;
+        let (gc, gr) = ((g % cost.width) as i64, (g / cost.width) as i64);
+        let mut best: Option<(f32, usize)> = None;
+        for dr in -reach..=reach {
+            for dc in -reach..=reach {
+                let within =
+                    ((dc * dc + dr * dr) as f64).sqrt() * res <= self.params.goal_tolerance * 0.9;
+                if let Some(k) = cost
+                    .index(gc + dc, gr + dr)
+                    .filter(|&k| within && cost.cost[k].is_finite())
+                {
+                    if best.is_none_or(|(c, _)| cost.clearance[k] > c) {
+                        best = Some((cost.clearance[k], k));
+                    }
+                }
+            }
+        }
+        best.map(|(_, k)| (k, false))
     }
 
     /// Moves `progress` to the path point closest to the robot (searching a window ahead,

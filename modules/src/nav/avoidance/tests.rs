@@ -131,6 +131,9 @@ fn chosen_arcs_keep_the_disc_off_every_laser_point_in_random_clutter() {
             0.0,
         );
         let cmd = a.step(&scan, target);
+        assert!(
+            cmd.v.abs() <= params.max_speed && cmd.omega.abs() <= params.max_turn && cmd.vy == 0.0
+        );
         if cmd.v > 0.0 {
             moved += 1;
         }

@@ -131,3 +131,23 @@ fn fails_without_a_path_and_retries_when_the_map_changes() {
     })
     .is_err());
 }
+
+#[test]
+fn a_goal_close_to_a_wall_is_approached_within_tolerance() {
+    // Wall column at x in [3.0, 3.1]; the goal is 0.15 m from its face, inside the lethal band.
+    let map = grid(60, 40, &wall(30, 0..40), 100);
+    let mut p = Planner::new(PlannerParams::default()).unwrap();
+    let goal = Pose2::new(2.85, 2.0, 0.0);
+    let out = p.step(&map, Pose2::new(1.0, 2.0, 0.0), goal);
+    assert!(!out.failed);
+    let end = out.path.last().unwrap();
+    let d = (end.0.x - goal.x()).hypot(end.0.y - goal.y());
+    assert!(
+        d <= 0.25 && end.0.x <= 3.0 - 0.25,
+        "ends {d} m from the goal, clear of the wall"
+    );
+    assert!(
+        p.step(&map, Pose2::new(end.0.x, end.0.y, 0.0), goal)
+            .arrived
+    );
+}
