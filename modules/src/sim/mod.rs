@@ -26,7 +26,7 @@ pub use kinematics::{DriveKind, Limits};
 pub use map_io::{load_world, parse_ascii, WorldMap};
 pub use robot::{LaserConfig, OdomNoise, RobotConfig};
 
-use robot::Robot;
+use robot::{Disc, Robot};
 
 /// Index of a robot in its [`World`], in the order robots were added.
 pub type RobotId = usize;
@@ -93,6 +93,19 @@ impl World {
                 ),
             });
         }
+        let overlaps = self.robots.iter().any(|r| {
+            (r.pose.x() - start.x()).hypot(r.pose.y() - start.y()) < r.config.radius + config.radius
+        });
+        if overlaps {
+            return Err(ParamError {
+                param: "start".into(),
+                message: format!(
+                    "expected a free start pose, but ({:.3}, {:.3}) overlaps another robot",
+                    start.x(),
+                    start.y()
+                ),
+            });
+        }
         let id = self.robots.len();
         // Each robot has its own stream so adding a robot does not change the others' noise.
         let rng = rand::rngs::StdRng::seed_from_u64(
@@ -130,8 +143,15 @@ impl World {
         self.time += dt;
         self.outputs.clear();
         let grid = &*self.grid;
-        for robot in &mut self.robots {
-            robot.advance(grid, dt);
+        // Robots move one after the other (in id order), each against the others' latest
+        // footprints, so two robots can never end up overlapping.
+        let mut discs: Vec<Disc> = self.robots.iter().map(Robot::disc).collect();
+        for (i, robot) in self.robots.iter_mut().enumerate() {
+            robot.advance(grid, &discs, i, dt);
+            discs[i] = robot.disc();
+        }
+        // Scans are taken after everyone moved, from one consistent snapshot.
+        for (i, robot) in self.robots.iter_mut().enumerate() {
             let scan = match robot.config.laser.clone() {
                 Some(laser) if robot.next_scan.is_none_or(|t| self.time + 1e-9 >= t) => {
                     // Scans keep the phase of the first one; a scan that fell more than a
@@ -144,7 +164,7 @@ impl World {
                             next
                         }
                     });
-                    Some(robot.scan(grid, &laser))
+                    Some(robot.scan(grid, &discs, i, &laser))
                 }
                 _ => None,
             };

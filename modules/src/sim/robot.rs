@@ -131,11 +131,18 @@ pub(crate) struct Robot {
 const SUBSTEP_FRACTION: f64 = 0.25;
 
 impl Robot {
+    /// The robot's footprint.
+    pub(crate) fn disc(&self) -> Disc {
+        (self.pose.x(), self.pose.y(), self.config.radius)
+    }
+
     /// Moves the robot for `dt` under its current command; returns whether a wall blocked it.
     ///
     /// The motion is swept in sub-steps of at most `radius / 4`; at the first colliding
     /// sub-step the contact point is refined by bisection and the robot stops there.
-    pub(crate) fn advance(&mut self, grid: &Grid, dt: f64) -> bool {
+    /// `discs` are the footprints `(x, y, radius)` of all robots in the world, this one at
+    /// index `me` (skipped): robots block each other like walls do.
+    pub(crate) fn advance(&mut self, grid: &Grid, discs: &[Disc], me: usize, dt: f64) -> bool {
         let target = limit_command(
             self.command,
             self.speed,
@@ -152,6 +159,10 @@ impl Robot {
         let collides = |f: f64| {
             let p = integrate(start, target, dt * f);
             grid.disc_collides(p.x(), p.y(), r)
+                || discs
+                    .iter()
+                    .enumerate()
+                    .any(|(j, d)| j != me && (p.x() - d.0).hypot(p.y() - d.1) < r + d.2)
         };
         let mut blocked_at = None;
         for i in 1..=n {
@@ -210,7 +221,15 @@ impl Robot {
     }
 
     /// A laser scan from the current true pose.
-    pub(crate) fn scan(&mut self, grid: &Grid, laser: &LaserConfig) -> LaserScan {
+    ///
+    /// Other robots (`discs` except index `me`) are seen as well as walls.
+    pub(crate) fn scan(
+        &mut self,
+        grid: &Grid,
+        discs: &[Disc],
+        me: usize,
+        laser: &LaserConfig,
+    ) -> LaserScan {
         let sensor = self.pose.0 * laser.mount.0;
         let (x, y, heading) = (
             sensor.translation.x,
@@ -224,6 +243,11 @@ impl Robot {
         for i in 0..laser.rays {
             let a = heading + angle_min + angle_increment * i as f64;
             let mut r = cast_ray(grid, x, y, a, laser.range_max);
+            for (j, d) in discs.iter().enumerate() {
+                if j != me {
+                    r = r.min(ray_disc(x, y, a, *d));
+                }
+            }
             // No-return rays stay exactly at range_max so consumers can recognise them.
             if noisy && r < laser.range_max {
                 r = (r + gauss(&mut self.rng, laser.range_noise_std)).clamp(0.0, laser.range_max);
@@ -237,6 +261,26 @@ impl Robot {
             ranges: ranges.into(),
         }
     }
+}
+
+/// A robot footprint `(x, y, radius)`.
+pub(crate) type Disc = (f64, f64, f64);
+
+/// Distance along the ray from `(x, y)` at `angle` to the disc `d`, infinity if missed, 0 if
+/// the ray starts inside it.
+fn ray_disc(x: f64, y: f64, angle: f64, d: Disc) -> f64 {
+    let (s, c) = angle.sin_cos();
+    let (mx, my) = (x - d.0, y - d.1);
+    let b = mx * c + my * s;
+    let cc = mx * mx + my * my - d.2 * d.2;
+    if cc <= 0.0 {
+        return 0.0;
+    }
+    let disc = b * b - cc;
+    if b > 0.0 || disc < 0.0 {
+        return f64::INFINITY;
+    }
+    -b - disc.sqrt()
 }
 
 /// One sample of N(0, std); std 0 still draws so that the RNG stream does not depend on motion.

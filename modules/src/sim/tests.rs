@@ -233,3 +233,36 @@ fn a_mounted_laser_measures_from_its_mounting_pose() {
     // Mounted 0.1 m forward, looking backward: the wall face at x = 0.1 is 2.0 m away.
     assert!((scan.ranges[90] - 2.0).abs() < 1e-9, "{}", scan.ranges[90]);
 }
+
+#[test]
+fn robots_see_and_block_each_other() {
+    let mut w = World::new(corridor(), 1);
+    let a = w
+        .add_robot(RobotConfig::default(), Pose2::new(1.0, 3.0, 0.0))
+        .unwrap();
+    let b = w
+        .add_robot(
+            RobotConfig::default(),
+            Pose2::new(4.0, 3.0, std::f64::consts::PI),
+        )
+        .unwrap();
+    assert_eq!(
+        w.add_robot(RobotConfig::default(), Pose2::new(4.1, 3.1, 0.0))
+            .unwrap_err()
+            .param,
+        "start"
+    );
+    let out = w.step(1e-3).unwrap().to_vec();
+    // Each sees the other's near side: centres 3 m apart, radius 0.2 -> 2.8 m.
+    let ahead = |o: &RobotOutput| o.scan.as_ref().unwrap().ranges[90];
+    assert!((ahead(&out[a]) - 2.8).abs() < 1e-6 && (ahead(&out[b]) - 2.8).abs() < 1e-6);
+    w.set_command(a, Twist2::new(0.7, 0.0)).unwrap();
+    w.set_command(b, Twist2::new(0.7, 0.0)).unwrap();
+    for _ in 0..200 {
+        let out = w.step(0.05).unwrap();
+        let gap = (out[a].ground_truth.x() - out[b].ground_truth.x()).abs();
+        assert!(gap >= 0.4 - 1e-9, "robots overlap: centres {gap} m apart");
+    }
+    let out = w.step(0.05).unwrap();
+    assert!(out[a].collisions >= 1 && out[b].collisions >= 1);
+}
