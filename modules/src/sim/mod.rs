@@ -1,7 +1,8 @@
 //! A deterministic 2D robot simulator: world grid, robots, lasers, collisions.
 //!
 //! Pure and synchronous: [`World::step`] advances simulated time by `dt` and returns, per
-//! robot, odometry, a laser scan, the actual speed and the collision count. Fixed `dt` and a
+//! robot, odometry, a laser scan, the actual speed and the collision count. Robots are discs
+//! that stop at walls and at each other and see each other in their scans. Fixed `dt` and a
 //! fixed seed give bit-identical runs; mapping simulated time to wall time is the caller's job.
 
 #![warn(missing_docs)]
