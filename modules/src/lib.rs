@@ -1,7 +1,12 @@
 //! Built-in petrel functional modules.
+//!
+//! [`sim`] and [`nav`] are the pure, deterministic cores of the simulator and the navigation
+//! modules: plain structs with `step`-style methods, no actors and no async.
 #![warn(missing_docs)]
 
 pub mod demo;
+pub mod nav;
+pub mod sim;
 
 use petrel_actors::ModuleRegistry;
 

@@ -1,0 +1,23 @@
+//! Navigation algorithms: localization, mapping, planning, obstacle avoidance, goal sequencing.
+//!
+//! Each is a plain struct with a `step`-style method from inputs to outputs, using the
+//! built-in property types, so a module actor only has to read, call and publish.
+
+#![warn(missing_docs)]
+
+pub mod astar;
+pub mod avoidance;
+pub mod costmap;
+pub mod headless;
+pub mod localizer;
+pub mod mapper;
+pub mod planner;
+pub mod sequencer;
+
+pub use avoidance::{Avoidance, AvoidanceParams};
+pub use costmap::CostParams;
+pub use headless::{run_mission, MissionParams, MissionSummary};
+pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
+pub use mapper::{Mapper, MapperParams};
+pub use planner::{Planner, PlannerOutput, PlannerParams};
+pub use sequencer::{GoalSequencer, SequencerOutput};

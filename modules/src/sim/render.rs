@@ -1,0 +1,204 @@
+//! PNG rendering of a map with trajectory, planned path, goals and robot.
+
+use std::path::Path;
+
+use image::{Rgb, RgbImage};
+use petrel_actors::{OccupancyGrid, Point2, Pose2};
+
+/// What to draw on top of the map.
+#[derive(Clone, Debug, Default)]
+pub struct RenderLayers<'a> {
+    /// Trajectory, oldest first; drawn blue to orange as time passes.
+    pub trajectory: &'a [Point2],
+    /// A planned path, drawn thin green.
+    pub path: &'a [Point2],
+    /// Goals, drawn as numbered-by-order red rings (reached ones filled).
+    pub goals: &'a [Pose2],
+    /// How many of `goals` have been reached.
+    pub reached: usize,
+    /// The robot: pose and radius.
+    pub robot: Option<(Pose2, f64)>,
+    /// Pixels per cell; `None` picks the largest of 1..=8 that keeps the image <= 1000 px.
+    pub scale: Option<u32>,
+}
+
+const FREE: [f64; 3] = [246.0, 244.0, 238.0];
+const WALL: [f64; 3] = [38.0, 41.0, 54.0];
+const UNKNOWN: Rgb<u8> = Rgb([168, 170, 178]);
+
+/// Renders `grid` (ROS convention) and `layers` into an RGB image.
+pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
+    let (w, h) = (grid.width.max(1), grid.height.max(1));
+    let scale = layers
+        .scale
+        .unwrap_or_else(|| (1000 / w.max(h)).clamp(1, 8))
+        .max(1);
+    let mut img = RgbImage::new(w * scale, h * scale);
+    for row in 0..h {
+        for col in 0..w {
+            // Read defensively: a malformed grid (short data) renders as unknown, not a panic.
+            let value = grid
+                .data
+                .get(row as usize * grid.width as usize + col as usize)
+                .copied();
+            let colour = match value {
+                Some(v) if v >= 0 => {
+                    let t = v.min(100) as f64 / 100.0;
+                    // Dark walls, light free space, with a visible step at 50 %.
+                    let t = if t >= 0.5 { 0.75 + 0.25 * t } else { 0.5 * t };
+                    Rgb(std::array::from_fn(|i| {
+                        (FREE[i] + (WALL[i] - FREE[i]) * t) as u8
+                    }))
+                }
+                _ => UNKNOWN,
+            };
+            let top = (h - 1 - row) * scale;
+            for dy in 0..scale {
+                for dx in 0..scale {
+                    img.put_pixel(col * scale + dx, top + dy, colour);
+                }
+            }
+        }
+    }
+    let px_per_m = scale as f64 / grid.resolution;
+    let to_px = |x: f64, y: f64| {
+        (
+            (x - grid.origin.x()) * px_per_m,
+            (h * scale) as f64 - (y - grid.origin.y()) * px_per_m,
+        )
+    };
+    let thick = (scale as f64 * 0.6).max(1.2);
+
+    for pair in layers.path.windows(2) {
+        line(
+            &mut img,
+            to_px(pair[0].0.x, pair[0].0.y),
+            to_px(pair[1].0.x, pair[1].0.y),
+            thick * 0.5,
+            Rgb([40, 170, 80]),
+        );
+    }
+    let n = layers.trajectory.len().max(2) as f64;
+    for (i, pair) in layers.trajectory.windows(2).enumerate() {
+        let t = i as f64 / (n - 2.0).max(1.0);
+        let c = Rgb([
+            (30.0 + 225.0 * t) as u8,
+            (90.0 + 50.0 * t) as u8,
+            (220.0 - 200.0 * t) as u8,
+        ]);
+        line(
+            &mut img,
+            to_px(pair[0].0.x, pair[0].0.y),
+            to_px(pair[1].0.x, pair[1].0.y),
+            thick,
+            c,
+        );
+    }
+    let ring = (0.3 * px_per_m).max(4.0);
+    for (i, g) in layers.goals.iter().enumerate() {
+        let c = to_px(g.x(), g.y());
+        disc(&mut img, c, ring, Rgb([205, 30, 45]));
+        let inner = if i < layers.reached {
+            ring * 0.35
+        } else {
+            ring * 0.7
+        };
+        disc(&mut img, c, inner, Rgb([255, 255, 255]));
+        // Goal order as small dots under the ring: one dot per index.
+        for k in 0..=i {
+            disc(
+                &mut img,
+                (c.0 - ring + k as f64 * ring * 0.6, c.1 + ring * 1.5),
+                (ring * 0.2).max(1.5),
+                Rgb([205, 30, 45]),
+            );
+        }
+    }
+    if let Some((pose, radius)) = layers.robot {
+        let c = to_px(pose.x(), pose.y());
+        let r = (radius * px_per_m).max(3.0);
+        disc(&mut img, c, r, Rgb([0, 128, 128]));
+        let tip = (c.0 + r * pose.theta().cos(), c.1 - r * pose.theta().sin());
+        line(&mut img, c, tip, (r * 0.25).max(1.0), Rgb([255, 255, 255]));
+    }
+    img
+}
+
+/// Renders and writes a PNG file.
+pub fn save_png(
+    path: &Path,
+    grid: &OccupancyGrid,
+    layers: &RenderLayers,
+) -> Result<(), image::ImageError> {
+    render(grid, layers).save_with_format(path, image::ImageFormat::Png)
+}
+
+fn disc(img: &mut RgbImage, (cx, cy): (f64, f64), r: f64, colour: Rgb<u8>) {
+    let (x0, x1) = ((cx - r).floor().max(0.0) as i64, (cx + r).ceil() as i64);
+    let (y0, y1) = ((cy - r).floor().max(0.0) as i64, (cy + r).ceil() as i64);
+    for y in y0..=y1.min(img.height() as i64 - 1) {
+        for x in x0..=x1.min(img.width() as i64 - 1) {
+            let (dx, dy) = (x as f64 + 0.5 - cx, y as f64 + 0.5 - cy);
+            if dx * dx + dy * dy <= r * r {
+                img.put_pixel(x as u32, y as u32, colour);
+            }
+        }
+    }
+}
+
+fn line(img: &mut RgbImage, a: (f64, f64), b: (f64, f64), width: f64, colour: Rgb<u8>) {
+    let len = (b.0 - a.0).hypot(b.1 - a.1);
+    let steps = (len * 2.0).ceil().max(1.0) as usize;
+    for i in 0..=steps {
+        let t = i as f64 / steps as f64;
+        disc(
+            img,
+            (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t),
+            width / 2.0,
+            colour,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renders_cells_upside_up_and_draws_layers() {
+        let data: Vec<i8> = vec![100, 0, -1, 0, 0, 0];
+        let grid = OccupancyGrid {
+            width: 3,
+            height: 2,
+            resolution: 1.0,
+            origin: Pose2::default(),
+            data: data.into(),
+        };
+        let img = render(
+            &grid,
+            &RenderLayers {
+                scale: Some(10),
+                ..RenderLayers::default()
+            },
+        );
+        assert_eq!(img.dimensions(), (30, 20));
+        // Cell (0, 0) is the bottom-left: dark; cell (2, 0) unknown grey; top row free.
+        assert_eq!(*img.get_pixel(5, 15), Rgb([38, 41, 54]));
+        assert_eq!(*img.get_pixel(25, 15), UNKNOWN);
+        assert_eq!(*img.get_pixel(5, 5), Rgb([246, 244, 238]));
+        let traj = [Point2::new(0.5, 1.5), Point2::new(2.5, 1.5)];
+        let layers = RenderLayers {
+            trajectory: &traj,
+            robot: Some((Pose2::new(2.5, 0.5, 0.0), 0.3)),
+            scale: Some(10),
+            ..RenderLayers::default()
+        };
+        let img = render(&grid, &layers);
+        assert_ne!(
+            *img.get_pixel(15, 5),
+            Rgb([246, 244, 238]),
+            "trajectory drawn"
+        );
+        assert_eq!(*img.get_pixel(23, 15), Rgb([0, 128, 128]), "robot drawn");
+    }
+}
