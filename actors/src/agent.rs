@@ -10,7 +10,10 @@ use crate::blackboard::Blackboard;
 use crate::config::{ConfigErrors, ConfigFile};
 use crate::module_types::ModuleRegistry;
 use crate::summary::RunSummary;
-use crate::supervisor::{AgentSupervisor, SupervisorArgs, SupervisorMsg};
+use crate::supervision::Intensity;
+use crate::supervisor::{
+    AgentSupervisor, ControlRequest, GroupSpec, ModuleSpec, SupervisorArgs, SupervisorMsg,
+};
 
 /// How long a module gets to finish its step and cleanup when the agent stops, before it is killed.
 pub const DEFAULT_STOP_TIMEOUT: Duration = Duration::from_secs(5);
@@ -74,13 +77,38 @@ impl Agent {
     /// with every property, value and link in place, then each module in config order.
     pub async fn start(config: &ConfigFile, types: &ModuleRegistry) -> Result<Agent, StartError> {
         let registry = config.build(types)?;
-        let name = config.config.name.clone();
-        let modules = config
-            .config
+        let events = registry.events_writer();
+        let cfg = &config.config;
+        let ms = Duration::from_millis;
+        let groups = cfg
+            .groups
+            .iter()
+            .map(|g| GroupSpec {
+                name: g.name.clone(),
+                strategy: g.strategy,
+                intensity: Intensity::new(g.max_restarts, Duration::from_secs_f64(g.within_s)),
+            })
+            .collect();
+        let modules = cfg
             .modules
             .iter()
-            .filter_map(|m| types.get(&m.type_name).map(|t| (m.name.clone(), *t)))
+            .filter_map(|m| {
+                Some(ModuleSpec {
+                    name: m.name.clone(),
+                    module_type: *types.get(&m.type_name)?,
+                    group: m
+                        .group
+                        .as_ref()
+                        .and_then(|g| cfg.groups.iter().position(|x| &x.name == g)),
+                    policy: m.restart,
+                    watchdog: m.watchdog_ms.map(ms),
+                    shutdown_timeout: ms(m
+                        .shutdown_timeout_ms
+                        .unwrap_or(cfg.supervision.shutdown_timeout_ms)),
+                })
+            })
             .collect();
+        let name = cfg.name.clone();
         let (blackboard, bb_join) = Blackboard::spawn(registry)
             .await
             .map_err(|e| StartError::Spawn(e.to_string()))?;
@@ -89,7 +117,10 @@ impl Agent {
             agent: Arc::from(name.as_str()),
             blackboard: blackboard.clone(),
             control: control.clone(),
+            supervision: cfg.supervision.clone(),
+            groups,
             modules,
+            events,
         };
         let (supervisor, sup_join) = Actor::spawn(None, AgentSupervisor, args)
             .await
@@ -116,6 +147,13 @@ impl Agent {
             Some(exit) => exit,
             // The sender lives in `self`, so this cannot happen while the agent exists.
             None => std::future::pending().await,
+        }
+    }
+
+    /// Runtime control of this agent's modules (stop, start, restart while running).
+    pub fn modules(&self) -> ModuleControl {
+        ModuleControl {
+            supervisor: self.supervisor.clone(),
         }
     }
 
@@ -146,7 +184,8 @@ impl Agent {
     /// Stops every module in reverse start order (running their cleanup, killing any that takes
     /// longer than `timeout`), and reports how each fared. The blackboard stays readable
     /// (e.g. for a snapshot) until [`shutdown`](Agent::shutdown).
-    pub async fn stop_modules(&self, timeout: Duration) -> RunSummary {
+    pub async fn stop_modules(&self, timeout: impl Into<Option<Duration>>) -> RunSummary {
+        let timeout = timeout.into();
         let modules =
             ractor::call!(self.supervisor, SupervisorMsg::StopAll, timeout).unwrap_or_default();
         RunSummary {
@@ -166,9 +205,39 @@ impl Agent {
     }
 
     /// Stops the modules, then the agent; reports how each module fared.
-    pub async fn stop(self, timeout: Duration) -> RunSummary {
+    pub async fn stop(self, timeout: impl Into<Option<Duration>>) -> RunSummary {
         let summary = self.stop_modules(timeout).await;
         self.shutdown().await;
         summary
+    }
+}
+
+/// Stops, starts and restarts an agent's modules while it runs (for tools, plans and contexts).
+#[derive(Clone)]
+pub struct ModuleControl {
+    pub(crate) supervisor: ActorRef<SupervisorMsg>,
+}
+
+impl ModuleControl {
+    async fn request(&self, request: ControlRequest) -> Result<(), String> {
+        match ractor::call!(self.supervisor, SupervisorMsg::Control, request) {
+            Ok(result) => result,
+            Err(e) => Err(format!("the agent supervisor is not answering: {e}")),
+        }
+    }
+
+    /// Stops module `name` (cleanup runs); it stays stopped until started again.
+    pub async fn stop(&self, name: &str) -> Result<(), String> {
+        self.request(ControlRequest::Stop(name.into())).await
+    }
+
+    /// Starts module `name` again after a stop; it finds its properties as it left them.
+    pub async fn start(&self, name: &str) -> Result<(), String> {
+        self.request(ControlRequest::Start(name.into())).await
+    }
+
+    /// Stops and starts module `name` (counted in its `stats/restarts`).
+    pub async fn restart(&self, name: &str) -> Result<(), String> {
+        self.request(ControlRequest::Restart(name.into())).await
     }
 }

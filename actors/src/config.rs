@@ -23,6 +23,7 @@ use serde::Deserialize;
 
 use crate::blackboard::{BlackboardError, Registry};
 use crate::module_types::ModuleRegistry;
+use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
 
 /// One agent's configuration.
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -30,6 +31,12 @@ use crate::module_types::ModuleRegistry;
 pub struct AgentConfig {
     /// The agent name (the `agent` of every property URL).
     pub name: String,
+    /// How the agent supervisor restarts failed modules (see [`crate::supervision`]).
+    #[serde(default)]
+    pub supervision: SupervisionConfig,
+    /// Named groups of modules with their own strategy and intensity.
+    #[serde(default)]
+    pub groups: Vec<GroupConfig>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -53,6 +60,18 @@ pub struct ModuleConfig {
     /// Capacities of this module's output queues, by path.
     #[serde(default)]
     pub capacities: BTreeMap<String, usize>,
+    /// The supervision group the module belongs to (default: directly under the agent).
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Whether the module is restarted when it ends.
+    #[serde(default)]
+    pub restart: RestartPolicy,
+    /// A step that takes longer than this many ms is a failure (a hang); overrides the module's own.
+    #[serde(default)]
+    pub watchdog_ms: Option<u64>,
+    /// Time the module gets to stop before it is killed, ms (default: the agent's).
+    #[serde(default)]
+    pub shutdown_timeout_ms: Option<u64>,
 }
 
 /// A problem in a config file, located in it.
@@ -129,7 +148,10 @@ impl ConfigFile {
     /// Parses config text; `path` names it in errors.
     pub fn parse(path: impl AsRef<Path>, text: &str) -> Result<Self, ConfigErrors> {
         let path = path.as_ref();
-        match ron::Options::default().from_str::<AgentConfig>(text) {
+        // Optional fields are written plainly (`group: "nav"`, not `group: Some("nav")`).
+        let options = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        match options.from_str::<AgentConfig>(text) {
             Ok(config) => Ok(ConfigFile {
                 config,
                 sources: vec![(path.into(), text.to_string())],
@@ -172,7 +194,7 @@ impl ConfigFile {
     /// capacities and links. Returns every problem found.
     pub fn build(&self, types: &ModuleRegistry) -> Result<Registry, ConfigErrors> {
         let mut registry = Registry::new(&self.config.name);
-        let mut errors = Vec::new();
+        let mut errors = self.check_supervision();
         let mut names = HashSet::new();
         for m in &self.config.modules {
             if !names.insert(m.name.as_str()) {
@@ -223,6 +245,7 @@ impl ConfigFile {
                 ));
             }
         }
+        registry.declare_events();
         let declared: Vec<&ModuleConfig> = self
             .config
             .modules
@@ -260,6 +283,118 @@ impl ConfigFile {
         }
     }
 
+    /// Checks the `supervision` section, groups, and the modules' supervision fields.
+    fn check_supervision(&self) -> Vec<ConfigError> {
+        let mut errors = Vec::new();
+        let at = |needle: &str, message: String| self.locate(&format!("{needle}:"), message);
+        let s = &self.config.supervision;
+        let mut intensity = |what: &str, max: u32, within: f64, needle: &str| {
+            if max > MAX_RESTARTS_LIMIT {
+                errors.push(at(
+                    needle,
+                    format!("{what}: max_restarts is {max}; expected 0..={MAX_RESTARTS_LIMIT}"),
+                ));
+            }
+            if !(within > 0.0 && within <= MAX_WINDOW_S) {
+                errors.push(at(needle, format!("{what}: within_s is {within}; expected a number of seconds in (0, {MAX_WINDOW_S}]")));
+            }
+        };
+        intensity("supervision", s.max_restarts, s.within_s, "supervision");
+        for g in &self.config.groups {
+            intensity(
+                &format!("group `{}`", g.name),
+                g.max_restarts,
+                g.within_s,
+                "groups",
+            );
+        }
+        let b = &s.backoff;
+        if b.min_ms > b.max_ms {
+            errors.push(at(
+                "backoff",
+                format!(
+                    "supervision backoff: min_ms ({}) is above max_ms ({})",
+                    b.min_ms, b.max_ms
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&b.jitter) {
+            errors.push(at(
+                "jitter",
+                format!(
+                    "supervision backoff: jitter is {}; expected 0.0..=1.0",
+                    b.jitter
+                ),
+            ));
+        }
+        let mut seen = HashSet::new();
+        for g in &self.config.groups {
+            if !seen.insert(g.name.as_str()) {
+                errors.push(self.locate(
+                    &format!("\"{}\"", g.name),
+                    format!("duplicate group name `{}`", g.name),
+                ));
+            }
+        }
+        for m in &self.config.modules {
+            if m.name.starts_with('_') {
+                errors.push(self.error(
+                    &m.name,
+                    None,
+                    format!(
+                        "module name `{}`: names starting with `_` are reserved for the runtime",
+                        m.name
+                    ),
+                ));
+            }
+            if let Some(group) = &m.group {
+                if !seen.contains(group.as_str()) {
+                    let known: Vec<&str> =
+                        self.config.groups.iter().map(|g| g.name.as_str()).collect();
+                    let known = if known.is_empty() {
+                        "none are defined".to_string()
+                    } else {
+                        format!("groups: {}", known.join(", "))
+                    };
+                    errors.push(self.error(
+                        &m.name,
+                        Some(group),
+                        format!("module `{}`: unknown group `{group}` ({known})", m.name),
+                    ));
+                }
+            }
+            if m.watchdog_ms == Some(0) {
+                errors.push(self.error(
+                    &m.name,
+                    Some("watchdog_ms"),
+                    format!("module `{}`: watchdog_ms must be above 0", m.name),
+                ));
+            }
+        }
+        errors
+    }
+
+    /// An error located at the first occurrence of `needle` in the last source that has it.
+    fn locate(&self, needle: &str, message: String) -> ConfigError {
+        for (file, text) in self.sources.iter().rev() {
+            if let Some(at) = text.find(needle) {
+                let (line, column) = line_column(text, at);
+                return ConfigError {
+                    file: file.clone(),
+                    line,
+                    column,
+                    message,
+                };
+            }
+        }
+        ConfigError {
+            file: self.path().into(),
+            line: 0,
+            column: 0,
+            message,
+        }
+    }
+
     /// An error located at the first quoted `needle` after module `module`'s name, in the
     /// last source that has it (overlays win), else at the module's name.
     fn error(&self, module: &str, needle: Option<&str>, message: String) -> ConfigError {
@@ -282,8 +417,7 @@ impl ConfigFile {
             let at = needle
                 .and_then(|n| text[start..].find(&format!("\"{n}\"")).map(|i| start + i))
                 .unwrap_or(start);
-            let line = text[..at].matches('\n').count() + 1;
-            let column = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+            let (line, column) = line_column(text, at);
             return ConfigError {
                 file: file.clone(),
                 line,
@@ -298,6 +432,18 @@ impl ConfigFile {
             message,
         }
     }
+}
+
+/// Largest `max_restarts` accepted.
+const MAX_RESTARTS_LIMIT: u32 = 100_000;
+/// Longest intensity window accepted, seconds.
+const MAX_WINDOW_S: f64 = 86_400.0;
+
+/// 1-based line and column of byte offset `at` in `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let line = text[..at].matches('\n').count() + 1;
+    let column = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, column)
 }
 
 /// Says which module and key a registry error is about, in config terms.

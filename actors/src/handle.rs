@@ -310,7 +310,8 @@ impl<T: PropertyType> QueueWriter<T> {
 }
 
 /// The consuming side of an `in/...` queue input: sees every item of the queue it is linked to,
-/// once, in order, from the moment it was linked.
+/// once, in order, from the moment it was linked (again after a module failure, for items not
+/// yet acknowledged: see [`ack`](QueueReader::ack)).
 pub struct QueueReader<T> {
     pub(crate) reader: Arc<ReaderEndpoint>,
     _t: PhantomData<fn() -> T>,
@@ -346,6 +347,17 @@ impl<T: PropertyType> QueueReader<T> {
     /// How many items wait to be read.
     pub fn pending(&self) -> usize {
         self.reader.pending()
+    }
+
+    /// Acknowledges every item taken so far, now.
+    ///
+    /// The runtime acknowledges what a step took when the step returns `Ok`, and a restarted
+    /// module is given again what its failed instance took but had not acknowledged (at least
+    /// once). A module that records in its state which items it has processed (e.g. the last
+    /// sequence number) and acknowledges right after recording them processes each item
+    /// exactly once across failures.
+    pub fn ack(&self) {
+        self.reader.ack()
     }
 
     /// How many items this reader lost because it lagged more than the queue's capacity.

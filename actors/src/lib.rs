@@ -20,12 +20,13 @@ mod ports;
 mod queue;
 mod snapshot;
 mod summary;
+pub mod supervision;
 mod supervisor;
 pub mod types;
 pub mod url;
 mod value;
 
-pub use agent::{Agent, AgentExit, StartError, DEFAULT_STOP_TIMEOUT};
+pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{Blackboard, BlackboardError, Registry};
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{
@@ -37,6 +38,8 @@ pub use module_types::{ModuleRegistry, ModuleType};
 pub use ports::{Ports, PropertyDecl, PropertyKind};
 pub use queue::DEFAULT_CAPACITY;
 pub use summary::{ModuleReport, RunSummary};
+pub use supervision::SupervisorEvent;
+pub use supervisor::EXIT_GAVE_UP;
 pub use types::{Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};
 pub use url::PropertyUrl;
 pub use value::{AnyValue, TypeInfo};

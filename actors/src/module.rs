@@ -123,6 +123,7 @@ impl<T: PropertyType> Watchable for QueueReader<T> {
 pub struct Schedule {
     pub(crate) period: Option<Duration>,
     pub(crate) timeout: Option<Duration>,
+    pub(crate) watchdog: Option<Duration>,
     pub(crate) watches: Vec<Watch>,
 }
 
@@ -153,6 +154,15 @@ impl Schedule {
     /// Steps when `queue` has new items (same as [`on_change`](Schedule::on_change)).
     pub fn on_items<T: PropertyType>(self, queue: &QueueReader<T>) -> Self {
         self.on_change(queue)
+    }
+
+    /// Declares that a step never takes longer than `deadline`: a step that does is a failure
+    /// (a hang): it is dropped and the module restarted. A config's `watchdog_ms` overrides it.
+    /// (An async step is dropped at its next `.await`; a step that blocks its thread cannot be
+    /// interrupted, so steps must not block: use `tokio::task::spawn_blocking` for heavy work.)
+    pub fn watchdog(mut self, deadline: Duration) -> Self {
+        self.watchdog = Some(deadline);
+        self
     }
 
     /// Steps when nothing else made the module step for `timeout`.

@@ -19,7 +19,8 @@ use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
 use crate::handle::Output;
 use crate::module::{Cause, Context, Module, Schedule, WatchTarget};
-use crate::ports::{Ports, PropertyKind};
+use crate::ports::{Handle, Ports, PropertyKind};
+use crate::queue::ReaderEndpoint;
 
 /// Stats are published at most this often (and at every status change), to keep steps cheap.
 const STATS_INTERVAL: Duration = Duration::from_millis(100);
@@ -34,6 +35,8 @@ pub mod status {
     pub const DISABLED: &str = "disabled";
     /// Ended by a panic, an error or a hang.
     pub const FAILED: &str = "failed";
+    /// Failed, waiting for the supervisor to start it again.
+    pub const RESTARTING: &str = "restarting";
     /// Stopped on request.
     pub const STOPPED: &str = "stopped";
 }
@@ -41,6 +44,7 @@ pub mod status {
 /// The runtime-owned properties every module has.
 pub(crate) struct Builtins {
     pub enabled: Output<bool>,
+    pub fault: Output<String>,
     pub status: Output<String>,
     pub steps: Output<i64>,
     pub last_step_us: Output<f64>,
@@ -53,12 +57,24 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
     // Written by the supervisor, declared here so that every module has it.
     ports.builtin(
         Stats,
+        "stats/restarts",
+        0_i64,
+        "times the supervisor restarted this module",
+    );
+    ports.builtin(
+        Stats,
         "stats/failures",
         0_i64,
         "failures (panics, errors, hangs) of this module",
     );
     Builtins {
         enabled: ports.builtin(Enabled, "enabled", true, "whether the module steps"),
+        fault: ports.builtin(
+            PropertyKind::Control,
+            "control/fault",
+            String::new(),
+            "write panic, error or hang to make the next step fail (fault injection)",
+        ),
         status: ports.builtin(
             Stats,
             "stats/status",
@@ -88,6 +104,8 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
 }
 
 pub(crate) struct ModuleArgs {
+    /// Overrides the module's own watchdog.
+    pub watchdog: Option<Duration>,
     pub agent: Arc<str>,
     pub name: String,
     pub blackboard: Blackboard,
@@ -105,6 +123,9 @@ impl<M> ModuleActor<M> {
 
 pub(crate) struct Running<M> {
     module: M,
+    readers: Vec<Arc<ReaderEndpoint>>,
+    watchdog: Option<Duration>,
+    fault_seen: u64,
     ctx: Context,
     builtins: Builtins,
     signal: Arc<Signal>,
@@ -129,6 +150,18 @@ impl<M: Module> Actor for ModuleActor<M> {
     ) -> Result<Running<M>, ActorProcessingErr> {
         let span = tracing::info_span!(parent: None, "module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
         let binding = args.blackboard.bind(&args.name).await?;
+        // A restarted instance is given again what its predecessor took but did not acknowledge.
+        let readers: Vec<Arc<ReaderEndpoint>> = binding
+            .handles
+            .values()
+            .filter_map(|h| match h {
+                Handle::QueueIn(reader) => Some(reader.clone()),
+                _ => None,
+            })
+            .collect();
+        for reader in &readers {
+            reader.rewind();
+        }
         let mut ports = Ports::bound(&args.name, binding.handles);
         let builtins = declare_builtins(&mut ports);
         let mut module = M::declare(&mut ports);
@@ -142,8 +175,12 @@ impl<M: Module> Actor for ModuleActor<M> {
             return Err(format!("init failed: {e:#}").into());
         }
         span.in_scope(|| tracing::info!("initialized"));
+        let fault_seen = builtins.fault.read().version;
         Ok(Running {
             module,
+            readers,
+            watchdog: args.watchdog,
+            fault_seen,
             ctx,
             builtins,
             signal: binding.signal,
@@ -195,8 +232,10 @@ impl<M: Module> Running<M> {
         let Schedule {
             period,
             timeout,
+            watchdog,
             watches,
         } = self.module.schedule();
+        self.watchdog = self.watchdog.or(watchdog);
         for watch in &watches {
             match &watch.0 {
                 WatchTarget::Value(ep) => ep.subscribe(&self.signal),
@@ -256,13 +295,42 @@ impl<M: Module> Running<M> {
         let started = Instant::now();
         self.ctx.cause = Cause(causes);
         self.ctx.now = started;
-        self.module.step(&mut self.ctx).await?;
+        let fault = self.take_fault();
+        let step = async {
+            match fault.as_deref() {
+                Some("panic") => panic!("fault injected through control/fault: panic"),
+                Some("error") => anyhow::bail!("fault injected through control/fault: error"),
+                Some("hang") => std::future::pending().await,
+                _ => self.module.step(&mut self.ctx).await,
+            }
+        };
+        match self.watchdog {
+            Some(deadline) => match tokio::time::timeout(deadline, step).await {
+                Ok(result) => result?,
+                Err(_) => anyhow::bail!("hang: a step ran longer than its {deadline:?} watchdog"),
+            },
+            None => step.await?,
+        }
+        // The step is done with what it took from its queues.
+        for reader in &self.readers {
+            reader.ack();
+        }
         self.ctx.steps += 1;
         let took = started.elapsed();
         if self.stats.record(started, took) {
             self.publish_stats();
         }
         Ok(())
+    }
+
+    /// A fault injected through `control/fault` since the last step, if any.
+    fn take_fault(&mut self) -> Option<String> {
+        let fault = self.builtins.fault.read();
+        if fault.version == self.fault_seen {
+            return None;
+        }
+        self.fault_seen = fault.version;
+        Some(fault.value.to_string()).filter(|f| !f.is_empty())
     }
 
     fn publish(&mut self, status: &str) {

@@ -32,6 +32,8 @@ pub enum PropertyKind {
     Enabled,
     /// `stats/...`: figures the runtime keeps about the module.
     Stats,
+    /// `control/...`: requests to the runtime about the module (e.g. fault injection).
+    Control,
     /// `out/...` queue: a stream the module produces.
     QueueOut,
     /// `in/...` queue: a stream the module consumes.
@@ -48,6 +50,7 @@ impl PropertyKind {
             PropertyKind::State => "state/",
             PropertyKind::Enabled => "enabled",
             PropertyKind::Stats => "stats/",
+            PropertyKind::Control => "control/",
         }
     }
 
@@ -62,6 +65,14 @@ impl PropertyKind {
     /// Whether this is a queue rather than a last-value property.
     pub fn is_queue(self) -> bool {
         matches!(self, PropertyKind::QueueIn | PropertyKind::QueueOut)
+    }
+
+    /// Whether the runtime owns it (declared for every module: `enabled`, `stats/...`, `control/...`).
+    pub fn is_builtin(self) -> bool {
+        matches!(
+            self,
+            PropertyKind::Enabled | PropertyKind::Stats | PropertyKind::Control
+        )
     }
 
     /// Whether configs and snapshots may set its value.
@@ -79,6 +90,7 @@ impl fmt::Display for PropertyKind {
             PropertyKind::State => "state",
             PropertyKind::Enabled => "enabled",
             PropertyKind::Stats => "stats",
+            PropertyKind::Control => "control",
             PropertyKind::QueueOut => "queue output",
             PropertyKind::QueueIn => "queue input",
         })

@@ -2,9 +2,14 @@
 //!
 //! A queue is passive (no task): a push appends an `Arc`-shared, timestamped item and raises
 //! the signal of every subscribed reader; each reader has its own cursor and sees every item
-//! once, in order. An item is freed as soon as every reader has consumed it. A queue holds at
-//! most `capacity` items: a reader that lags further loses the oldest ones, and the loss is
-//! added to its drop counter, which is published as the property `stats/dropped/<input path>`.
+//! once, in order. A queue holds at most `capacity` items: a reader that lags further loses the
+//! oldest ones, and the loss is added to its drop counter, which is published as the property
+//! `stats/dropped/<input path>`.
+//!
+//! Each reader also has an *acknowledged* position: the module actor acknowledges what a step
+//! took once the step returns, and a restarted module rewinds to it. An item is freed once
+//! every reader has acknowledged it. So delivery across a module failure is **at least once**:
+//! the items of the step that failed are delivered again (unless evicted by capacity).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -28,7 +33,10 @@ pub(crate) struct QueueItem {
 
 struct ReaderEntry {
     id: u64,
+    /// Next item to deliver.
     cursor: u64,
+    /// First item not yet acknowledged (`acked <= cursor`).
+    acked: u64,
     signal: Option<Arc<Signal>>,
     dropped: Arc<Endpoint>,
 }
@@ -46,12 +54,12 @@ impl Inner {
         self.next_seq - self.items.len() as u64
     }
 
-    /// Frees the items every reader has consumed.
+    /// Frees the items every reader has acknowledged.
     fn trim(&mut self) {
         let min = self
             .readers
             .iter()
-            .map(|r| r.cursor)
+            .map(|r| r.acked)
             .min()
             .unwrap_or(self.next_seq);
         while self.items.front().is_some_and(|i| i.seq < min) {
@@ -108,9 +116,13 @@ impl QueueCore {
             if inner.items.len() > inner.capacity {
                 inner.items.pop_front();
                 let head = inner.head_seq();
-                for r in inner.readers.iter_mut().filter(|r| r.cursor < head) {
-                    lagging.push((r.dropped.clone(), head - r.cursor));
-                    r.cursor = head;
+                for r in inner.readers.iter_mut() {
+                    // Delivered but unacknowledged items can no longer be redelivered.
+                    r.acked = r.acked.max(head);
+                    if r.cursor < head {
+                        lagging.push((r.dropped.clone(), head - r.cursor));
+                        r.cursor = head;
+                    }
                 }
             }
             for r in &inner.readers {
@@ -132,6 +144,7 @@ impl QueueCore {
         inner.readers.push(ReaderEntry {
             id,
             cursor,
+            acked: cursor,
             signal,
             dropped,
         });
@@ -171,6 +184,26 @@ impl QueueCore {
         };
         r.cursor = head + end as u64;
         inner.trim();
+    }
+
+    /// Acknowledges everything reader `id` took so far.
+    fn ack(&self, id: u64) {
+        let mut inner = self.inner.lock();
+        if let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) {
+            if r.acked != r.cursor {
+                r.acked = r.cursor;
+                inner.trim();
+            }
+        }
+    }
+
+    /// Delivers again everything reader `id` took but did not acknowledge.
+    fn rewind(&self, id: u64) {
+        let mut inner = self.inner.lock();
+        let head = inner.head_seq();
+        if let Some(r) = inner.readers.iter_mut().find(|r| r.id == id) {
+            r.cursor = r.acked.max(head);
+        }
     }
 
     fn pending(&self, id: u64) -> usize {
@@ -246,6 +279,14 @@ impl ReaderEndpoint {
     pub fn pending(&self) -> usize {
         self.source.load().pending(self.id)
     }
+
+    pub fn ack(&self) {
+        self.source.load().ack(self.id)
+    }
+
+    pub fn rewind(&self) {
+        self.source.load().rewind(self.id)
+    }
 }
 
 impl Drop for ReaderEndpoint {
@@ -265,6 +306,7 @@ mod tests {
     fn seqs(r: &ReaderEndpoint) -> Vec<i64> {
         let mut out = Vec::new();
         r.take(usize::MAX, &mut out);
+        r.ack();
         out.iter()
             .map(|i| *i.value.downcast_ref::<i64>().unwrap())
             .collect()
@@ -282,6 +324,29 @@ mod tests {
         assert_eq!(q.len(), 5, "b has not read yet");
         assert_eq!(seqs(&b), vec![0, 1, 2, 3, 4]);
         assert_eq!(q.len(), 0, "freed once both consumed");
+    }
+
+    #[test]
+    fn unacknowledged_items_are_delivered_again_after_a_rewind() {
+        let q = QueueCore::new("p/out/q", TypeInfo::of::<i64>(), 16);
+        let r = reader(1, &q);
+        for i in 0..4 {
+            q.push(Arc::new(i as i64));
+        }
+        assert_eq!(seqs(&r), vec![0, 1, 2, 3]);
+        q.push(Arc::new(4_i64));
+        q.push(Arc::new(5_i64));
+        let mut taken = Vec::new();
+        r.take(usize::MAX, &mut taken);
+        assert_eq!(
+            taken.len(),
+            2,
+            "a step takes 4 and 5, then fails before acknowledging"
+        );
+        assert_eq!(q.len(), 2, "unacknowledged items are kept");
+        r.rewind();
+        assert_eq!(seqs(&r), vec![4, 5], "the restarted reader gets them again");
+        assert_eq!(q.len(), 0);
     }
 
     #[test]

@@ -39,7 +39,7 @@ pub(crate) fn write(registry: &Registry) -> String {
                 continue;
             }
             match entry.decl.kind {
-                PropertyKind::Stats | PropertyKind::QueueIn => {}
+                PropertyKind::Stats | PropertyKind::Control | PropertyKind::QueueIn => {}
                 PropertyKind::QueueOut => {
                     if let crate::ports::Handle::QueueOut(core) = &entry.handle {
                         capacities.push(format!("{path:?}: {}", core.capacity()));

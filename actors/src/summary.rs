@@ -13,8 +13,10 @@ pub struct ModuleReport {
     pub status: String,
     /// Steps run.
     pub steps: u64,
-    /// Failures (panics, errors).
+    /// Failures (panics, errors, hangs).
     pub failures: u64,
+    /// Restarts by the supervisor.
+    pub restarts: u64,
     /// The last failure's message.
     pub last_error: Option<String>,
 }
@@ -32,6 +34,11 @@ impl RunSummary {
     /// The report of module `name`.
     pub fn module(&self, name: &str) -> Option<&ModuleReport> {
         self.modules.iter().find(|m| m.name == name)
+    }
+
+    /// Total restarts across modules.
+    pub fn restarts(&self) -> u64 {
+        self.modules.iter().map(|m| m.restarts).sum()
     }
 
     /// Total failures across modules.
@@ -58,21 +65,22 @@ impl fmt::Display for RunSummary {
             .max(4);
         writeln!(
             f,
-            "agent {}: {} modules, {} failures",
+            "agent {}: {} modules, {} failures, {} restarts",
             self.agent,
             self.modules.len(),
-            self.failures()
+            self.failures(),
+            self.restarts()
         )?;
         writeln!(
             f,
-            "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}",
-            "module", "type", "status", "steps", "failures"
+            "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}  {:>8}",
+            "module", "type", "status", "steps", "failures", "restarts"
         )?;
         for m in &self.modules {
             writeln!(
                 f,
-                "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}",
-                m.name, m.module_type, m.status, m.steps, m.failures
+                "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}  {:>8}",
+                m.name, m.module_type, m.status, m.steps, m.failures, m.restarts
             )?;
             if let Some(e) = &m.last_error {
                 writeln!(f, "  {:<w$}  last error: {e}", "")?;

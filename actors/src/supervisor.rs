@@ -1,8 +1,9 @@
-//! The agent's supervisor actor: starts module actors in config order, records their failures,
-//! and stops them in reverse order.
+//! The agent supervisor actor: the imperative shell around [`crate::supervision`]'s policy.
 //!
-//! Policy for now: a failed module is reported (trace, `stats/status = failed`,
-//! `stats/failures`) and stays stopped; it never takes the agent or the process down.
+//! It starts module actors in config order, turns their failures into restart plans (strategy,
+//! restart policy, intensity, escalation, backoff), carries the plans out, publishes what it does
+//! (traces, `_supervisor/events`, `stats/failures`, `stats/restarts`, `stats/status`), serves
+//! runtime control requests, and stops everything in reverse order.
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -10,20 +11,59 @@ use std::time::Duration;
 use ractor::{Actor, ActorCell, ActorProcessingErr, ActorRef, RpcReplyPort, SupervisionEvent};
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
+use tokio::time::Instant;
 
 use crate::agent::AgentControl;
 use crate::blackboard::Blackboard;
+use crate::handle::QueueWriter;
 use crate::module_actor::{status, ModuleArgs};
 use crate::module_types::ModuleType;
 use crate::summary::ModuleReport;
+use crate::supervision::{
+    plan_restart, Backoff, GiveUp, Intensity, Member, RestartPlan, RestartPolicy,
+};
+use crate::supervision::{Strategy, SupervisionConfig, SupervisorEvent};
+
+/// Exit code of `petrel run` when the supervisor gives up and stops the agent.
+pub const EXIT_GAVE_UP: u8 = 3;
+
+/// One module as the supervisor is told about it.
+pub(crate) struct ModuleSpec {
+    pub name: String,
+    pub module_type: ModuleType,
+    pub group: Option<usize>,
+    pub policy: RestartPolicy,
+    pub watchdog: Option<Duration>,
+    pub shutdown_timeout: Duration,
+}
+
+/// A supervision group as the supervisor is told about it.
+pub(crate) struct GroupSpec {
+    pub name: String,
+    pub strategy: Strategy,
+    pub intensity: Intensity,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SlotState {
+    Running,
+    /// A restart is scheduled.
+    Waiting,
+    Stopped,
+    Failed,
+}
 
 struct Slot {
-    name: String,
-    module_type: ModuleType,
+    spec: ModuleSpec,
+    state: SlotState,
+    /// Bumped whenever a scheduled restart must be forgotten.
+    generation: u64,
     actor: Option<ActorCell>,
     join: Option<JoinHandle<()>>,
     stop: watch::Sender<bool>,
+    backoff: Backoff,
     failures: u64,
+    restarts: u64,
     last_error: Option<String>,
 }
 
@@ -31,21 +71,47 @@ pub(crate) struct SupervisorArgs {
     pub agent: Arc<str>,
     pub blackboard: Blackboard,
     pub control: AgentControl,
-    pub modules: Vec<(String, ModuleType)>,
+    pub supervision: SupervisionConfig,
+    pub groups: Vec<GroupSpec>,
+    pub modules: Vec<ModuleSpec>,
+    pub events: QueueWriter<SupervisorEvent>,
 }
 
 pub(crate) struct SupervisorState {
+    me: ActorRef<SupervisorMsg>,
     agent: Arc<str>,
     blackboard: Blackboard,
     control: AgentControl,
+    config: SupervisionConfig,
+    top: Intensity,
+    groups: Vec<GroupSpec>,
     slots: Vec<Slot>,
+    events: QueueWriter<SupervisorEvent>,
+    started: Instant,
+    stopping: bool,
+    rng: u64,
+}
+
+/// A runtime request about one module.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum ControlRequest {
+    Stop(String),
+    Start(String),
+    Restart(String),
 }
 
 pub(crate) enum SupervisorMsg {
-    /// Stops every module in reverse start order, each within the timeout, then reports.
-    StopAll(Duration, RpcReplyPort<Vec<ModuleReport>>),
+    /// Stops every module in reverse start order (each within its shutdown timeout, or the given
+    /// one), then reports.
+    StopAll(Option<Duration>, RpcReplyPort<Vec<ModuleReport>>),
     /// Reports every module's status so far.
     Report(RpcReplyPort<Vec<ModuleReport>>),
+    /// Scheduled restarts are due: (slot, generation) pairs.
+    Restart(Vec<(usize, u64)>),
+    /// A module instance could not be started.
+    StartFailed(usize, u64, String),
+    /// Stop, start or restart a module on request.
+    Control(ControlRequest, RpcReplyPort<Result<(), String>>),
 }
 
 pub(crate) struct AgentSupervisor;
@@ -60,25 +126,45 @@ impl Actor for AgentSupervisor {
         me: ActorRef<SupervisorMsg>,
         args: SupervisorArgs,
     ) -> Result<SupervisorState, ActorProcessingErr> {
+        let config = args.supervision;
+        let slots = args
+            .modules
+            .into_iter()
+            .map(|spec| Slot {
+                spec,
+                state: SlotState::Stopped,
+                generation: 0,
+                actor: None,
+                join: None,
+                stop: watch::channel(false).0,
+                backoff: Backoff::new(config.backoff),
+                failures: 0,
+                restarts: 0,
+                last_error: None,
+            })
+            .collect();
+        let seed = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(1, |d| d.as_nanos() as u64);
         let mut state = SupervisorState {
+            me,
             agent: args.agent,
             blackboard: args.blackboard,
             control: args.control,
-            slots: Vec::new(),
+            top: Intensity::new(
+                config.max_restarts,
+                Duration::from_secs_f64(config.within_s),
+            ),
+            config,
+            groups: args.groups,
+            slots,
+            events: args.events,
+            started: Instant::now(),
+            stopping: false,
+            rng: seed | 1,
         };
-        for (name, module_type) in args.modules {
-            let (stop, _) = watch::channel(false);
-            state.slots.push(Slot {
-                name,
-                module_type,
-                actor: None,
-                join: None,
-                stop,
-                failures: 0,
-                last_error: None,
-            });
-            let index = state.slots.len() - 1;
-            state.start(index, me.get_cell()).await;
+        for i in 0..state.slots.len() {
+            state.spawn(i).await;
         }
         tracing::info!(agent = %state.agent, modules = state.slots.len(), "agent started");
         Ok(state)
@@ -98,6 +184,17 @@ impl Actor for AgentSupervisor {
             SupervisorMsg::Report(reply) => {
                 let _ = reply.send(state.report().await);
             }
+            SupervisorMsg::Restart(due) => state.restart_now(due).await,
+            SupervisorMsg::StartFailed(i, generation, reason) => {
+                if state.slots[i].generation == generation {
+                    state
+                        .on_exit(i, true, format!("could not start: {reason}"))
+                        .await;
+                }
+            }
+            SupervisorMsg::Control(request, reply) => {
+                let _ = reply.send(state.control_request(request).await);
+            }
         }
         Ok(())
     }
@@ -111,13 +208,12 @@ impl Actor for AgentSupervisor {
         match event {
             SupervisionEvent::ActorFailed(cell, error) => {
                 if let Some(i) = state.slot_of(&cell) {
-                    state.slots[i].actor = None;
-                    state.failed(i, error.to_string()).await;
+                    state.on_exit(i, true, error.to_string()).await;
                 }
             }
             SupervisionEvent::ActorTerminated(cell, _, _) => {
                 if let Some(i) = state.slot_of(&cell) {
-                    state.slots[i].actor = None;
+                    state.on_exit(i, false, "ended by itself".into()).await;
                 }
             }
             _ => {}
@@ -135,58 +231,262 @@ impl SupervisorState {
         })
     }
 
-    async fn start(&mut self, index: usize, supervisor: ActorCell) {
-        let slot = &mut self.slots[index];
+    fn find(&self, name: &str) -> Result<usize, String> {
+        self.slots
+            .iter()
+            .position(|s| s.spec.name == name)
+            .ok_or_else(|| format!("no module `{name}` in agent `{}`", self.agent))
+    }
+
+    /// A uniform draw in [0, 1) for backoff jitter (xorshift; quality is not a concern here).
+    fn unit(&mut self) -> f64 {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 7;
+        self.rng ^= self.rng << 17;
+        (self.rng >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn event(&self, module: &str, kind: &str, reason: &str, restarts: u64) {
+        let time_s = self.started.elapsed().as_secs_f64();
+        self.events.push(SupervisorEvent {
+            time_s,
+            module: module.into(),
+            kind: kind.into(),
+            reason: reason.into(),
+            restarts: restarts as i64,
+        });
+    }
+
+    async fn set_stat<T: crate::PropertyType>(&self, i: usize, path: &str, value: T) {
+        // The blackboard outlives the modules; if it is gone the agent is stopping anyway.
+        let _ = self
+            .blackboard
+            .set_runtime(&format!("{}/{path}", self.slots[i].spec.name), value)
+            .await;
+    }
+
+    /// Starts slot `i`'s module; a failure to start comes back as a `StartFailed` message.
+    async fn spawn(&mut self, i: usize) {
         let (stop, stop_rx) = watch::channel(false);
+        let slot = &mut self.slots[i];
         slot.stop = stop;
         let args = ModuleArgs {
+            watchdog: slot.spec.watchdog,
             agent: self.agent.clone(),
-            name: slot.name.clone(),
+            name: slot.spec.name.clone(),
             blackboard: self.blackboard.clone(),
             control: self.control.clone(),
             stop: stop_rx,
         };
-        match slot.module_type.spawn(args, supervisor).await {
+        slot.backoff.started(Instant::now());
+        match slot.spec.module_type.spawn(args, self.me.get_cell()).await {
             Ok((actor, join)) => {
                 slot.actor = Some(actor);
                 slot.join = Some(join);
+                slot.state = SlotState::Running;
             }
             Err(reason) => {
-                self.failed(index, format!("could not start: {reason}"))
+                slot.state = SlotState::Waiting;
+                let _ = self
+                    .me
+                    .cast(SupervisorMsg::StartFailed(i, slot.generation, reason));
+            }
+        }
+    }
+
+    /// Stops slot `i` gracefully, killing it after its shutdown timeout.
+    async fn stop_slot(&mut self, i: usize, timeout: Option<Duration>) {
+        let slot = &mut self.slots[i];
+        slot.generation += 1;
+        slot.state = SlotState::Stopped;
+        let _ = slot.stop.send(true);
+        let timeout = timeout.unwrap_or(slot.spec.shutdown_timeout);
+        let actor = slot.actor.take();
+        if let Some(join) = slot.join.take() {
+            if tokio::time::timeout(timeout, join).await.is_err() {
+                tracing::warn!(agent = %self.agent, module = %slot.spec.name, ?timeout, "module did not stop in time: killed");
+                if let Some(actor) = actor {
+                    actor.kill();
+                }
+            }
+        }
+    }
+
+    /// A module instance ended: record it and restart what its supervisor's policy says.
+    async fn on_exit(&mut self, i: usize, failure: bool, reason: String) {
+        let slot = &mut self.slots[i];
+        slot.actor = None;
+        slot.join = None;
+        if self.stopping {
+            return;
+        }
+        let (name, restarts) = (slot.spec.name.clone(), slot.restarts);
+        if failure {
+            slot.failures += 1;
+            slot.last_error = Some(reason.clone());
+            let failures = slot.failures as i64;
+            tracing::error!(agent = %self.agent, module = %name, failures, restarts, error = %reason, "module failed");
+            self.event(&name, "failed", &reason, restarts);
+            self.set_stat(i, "stats/failures", failures).await;
+            self.set_stat(i, "stats/status", status::FAILED.to_string())
+                .await;
+        }
+        let members: Vec<Member> = self
+            .slots
+            .iter()
+            .map(|s| Member {
+                group: s.spec.group,
+                policy: s.spec.policy,
+            })
+            .collect();
+        let group = self.slots[i].spec.group;
+        let strategy = group.map_or(self.config.strategy, |g| self.groups[g].strategy);
+        let RestartPlan::Restart { stop, restart } =
+            plan_restart(&members, i, failure, strategy, false)
+        else {
+            self.slots[i].state = if failure {
+                SlotState::Failed
+            } else {
+                SlotState::Stopped
+            };
+            tracing::info!(agent = %self.agent, module = %name, policy = ?self.slots[i].spec.policy, "not restarted");
+            return;
+        };
+        let now = Instant::now();
+        let allowed = match group {
+            Some(g) => self.groups[g].intensity.allow(now),
+            None => self.top.allow(now),
+        };
+        if allowed {
+            return self.execute(i, stop, restart).await;
+        }
+        let Some(g) = group else {
+            return self.give_up(i).await;
+        };
+        let why = format!(
+            "group `{}` exceeded its restart intensity; it fails to the agent",
+            self.groups[g].name
+        );
+        tracing::warn!(agent = %self.agent, group = %self.groups[g].name, module = %name, "{why}");
+        self.event(&self.groups[g].name, "escalated", &why, restarts);
+        if !self.top.allow(now) {
+            return self.give_up(i).await;
+        }
+        if let RestartPlan::Restart { stop, restart } =
+            plan_restart(&members, i, true, self.config.strategy, true)
+        {
+            self.execute(i, stop, restart).await;
+        }
+    }
+
+    async fn give_up(&mut self, i: usize) {
+        let slot = &mut self.slots[i];
+        slot.state = SlotState::Failed;
+        let name = slot.spec.name.clone();
+        let reason = format!(
+            "module `{name}` failed {} times ({} restarts) beyond the supervision intensity; last error: {}",
+            slot.failures,
+            slot.restarts,
+            slot.last_error.as_deref().unwrap_or("none")
+        );
+        tracing::error!(agent = %self.agent, module = %name, on_give_up = ?self.config.on_give_up, "supervisor gave up: {reason}");
+        self.event(&name, "gave_up", &reason, self.slots[i].restarts);
+        match self.config.on_give_up {
+            GiveUp::StopAgent => self
+                .control
+                .stop(EXIT_GAVE_UP, format!("supervisor gave up: {reason}")),
+            GiveUp::DisableModule => {
+                self.set_stat(i, "stats/status", status::FAILED.to_string())
                     .await
             }
         }
     }
 
-    async fn failed(&mut self, index: usize, error: String) {
-        let slot = &mut self.slots[index];
-        slot.failures += 1;
-        tracing::error!(agent = %self.agent, module = %slot.name, failures = slot.failures, %error, "module failed; it stays stopped");
-        slot.last_error = Some(error);
-        let name = slot.name.clone();
-        let failures = slot.failures as i64;
-        // The blackboard outlives the modules; if it is gone the agent is stopping anyway.
-        let _ = self
-            .blackboard
-            .set_runtime(&format!("{name}/stats/failures"), failures)
-            .await;
-        let _ = self
-            .blackboard
-            .set_runtime(&format!("{name}/stats/status"), status::FAILED.to_string())
-            .await;
+    /// Stops `stop` (reverse order), then restarts `restart` after the failed module's backoff.
+    async fn execute(&mut self, failed: usize, stop: Vec<usize>, restart: Vec<usize>) {
+        for j in stop {
+            if self.slots[j].actor.is_some() {
+                self.stop_slot(j, None).await;
+            }
+        }
+        let unit = self.unit();
+        let delay = self.slots[failed].backoff.next_delay(Instant::now(), unit);
+        let mut due = Vec::with_capacity(restart.len());
+        for j in restart {
+            let slot = &mut self.slots[j];
+            slot.generation += 1;
+            slot.state = SlotState::Waiting;
+            due.push((j, slot.generation));
+            self.set_stat(j, "stats/status", status::RESTARTING.to_string())
+                .await;
+        }
+        if delay.is_zero() {
+            return self.restart_now(due).await;
+        }
+        let me = self.me.clone();
+        tokio::spawn(async move {
+            tokio::time::sleep(delay).await;
+            let _ = me.cast(SupervisorMsg::Restart(due));
+        });
     }
 
-    async fn stop_all(&mut self, timeout: Duration) {
-        for slot in self.slots.iter_mut().rev() {
-            let _ = slot.stop.send(true);
-            let Some(join) = slot.join.take() else {
+    async fn restart_now(&mut self, due: Vec<(usize, u64)>) {
+        for (j, generation) in due {
+            let slot = &mut self.slots[j];
+            if self.stopping || slot.generation != generation || slot.state != SlotState::Waiting {
                 continue;
-            };
-            if tokio::time::timeout(timeout, join).await.is_err() {
-                tracing::warn!(agent = %self.agent, module = %slot.name, ?timeout, "module did not stop in time: killed");
-                if let Some(actor) = slot.actor.take() {
-                    actor.kill();
-                }
+            }
+            slot.restarts += 1;
+            let (name, restarts) = (slot.spec.name.clone(), slot.restarts);
+            tracing::warn!(agent = %self.agent, module = %name, restarts, "restarting module");
+            self.event(&name, "restarted", "", restarts);
+            self.set_stat(j, "stats/restarts", restarts as i64).await;
+            self.spawn(j).await;
+        }
+    }
+
+    async fn control_request(&mut self, request: ControlRequest) -> Result<(), String> {
+        if self.stopping {
+            return Err("the agent is stopping".into());
+        }
+        let (ControlRequest::Stop(name)
+        | ControlRequest::Start(name)
+        | ControlRequest::Restart(name)) = &request;
+        let i = self.find(name)?;
+        tracing::info!(agent = %self.agent, module = %name, ?request, "control request");
+        if matches!(
+            request,
+            ControlRequest::Stop(_) | ControlRequest::Restart(_)
+        ) {
+            self.stop_slot(i, None).await;
+            self.event(name, "stopped", "on request", self.slots[i].restarts);
+        }
+        if matches!(
+            request,
+            ControlRequest::Start(_) | ControlRequest::Restart(_)
+        ) {
+            if self.slots[i].actor.is_some() {
+                return Err(format!("module `{name}` is already running"));
+            }
+            if matches!(request, ControlRequest::Restart(_)) {
+                self.slots[i].restarts += 1;
+                let restarts = self.slots[i].restarts as i64;
+                self.set_stat(i, "stats/restarts", restarts).await;
+                self.event(name, "restarted", "on request", restarts as u64);
+            }
+            self.slots[i].generation += 1;
+            self.spawn(i).await;
+        }
+        Ok(())
+    }
+
+    async fn stop_all(&mut self, timeout: Option<Duration>) {
+        self.stopping = true;
+        for i in (0..self.slots.len()).rev() {
+            if self.slots[i].actor.is_some() {
+                self.stop_slot(i, timeout).await;
+            } else if self.slots[i].state == SlotState::Waiting {
+                self.slots[i].state = SlotState::Stopped;
             }
         }
     }
@@ -194,23 +494,26 @@ impl SupervisorState {
     async fn report(&self) -> Vec<ModuleReport> {
         let mut reports = Vec::with_capacity(self.slots.len());
         for slot in &self.slots {
-            let get = |path: &str| format!("{}/{}", slot.name, path);
+            let get = |path: &str| format!("{}/{}", slot.spec.name, path);
+            let status = self
+                .blackboard
+                .get::<String>(&get("stats/status"))
+                .await
+                .map(|s| s.to_string())
+                .unwrap_or_default();
+            let steps = self
+                .blackboard
+                .get::<i64>(&get("stats/steps"))
+                .await
+                .map(|s| *s)
+                .unwrap_or_default();
             reports.push(ModuleReport {
-                name: slot.name.clone(),
-                module_type: slot.module_type.name().to_string(),
-                status: self
-                    .blackboard
-                    .get::<String>(&get("stats/status"))
-                    .await
-                    .map(|s| s.to_string())
-                    .unwrap_or_default(),
-                steps: self
-                    .blackboard
-                    .get::<i64>(&get("stats/steps"))
-                    .await
-                    .map(|s| *s)
-                    .unwrap_or_default() as u64,
+                name: slot.spec.name.clone(),
+                module_type: slot.spec.module_type.name().to_string(),
+                status,
+                steps: steps as u64,
                 failures: slot.failures,
+                restarts: slot.restarts,
                 last_error: slot.last_error.clone(),
             });
         }

@@ -74,9 +74,10 @@ pub(crate) struct RunArgs {
     /// Write a snapshot of the whole blackboard here when stopping.
     #[arg(long)]
     snapshot_out: Option<PathBuf>,
-    /// How long each module gets to stop before it is killed.
-    #[arg(long, value_parser = humantime::parse_duration, default_value = "5s")]
-    stop_timeout: Duration,
+    /// How long each module gets to stop before it is killed (default: each module's
+    /// `shutdown_timeout_ms`, else the agent's `supervision.shutdown_timeout_ms`, 5 s).
+    #[arg(long, value_parser = humantime::parse_duration)]
+    stop_timeout: Option<std::time::Duration>,
     /// Log format on standard error (filter with RUST_LOG, default `info`).
     #[arg(long, value_enum, default_value_t = LogFormat::Pretty)]
     log_format: LogFormat,

@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use petrel_actors::{ModuleRegistry, PropertyKind};
+use petrel_actors::ModuleRegistry;
 
 pub(crate) fn list(registry: &ModuleRegistry) -> ExitCode {
     let width = registry.types().map(|t| t.name().len()).max().unwrap_or(0);
@@ -29,7 +29,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
     let (own, runtime): (Vec<_>, Vec<_>) = t
         .properties()
         .into_iter()
-        .partition(|p| !matches!(p.kind, PropertyKind::Enabled | PropertyKind::Stats));
+        .partition(|p| !p.kind.is_builtin());
     let rows: Vec<[String; 5]> = own
         .iter()
         .chain(&runtime)

@@ -1,4 +1,5 @@
-//! A failing module is reported and stopped; the agent and the other modules keep going.
+//! A failing module is reported; with `restart: temporary` it stays stopped, and the agent and
+//! the other modules keep going.
 
 use petrel::actors::{status, DEFAULT_STOP_TIMEOUT};
 
@@ -8,9 +9,10 @@ use crate::support::{advance, start};
 async fn panics_errors_and_init_failures_stop_only_that_module() {
     let agent = start(
         r#"Agent(name: "r1", modules: [
-            (name: "panics", type: "test.faulty", values: {"params/mode": "panic"}),
-            (name: "errors", type: "test.faulty", values: {"params/mode": "error", "params/fail_at": 5}),
-            (name: "no_device", type: "test.faulty", values: {"params/mode": "init"}),
+            (name: "panics", type: "test.faulty", restart: temporary, values: {"params/mode": "panic"}),
+            (name: "errors", type: "test.faulty", restart: temporary,
+             values: {"params/mode": "error", "params/fail_at": 5}),
+            (name: "no_device", type: "test.faulty", restart: temporary, values: {"params/mode": "init"}),
             (name: "count", type: "demo.counter", values: {"params/period_ms": 10}),
         ])"#,
     )

@@ -8,4 +8,5 @@ mod links;
 mod queues;
 mod scheduling;
 mod snapshot;
+mod supervision;
 mod support;

@@ -11,7 +11,10 @@ pub fn registry() -> ModuleRegistry {
     let mut r = petrel::modules::builtin();
     r.register::<Echo>()
         .register::<TickLog>()
-        .register::<Faulty>();
+        .register::<Faulty>()
+        .register::<EventLog>()
+        .register::<StopOrder>()
+        .register::<FlakyConsumer>();
     r
 }
 
@@ -133,6 +136,126 @@ impl Module for Faulty {
                 _ => anyhow::bail!("lost the serial link at step {steps}"),
             }
         }
+        Ok(())
+    }
+}
+
+/// `test.event_log`: reads `_supervisor/events`; publishes the kinds seen (`kind:module` joined
+/// by spaces) and the times of `restarted` events, in ms since the agent started.
+pub struct EventLog {
+    events: petrel::actors::QueueReader<petrel::actors::SupervisorEvent>,
+    kinds: Output<String>,
+    restart_ms: Output<Vec<f64>>,
+}
+
+impl Module for EventLog {
+    const TYPE: &'static str = "test.event_log";
+    const DESCRIPTION: &'static str = "Records supervision events.";
+    fn declare(ports: &mut Ports) -> Self {
+        EventLog {
+            events: ports.queue_in("in/events", "supervision events"),
+            kinds: ports.output("out/kinds", String::new(), "kind:module ..."),
+            restart_ms: ports.output("out/restart_ms", Vec::new(), "times of restarts"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.events)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let (mut kinds, mut times) = (
+            (*self.kinds.get()).clone(),
+            (*self.restart_ms.get()).clone(),
+        );
+        for e in self.events.drain() {
+            kinds.push_str(&format!("{}:{} ", e.kind, e.module));
+            if e.kind == "restarted" {
+                times.push((e.time_s * 1e3).round());
+            }
+        }
+        self.kinds.set(kinds);
+        self.restart_ms.set(times);
+        Ok(())
+    }
+}
+
+static STOP_SEQUENCE: std::sync::atomic::AtomicI64 = std::sync::atomic::AtomicI64::new(0);
+
+/// `test.stop_order`: its cleanup records a global sequence number in `out/stopped`.
+pub struct StopOrder {
+    stopped: Output<i64>,
+}
+
+impl Module for StopOrder {
+    const TYPE: &'static str = "test.stop_order";
+    const DESCRIPTION: &'static str = "Records when its cleanup ran.";
+    fn declare(ports: &mut Ports) -> Self {
+        StopOrder {
+            stopped: ports.output("out/stopped", 0, "global cleanup sequence number"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new()
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        Ok(())
+    }
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.stopped
+            .set(STOP_SEQUENCE.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1);
+        Ok(())
+    }
+}
+
+/// Items on which `test.flaky_consumer` has panicked (first delivery only).
+static FLAKY_PANICS: std::sync::atomic::AtomicI64 = std::sync::atomic::AtomicI64::new(-1);
+
+/// `test.flaky_consumer`: processes numbered items, committing its progress at the end of each
+/// step; panics in the middle of a batch on item numbers ≡ 500 (mod 1000), once each.
+pub struct FlakyConsumer {
+    items: petrel::actors::QueueReader<i64>,
+    next: State<i64>,
+    errors: State<i64>,
+    deliveries: State<i64>,
+}
+
+impl Module for FlakyConsumer {
+    const TYPE: &'static str = "test.flaky_consumer";
+    const DESCRIPTION: &'static str = "Checks numbered items, panicking now and then.";
+    fn declare(ports: &mut Ports) -> Self {
+        FlakyConsumer {
+            items: ports.queue_in("in/items", "numbered items"),
+            next: ports.state("state/next", 0, "next number expected"),
+            errors: ports.state("state/errors", 0, "items out of order (gap or duplicate)"),
+            deliveries: ports.state(
+                "state/deliveries",
+                0,
+                "items received, redeliveries included",
+            ),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.items)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let (mut next, mut errors) = (self.next.value(), self.errors.value());
+        let batch = self.items.drain();
+        // Deliveries are counted as they happen, so redeliveries show.
+        self.deliveries
+            .set(self.deliveries.value() + batch.len() as i64);
+        for item in batch {
+            let n = *item.value;
+            if n % 1000 == 500 && FLAKY_PANICS.fetch_max(n, std::sync::atomic::Ordering::SeqCst) < n
+            {
+                panic!("flaky consumer fails in the middle of a batch at item {n}");
+            }
+            if n != next {
+                errors += 1;
+            }
+            next = n + 1;
+        }
+        // Progress is committed when the step completes, as the runtime acknowledges the batch.
+        self.next.set(next);
+        self.errors.set(errors);
         Ok(())
     }
 }

@@ -111,6 +111,9 @@ pub(crate) struct Entry {
     own_queue: Option<Arc<QueueCore>>,
 }
 
+/// Events `_supervisor/events` keeps for its slowest reader.
+const EVENTS_CAPACITY: usize = 1024;
+
 pub(crate) struct ModuleEntry {
     pub type_name: String,
     /// Raised when a watched input or queue changes; kept across restarts.
@@ -211,6 +214,55 @@ impl Registry {
         Ok(())
     }
 
+    /// Declares the runtime's own `_supervisor/events` queue (see [`crate::supervision`]).
+    pub(crate) fn declare_events(&mut self) {
+        use crate::supervision::{SupervisorEvent, EVENTS_MODULE, EVENTS_PATH};
+        let key = format!("{EVENTS_MODULE}/{EVENTS_PATH}");
+        let type_info = TypeInfo::of::<SupervisorEvent>();
+        let decl = PropertyDecl {
+            path: EVENTS_PATH.to_string(),
+            kind: PropertyKind::QueueOut,
+            type_info,
+            default: None,
+            doc: "failures, restarts and give-ups of this agent's modules".into(),
+            capacity: Some(EVENTS_CAPACITY),
+        };
+        let handle = Handle::QueueOut(QueueCore::new(&key, type_info, EVENTS_CAPACITY));
+        self.entries.insert(
+            key,
+            Entry {
+                decl,
+                handle,
+                link: None,
+                own_queue: None,
+            },
+        );
+        let entry = ModuleEntry {
+            type_name: "runtime.supervisor".into(),
+            signal: Arc::default(),
+            enabled_signal: Arc::default(),
+        };
+        self.modules.insert(EVENTS_MODULE.to_string(), entry);
+    }
+
+    /// The writer of `_supervisor/events`.
+    pub(crate) fn events_writer(&self) -> crate::QueueWriter<crate::supervision::SupervisorEvent> {
+        use crate::supervision::{EVENTS_MODULE, EVENTS_PATH};
+        match self
+            .entries
+            .get(&format!("{EVENTS_MODULE}/{EVENTS_PATH}"))
+            .map(|e| &e.handle)
+        {
+            Some(Handle::QueueOut(core)) => crate::QueueWriter::new(core.clone()),
+            // Only reachable if `declare_events` was not called: events then go nowhere.
+            _ => crate::QueueWriter::new(QueueCore::new(
+                "_supervisor/events",
+                TypeInfo::of::<crate::supervision::SupervisorEvent>(),
+                1,
+            )),
+        }
+    }
+
     /// The cells of `module`, by path, for binding a (re)started instance.
     pub(crate) fn handles(&self, module: &str) -> Option<HashMap<String, Handle>> {
         self.modules.get(module)?;
@@ -278,7 +330,7 @@ impl Registry {
     fn known_paths(&self, module: &str) -> String {
         self.declarations(module)
             .iter()
-            .filter(|d| d.kind != PropertyKind::Stats)
+            .filter(|d| !matches!(d.kind, PropertyKind::Stats | PropertyKind::Control))
             .map(|d| d.path.as_str())
             .collect::<Vec<_>>()
             .join(", ")
