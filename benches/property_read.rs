@@ -14,7 +14,7 @@ fn bench(c: &mut Criterion) {
     let (agent, input) = rt.block_on(async {
         let agent = common::start(
             r#"Agent(name: "bench", modules: [
-                (name: "a", type: "bench.echo", values: {"out/value": 1.5}),
+                (name: "a", type: "bench.echo", values: {"in/value": 1.5}),
                 (name: "b", type: "bench.echo", links: {"in/value": "a/out/value"}),
             ])"#,
         )

@@ -156,3 +156,25 @@ fn plan_simulate_prints_one_json_line_per_step() {
         text(&broken.stderr)
     );
 }
+
+#[test]
+fn the_chaos_demo_keeps_going_and_loses_nothing() {
+    let out = petrel(&["run", "configs/chaos.ron", "--for", "3s"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    let summary = stdout
+        .lines()
+        .find(|l| l.starts_with("agent robot1:"))
+        .expect("a summary");
+    let restarts: u64 = summary
+        .split(", ")
+        .find_map(|p| p.strip_suffix(" restarts")?.parse().ok())
+        .unwrap();
+    assert!(restarts > 0, "{stdout}");
+    let last = stdout
+        .lines()
+        .filter(|l| l.starts_with("[consumer]"))
+        .last()
+        .expect("the consumer reports");
+    assert!(last.ends_with("gaps 0, duplicates 0"), "{last}");
+}

@@ -349,8 +349,9 @@ impl ConfigFile {
             }
             if let Some(group) = &m.group {
                 if !seen.contains(group.as_str()) {
-                    let known: Vec<&str> =
+                    let mut known: Vec<&str> =
                         self.config.groups.iter().map(|g| g.name.as_str()).collect();
+                    known.dedup();
                     let known = if known.is_empty() {
                         "none are defined".to_string()
                     } else {
@@ -414,9 +415,13 @@ impl ConfigFile {
             let Some((start, _)) = text.match_indices(&quoted_module).nth(nth) else {
                 continue;
             };
-            let at = needle
-                .and_then(|n| text[start..].find(&format!("\"{n}\"")).map(|i| start + i))
-                .unwrap_or(start);
+            // A needle is a quoted key or value, or a bare field name (`watchdog_ms:`).
+            let find = |n: &str| {
+                let rest = &text[start..];
+                rest.find(&format!("\"{n}\""))
+                    .or_else(|| rest.find(&format!("{n}:")))
+            };
+            let at = needle.and_then(find).map_or(start, |i| start + i);
             let (line, column) = line_column(text, at);
             return ConfigError {
                 file: file.clone(),

@@ -30,7 +30,7 @@ pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOU
 pub use blackboard::{Blackboard, BlackboardError, Registry};
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{
-    Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
+    AnyHandle, Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
 };
 pub use module::{Cause, Context, Module, Schedule, Watchable};
 pub use module_actor::status;

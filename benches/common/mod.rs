@@ -32,7 +32,8 @@ pub fn registry() -> ModuleRegistry {
         .register::<Ping>()
         .register::<QueueSource>()
         .register::<QueueSink>()
-        .register::<Idle>();
+        .register::<Idle>()
+        .register::<Crashy>();
     r
 }
 
@@ -206,6 +207,33 @@ impl Module for Idle {
         Schedule::new().on_change(&self.input)
     }
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// `bench.crashy`: counts its first steps in `out/started`; crashes when told through
+/// `control/fault` and woken by `in/kick`.
+pub struct Crashy {
+    kick: Input<i64>,
+    started: Output<i64>,
+}
+
+impl Module for Crashy {
+    const TYPE: &'static str = "bench.crashy";
+    const DESCRIPTION: &'static str = "Counts its (re)starts.";
+    fn declare(ports: &mut Ports) -> Self {
+        Crashy {
+            kick: ports.input("in/kick", 0, "wakes it"),
+            started: ports.output("out/started", 0, "instances started"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.kick)
+    }
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.cause().first() {
+            self.started.set(self.started.value() + 1);
+        }
         Ok(())
     }
 }

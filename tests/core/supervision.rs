@@ -368,3 +368,63 @@ async fn modules_can_be_stopped_started_and_restarted_while_running() {
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn chaos_soak_twenty_modules_lose_nothing_and_leave_nothing_behind() {
+    let tasks_before = tokio::runtime::Handle::current()
+        .metrics()
+        .num_alive_tasks();
+    let mut modules = String::new();
+    let mut targets = Vec::new();
+    for i in 0..10 {
+        modules.push_str(&format!(
+            r#"(name: "p{i}", type: "demo.producer", watchdog_ms: 50, values: {{"params/period_ms": 7, "params/batch": 3}},
+                capacities: {{"out/items": 100000}}),
+               (name: "c{i}", type: "demo.consumer", watchdog_ms: 50, links: {{"in/items": "p{i}/out/items"}}),"#
+        ));
+        targets.push(format!("p{i}, c{i}"));
+    }
+    let agent = start(&format!(
+        r#"Agent(name: "soak", supervision: (max_restarts: 1000, backoff: (min_ms: 1, max_ms: 50, jitter: 0.2)),
+            modules: [{modules}
+                (name: "chaos", type: "demo.chaos", values: {{"params/targets": "{}", "params/faults": "panic, hang, error",
+                 "params/mean_interval_ms": 50, "params/seed": 42}}),
+            ])"#,
+        targets.join(", ")
+    ))
+    .await;
+    advance(30_000).await;
+    agent.modules().stop("chaos").await.unwrap();
+    for i in 0..10 {
+        agent.modules().stop(&format!("p{i}")).await.unwrap();
+    }
+    advance(1_000).await;
+    let injected = int(&agent, "chaos/out/injected").await;
+    assert!(injected > 400, "chaos did its job: {injected} faults");
+    let summary = agent.stop_modules(DEFAULT_STOP_TIMEOUT).await;
+    assert!(summary.restarts() > 400, "{summary}");
+    for i in 0..10 {
+        let produced = int(&agent, &format!("p{i}/state/next")).await;
+        let get = |p: &str| format!("c{i}/{p}");
+        assert!(produced > 5_000, "p{i} kept producing: {produced}");
+        assert_eq!(
+            int(&agent, &get("out/received")).await,
+            produced,
+            "c{i} got everything"
+        );
+        assert_eq!(int(&agent, &get("out/gaps")).await, 0, "c{i}");
+        assert_eq!(int(&agent, &get("out/duplicates")).await, 0, "c{i}");
+        assert_eq!(int(&agent, &get("stats/dropped/in/items")).await, 0, "c{i}");
+    }
+    agent.shutdown().await;
+    // Every module actor, restart timer and blackboard task is gone again.
+    for _ in 0..10 {
+        tokio::task::yield_now().await;
+    }
+    assert_eq!(
+        tokio::runtime::Handle::current()
+            .metrics()
+            .num_alive_tasks(),
+        tasks_before
+    );
+}

@@ -68,12 +68,26 @@ impl Module for Consumer {
         self.duplicates.set(dups);
         self.received.set(received);
         let every = self.report_every.value();
-        if every > 0 && received / every != before / every {
+        self.report(ctx, every > 0 && received / every != before / every);
+        Ok(())
+    }
+
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        self.report(ctx, self.report_every.value() > 0);
+        Ok(())
+    }
+}
+
+impl Consumer {
+    /// Prints the counters when `now`.
+    fn report(&self, ctx: &Context, now: bool) {
+        if now {
+            let (received, last) = (self.received.value(), self.last.value());
+            let (gaps, dups) = (self.gaps.value(), self.duplicates.value());
             println!(
                 "[{}] received {received} items, last #{last}, gaps {gaps}, duplicates {dups}",
                 ctx.module()
             );
         }
-        Ok(())
     }
 }

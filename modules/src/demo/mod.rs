@@ -1,7 +1,8 @@
 //! Demo modules that exercise the runtime core: a counter and a signal generator (sources), a
 //! scale/filter (in → out with parameters), a queue producer and a queue consumer that checks
-//! order, and a printer.
+//! order, a printer, and a chaos monkey that makes modules fail.
 
+mod chaos;
 mod consumer;
 mod counter;
 mod printer;
@@ -9,6 +10,7 @@ mod producer;
 mod scale;
 mod signal;
 
+pub use chaos::Chaos;
 pub use consumer::Consumer;
 pub use counter::Counter;
 pub use printer::Printer;
@@ -26,7 +28,8 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<Scale>()
         .register::<Producer>()
         .register::<Consumer>()
-        .register::<Printer>();
+        .register::<Printer>()
+        .register::<Chaos>();
 }
 
 fn period(ms: i64) -> std::time::Duration {

@@ -1,0 +1,108 @@
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use petrel_actors::{AnyHandle, Context, Module, Output, Param, Ports, Schedule};
+use rand::rngs::SmallRng;
+use rand::{Rng, SeedableRng};
+
+/// Faults `demo.chaos` knows how to inject.
+const FAULTS: [&str; 3] = ["panic", "hang", "error"];
+
+/// Chances are drawn this many times per mean interval, so intervals vary (geometrically).
+const DRAWS_PER_INTERVAL: i64 = 4;
+
+/// `demo.chaos`: makes chosen modules fail at random times, by writing a fault (`panic`,
+/// `hang`, `error`) to their `control/fault` property, to show supervision at work.
+pub struct Chaos {
+    targets: Param<String>,
+    faults: Param<String>,
+    mean_interval_ms: Param<i64>,
+    seed: Param<i64>,
+    injected: Output<i64>,
+    handles: Vec<(String, AnyHandle)>,
+    kinds: Vec<&'static str>,
+    rng: SmallRng,
+}
+
+/// Splits a comma-separated list, trimming blanks.
+fn list(text: &str) -> Vec<&str> {
+    text.split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .collect()
+}
+
+impl Module for Chaos {
+    const TYPE: &'static str = "demo.chaos";
+    const DESCRIPTION: &'static str =
+        "Makes the modules in params/targets panic, hang or fail at random.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        Chaos {
+            targets: ports.param(
+                "params/targets",
+                String::new(),
+                "comma-separated module names",
+            ),
+            faults: ports.param(
+                "params/faults",
+                "panic, hang".to_string(),
+                "comma-separated: panic, hang, error",
+            ),
+            mean_interval_ms: ports.param(
+                "params/mean_interval_ms",
+                1000,
+                "mean time between faults, ms",
+            ),
+            seed: ports.param("params/seed", 1, "random seed (same seed, same faults)"),
+            injected: ports.output("out/injected", 0, "faults injected so far"),
+            handles: Vec::new(),
+            kinds: Vec::new(),
+            rng: SmallRng::seed_from_u64(1),
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        let draw = (self.mean_interval_ms.value() / DRAWS_PER_INTERVAL).max(1);
+        Schedule::every(Duration::from_millis(draw as u64))
+    }
+
+    async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let targets = self.targets.get();
+        if list(&targets).is_empty() {
+            bail!("params/targets is empty; expected comma-separated module names");
+        }
+        for target in list(&targets) {
+            let handle = ctx
+                .blackboard()
+                .any_handle(&format!("{target}/control/fault"))
+                .await
+                .with_context(|| format!("params/targets names `{target}`"))?;
+            self.handles.push((target.to_string(), handle));
+        }
+        for fault in list(&self.faults.get()) {
+            match FAULTS.iter().find(|f| **f == fault) {
+                Some(f) => self.kinds.push(f),
+                None => bail!("params/faults has `{fault}`; expected panic, hang or error"),
+            }
+        }
+        if self.kinds.is_empty() {
+            bail!("params/faults is empty; expected panic, hang or error");
+        }
+        self.rng = SmallRng::seed_from_u64(self.seed.value() as u64);
+        Ok(())
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.cause().first() || self.rng.random_range(0..DRAWS_PER_INTERVAL) != 0 {
+            return Ok(());
+        }
+        let (target, handle) = &self.handles[self.rng.random_range(0..self.handles.len())];
+        let fault = self.kinds[self.rng.random_range(0..self.kinds.len())];
+        tracing::warn!(target = %target, fault, "chaos: injecting a fault");
+        handle.set(Arc::new(fault.to_string()))?;
+        self.injected.set(self.injected.value() + 1);
+        Ok(())
+    }
+}
