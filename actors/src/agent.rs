@@ -7,7 +7,7 @@ use ractor::{Actor, ActorRef};
 use tokio::task::JoinHandle;
 
 use crate::blackboard::Blackboard;
-use crate::config::{ConfigErrors, ConfigFile};
+use crate::config::{ConfigErrors, ConfigFile, ModuleConfig};
 use crate::module_types::ModuleRegistry;
 use crate::summary::RunSummary;
 use crate::supervision::Intensity;
@@ -114,6 +114,7 @@ impl Agent {
             .map_err(|e| StartError::Spawn(e.to_string()))?;
         let control = AgentControl::new();
         let args = SupervisorArgs {
+            types: types.clone(),
             agent: Arc::from(name.as_str()),
             blackboard: blackboard.clone(),
             control: control.clone(),
@@ -234,6 +235,18 @@ impl ModuleControl {
     /// Starts module `name` again after a stop; it finds its properties as it left them.
     pub async fn start(&self, name: &str) -> Result<(), String> {
         self.request(ControlRequest::Start(name.into())).await
+    }
+
+    /// Adds a module instance while the agent runs (elasticity): its properties are declared,
+    /// its values and links applied (all checked as in a config), then it starts.
+    pub async fn add(&self, config: ModuleConfig) -> Result<(), String> {
+        self.request(ControlRequest::Add(Box::new(config))).await
+    }
+
+    /// Stops module `name` and removes it and its properties; refused while other properties
+    /// link into it (unlink them first).
+    pub async fn remove(&self, name: &str) -> Result<(), String> {
+        self.request(ControlRequest::Remove(name.into())).await
     }
 
     /// Stops and starts module `name` (counted in its `stats/restarts`).

@@ -252,30 +252,26 @@ impl ConfigFile {
             .iter()
             .filter(|m| registry.module_type(&m.name) == Some(m.type_name.as_str()))
             .collect();
-        let mut pending = Vec::new();
+        // Values first, then links: a link may point at any module, declared before or after.
+        let mut failed: Vec<(&ModuleConfig, &str, BlackboardError)> = Vec::new();
         for &m in &declared {
-            for (path, value) in &m.values {
-                let result = registry.set_from_ron(&format!("{}/{path}", m.name), value.clone());
-                pending.push((m, path, result));
-            }
-            for (path, capacity) in &m.capacities {
-                pending.push((
-                    m,
-                    path,
-                    registry.set_capacity(&format!("{}/{path}", m.name), *capacity),
-                ));
-            }
+            failed.extend(
+                registry
+                    .apply_values(m)
+                    .into_iter()
+                    .map(|(path, e)| (m, path, e)),
+            );
         }
         for &m in &declared {
-            for (path, target) in &m.links {
-                let result = registry.link(&format!("{}/{path}", m.name), target);
-                pending.push((m, path, result));
-            }
+            failed.extend(
+                registry
+                    .apply_links(m)
+                    .into_iter()
+                    .map(|(path, e)| (m, path, e)),
+            );
         }
-        for (m, path, result) in pending {
-            if let Err(e) = result {
-                errors.push(self.error(&m.name, Some(path), describe(&m.name, path, e)));
-            }
+        for (m, path, e) in failed {
+            errors.push(self.error(&m.name, Some(path), describe(&m.name, path, e)));
         }
         match errors.is_empty() {
             true => Ok(registry),
@@ -452,7 +448,7 @@ fn line_column(text: &str, at: usize) -> (usize, usize) {
 }
 
 /// Says which module and key a registry error is about, in config terms.
-fn describe(module: &str, path: &str, error: BlackboardError) -> String {
+pub(crate) fn describe(module: &str, path: &str, error: BlackboardError) -> String {
     match error {
         BlackboardError::UnknownProperty {
             module: m,

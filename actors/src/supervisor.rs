@@ -15,9 +15,10 @@ use tokio::time::Instant;
 
 use crate::agent::AgentControl;
 use crate::blackboard::Blackboard;
+use crate::config::ModuleConfig;
 use crate::handle::QueueWriter;
 use crate::module_actor::{status, ModuleArgs};
-use crate::module_types::ModuleType;
+use crate::module_types::{ModuleRegistry, ModuleType};
 use crate::summary::ModuleReport;
 use crate::supervision::{
     plan_restart, Backoff, GiveUp, Intensity, Member, RestartPlan, RestartPolicy,
@@ -51,6 +52,8 @@ enum SlotState {
     Waiting,
     Stopped,
     Failed,
+    /// Removed from the agent; the slot stays so that indices in pending messages stay valid.
+    Removed,
 }
 
 struct Slot {
@@ -68,6 +71,7 @@ struct Slot {
 }
 
 pub(crate) struct SupervisorArgs {
+    pub types: ModuleRegistry,
     pub agent: Arc<str>,
     pub blackboard: Blackboard,
     pub control: AgentControl,
@@ -79,6 +83,7 @@ pub(crate) struct SupervisorArgs {
 
 pub(crate) struct SupervisorState {
     me: ActorRef<SupervisorMsg>,
+    types: ModuleRegistry,
     agent: Arc<str>,
     blackboard: Blackboard,
     control: AgentControl,
@@ -93,11 +98,13 @@ pub(crate) struct SupervisorState {
 }
 
 /// A runtime request about one module.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub(crate) enum ControlRequest {
     Stop(String),
     Start(String),
     Restart(String),
+    Add(Box<ModuleConfig>),
+    Remove(String),
 }
 
 pub(crate) enum SupervisorMsg {
@@ -148,6 +155,7 @@ impl Actor for AgentSupervisor {
             .map_or(1, |d| d.as_nanos() as u64);
         let mut state = SupervisorState {
             me,
+            types: args.types,
             agent: args.agent,
             blackboard: args.blackboard,
             control: args.control,
@@ -449,34 +457,94 @@ impl SupervisorState {
         if self.stopping {
             return Err("the agent is stopping".into());
         }
-        let (ControlRequest::Stop(name)
-        | ControlRequest::Start(name)
-        | ControlRequest::Restart(name)) = &request;
-        let i = self.find(name)?;
-        tracing::info!(agent = %self.agent, module = %name, ?request, "control request");
-        if matches!(
-            request,
-            ControlRequest::Stop(_) | ControlRequest::Restart(_)
-        ) {
-            self.stop_slot(i, None).await;
-            self.event(name, "stopped", "on request", self.slots[i].restarts);
-        }
-        if matches!(
-            request,
-            ControlRequest::Start(_) | ControlRequest::Restart(_)
-        ) {
-            if self.slots[i].actor.is_some() {
-                return Err(format!("module `{name}` is already running"));
+        tracing::info!(agent = %self.agent, ?request, "control request");
+        match request {
+            ControlRequest::Stop(name) => {
+                let i = self.find(&name)?;
+                self.stop_slot(i, None).await;
+                self.event(&name, "stopped", "on request", self.slots[i].restarts);
             }
-            if matches!(request, ControlRequest::Restart(_)) {
+            ControlRequest::Start(name) => {
+                let i = self.find(&name)?;
+                if self.slots[i].actor.is_some() {
+                    return Err(format!("module `{name}` is already running"));
+                }
+                self.slots[i].generation += 1;
+                self.spawn(i).await;
+            }
+            ControlRequest::Restart(name) => {
+                let i = self.find(&name)?;
+                self.stop_slot(i, None).await;
                 self.slots[i].restarts += 1;
-                let restarts = self.slots[i].restarts as i64;
-                self.set_stat(i, "stats/restarts", restarts).await;
-                self.event(name, "restarted", "on request", restarts as u64);
+                let restarts = self.slots[i].restarts;
+                self.set_stat(i, "stats/restarts", restarts as i64).await;
+                self.event(&name, "restarted", "on request", restarts);
+                self.spawn(i).await;
             }
-            self.slots[i].generation += 1;
-            self.spawn(i).await;
+            ControlRequest::Add(config) => self.add(*config).await?,
+            ControlRequest::Remove(name) => {
+                let i = self.find(&name)?;
+                self.blackboard
+                    .remove_module(&name)
+                    .await
+                    .map_err(|e| e.to_string())?;
+                self.stop_slot(i, None).await;
+                self.slots[i].state = SlotState::Removed;
+                self.event(&name, "removed", "on request", self.slots[i].restarts);
+            }
         }
+        Ok(())
+    }
+
+    /// Adds a module instance while running: declared in the blackboard, then started.
+    async fn add(&mut self, config: ModuleConfig) -> Result<(), String> {
+        if self.find(&config.name).is_ok() {
+            return Err(format!("a module `{}` already exists", config.name));
+        }
+        let Some(module_type) = self.types.get(&config.type_name).copied() else {
+            let near = self.types.nearest(&config.type_name).join(", ");
+            return Err(format!(
+                "unknown module type `{}` (nearest: {near})",
+                config.type_name
+            ));
+        };
+        let group = match &config.group {
+            None => None,
+            Some(g) => Some(
+                self.groups
+                    .iter()
+                    .position(|x| &x.name == g)
+                    .ok_or_else(|| format!("unknown group `{g}`"))?,
+            ),
+        };
+        let spec = ModuleSpec {
+            name: config.name.clone(),
+            module_type,
+            group,
+            policy: config.restart,
+            watchdog: config.watchdog_ms.map(Duration::from_millis),
+            shutdown_timeout: Duration::from_millis(
+                config
+                    .shutdown_timeout_ms
+                    .unwrap_or(self.config.shutdown_timeout_ms),
+            ),
+        };
+        self.blackboard.add_module(config, module_type).await?;
+        self.slots.push(Slot {
+            spec,
+            state: SlotState::Stopped,
+            generation: 0,
+            actor: None,
+            join: None,
+            stop: watch::channel(false).0,
+            backoff: Backoff::new(self.config.backoff),
+            failures: 0,
+            restarts: 0,
+            last_error: None,
+        });
+        let i = self.slots.len() - 1;
+        self.event(&self.slots[i].spec.name, "added", "on request", 0);
+        self.spawn(i).await;
         Ok(())
     }
 
@@ -493,7 +561,7 @@ impl SupervisorState {
 
     async fn report(&self) -> Vec<ModuleReport> {
         let mut reports = Vec::with_capacity(self.slots.len());
-        for slot in &self.slots {
+        for slot in self.slots.iter().filter(|s| s.state != SlotState::Removed) {
             let get = |path: &str| format!("{}/{}", slot.spec.name, path);
             let status = self
                 .blackboard

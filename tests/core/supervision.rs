@@ -428,3 +428,65 @@ async fn chaos_soak_twenty_modules_lose_nothing_and_leave_nothing_behind() {
         tasks_before
     );
 }
+
+#[tokio::test(start_paused = true)]
+async fn module_instances_can_be_added_and_removed_while_running() {
+    use petrel::actors::ModuleConfig;
+    let agent = start(r#"Agent(name: "r1", modules: [(name: "producer", type: "demo.producer", values: {"params/period_ms": 10})])"#).await;
+    let modules = agent.modules();
+    advance(55).await;
+    let consumer = ModuleConfig {
+        name: "late".into(),
+        type_name: "demo.consumer".into(),
+        links: [("in/items".to_string(), "producer/out/items".to_string())].into(),
+        ..Default::default()
+    };
+    modules.add(consumer.clone()).await.unwrap();
+    advance(100).await;
+    assert_eq!(
+        int(&agent, "late/out/received").await,
+        10,
+        "items pushed since it was added"
+    );
+    assert_eq!(
+        modules.add(consumer.clone()).await.unwrap_err(),
+        "a module `late` already exists"
+    );
+    let broken = ModuleConfig {
+        name: "broken".into(),
+        links: [("in/items".to_string(), "producer/out/nope".to_string())].into(),
+        ..consumer
+    };
+    let error = modules.add(broken).await.unwrap_err();
+    assert!(
+        error.contains("module `broken`, `in/items`: module `producer` has no property `out/nope`"),
+        "{error}"
+    );
+    assert!(
+        agent
+            .blackboard()
+            .get::<bool>("broken/enabled")
+            .await
+            .is_err(),
+        "a refused module leaves nothing behind"
+    );
+    assert_eq!(
+        modules.remove("producer").await.unwrap_err(),
+        "module `producer` cannot be removed: linked from late/in/items"
+    );
+    modules.remove("late").await.unwrap();
+    assert!(agent
+        .blackboard()
+        .get::<i64>("late/out/received")
+        .await
+        .is_err());
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(
+        summary
+            .modules
+            .iter()
+            .map(|m| m.name.as_str())
+            .collect::<Vec<_>>(),
+        ["producer"]
+    );
+}

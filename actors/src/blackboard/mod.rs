@@ -12,7 +12,9 @@ use std::sync::Arc;
 use ractor::{Actor, ActorProcessingErr, ActorRef, RpcReplyPort};
 
 use crate::cell::Signal;
+use crate::config::ModuleConfig;
 use crate::handle::{AnyHandle, PropertyHandle};
+use crate::module_types::ModuleType;
 use crate::ports::Handle;
 use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
@@ -43,6 +45,12 @@ pub(crate) enum BlackboardMsg {
     Get(String, Reply<(TypeInfo, AnyValue)>),
     Endpoint(String, Reply<Arc<crate::cell::Endpoint>>),
     Snapshot(Reply<String>),
+    AddModule(
+        Box<ModuleConfig>,
+        ModuleType,
+        RpcReplyPort<Result<(), String>>,
+    ),
+    RemoveModule(String, Reply<()>),
 }
 
 struct BlackboardActor;
@@ -123,6 +131,16 @@ impl Actor for BlackboardActor {
             }
             BlackboardMsg::Endpoint(key, reply) => {
                 let _ = reply.send(reg.endpoint(&key));
+            }
+            BlackboardMsg::AddModule(config, module_type, reply) => {
+                let result = reg.add_module(&config, &module_type);
+                tracing::info!(agent = reg.agent(), module = %config.name, ok = result.is_ok(), "module added");
+                let _ = reply.send(result);
+            }
+            BlackboardMsg::RemoveModule(module, reply) => {
+                let result = reg.remove_module(&module);
+                tracing::info!(agent = reg.agent(), %module, ok = result.is_ok(), "module removed");
+                let _ = reply.send(result);
             }
             BlackboardMsg::Snapshot(reply) => {
                 let _ = reply.send(Ok(crate::snapshot::write(reg)));
@@ -286,6 +304,29 @@ impl Blackboard {
     /// The whole blackboard as a RON agent config (values, links, queue capacities).
     pub async fn snapshot(&self) -> Result<String, BlackboardError> {
         self.call(BlackboardMsg::Snapshot).await
+    }
+
+    pub(crate) async fn add_module(
+        &self,
+        config: ModuleConfig,
+        module_type: ModuleType,
+    ) -> Result<(), String> {
+        match self
+            .actor
+            .call(
+                |r| BlackboardMsg::AddModule(Box::new(config), module_type, r),
+                None,
+            )
+            .await
+        {
+            Ok(ractor::rpc::CallResult::Success(result)) => result,
+            _ => Err(BlackboardError::Stopped.to_string()),
+        }
+    }
+
+    pub(crate) async fn remove_module(&self, module: &str) -> Result<(), BlackboardError> {
+        self.call(|r| BlackboardMsg::RemoveModule(module.to_string(), r))
+            .await
     }
 
     /// Stops the blackboard actor.

@@ -7,6 +7,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use crate::cell::{Cell, Endpoint, Signal};
+use crate::config::{describe, ModuleConfig};
+use crate::module_types::ModuleType;
 use crate::ports::{Handle, Ports, PropertyDecl, PropertyKind};
 use crate::queue::{dropped_path, QueueCore};
 use crate::url::PropertyUrl;
@@ -94,6 +96,14 @@ pub enum BlackboardError {
         key: String,
         /// Its kind.
         kind: PropertyKind,
+    },
+    /// Other properties link into the module being removed.
+    #[error("module `{module}` cannot be removed: linked from {}", .links.join(", "))]
+    InUse {
+        /// The module.
+        module: String,
+        /// The properties that link into it.
+        links: Vec<String>,
     },
     /// A module declared its properties wrongly.
     #[error("{0}")]
@@ -211,6 +221,93 @@ impl Registry {
             enabled_signal: Arc::default(),
         };
         self.modules.insert(module.to_string(), entry);
+        Ok(())
+    }
+
+    /// Sets the values and queue capacities `m` configures; returns what failed, by config key.
+    pub(crate) fn apply_values<'a>(
+        &mut self,
+        m: &'a ModuleConfig,
+    ) -> Vec<(&'a str, BlackboardError)> {
+        let mut failed = Vec::new();
+        for (path, value) in &m.values {
+            if let Err(e) = self.set_from_ron(&format!("{}/{path}", m.name), value.clone()) {
+                failed.push((path.as_str(), e));
+            }
+        }
+        for (path, capacity) in &m.capacities {
+            if let Err(e) = self.set_capacity(&format!("{}/{path}", m.name), *capacity) {
+                failed.push((path.as_str(), e));
+            }
+        }
+        failed
+    }
+
+    /// Creates the links `m` configures; returns what failed, by config key.
+    pub(crate) fn apply_links<'a>(
+        &mut self,
+        m: &'a ModuleConfig,
+    ) -> Vec<(&'a str, BlackboardError)> {
+        let mut failed = Vec::new();
+        for (path, target) in &m.links {
+            if let Err(e) = self.link(&format!("{}/{path}", m.name), target) {
+                failed.push((path.as_str(), e));
+            }
+        }
+        failed
+    }
+
+    /// Declares a new module instance while the agent runs, with its values and links; on any
+    /// error nothing is added and every problem is returned.
+    pub(crate) fn add_module(
+        &mut self,
+        m: &ModuleConfig,
+        module_type: &ModuleType,
+    ) -> Result<(), String> {
+        if m.name.starts_with('_') {
+            return Err(format!(
+                "module name `{}`: names starting with `_` are reserved for the runtime",
+                m.name
+            ));
+        }
+        self.declare(&m.name, module_type.name(), module_type.declare(&m.name))
+            .map_err(|e| e.to_string())?;
+        let mut failed = self.apply_values(m);
+        failed.extend(self.apply_links(m));
+        if failed.is_empty() {
+            return Ok(());
+        }
+        let errors: Vec<String> = failed
+            .into_iter()
+            .map(|(path, e)| describe(&m.name, path, e))
+            .collect();
+        let _ = self.remove_module(&m.name);
+        Err(errors.join("; "))
+    }
+
+    /// Removes a module instance and its properties; refused while other properties link into it.
+    pub(crate) fn remove_module(&mut self, module: &str) -> Result<(), BlackboardError> {
+        if !self.order.iter().any(|m| m == module) {
+            return Err(self.key_of(&format!("{module}/enabled")).unwrap_err());
+        }
+        let prefix = format!("{module}/");
+        let links: Vec<String> = self
+            .entries
+            .iter()
+            .filter(|(k, e)| {
+                !k.starts_with(&prefix) && e.link.as_ref().is_some_and(|t| t.starts_with(&prefix))
+            })
+            .map(|(k, _)| k.clone())
+            .collect();
+        if !links.is_empty() {
+            return Err(BlackboardError::InUse {
+                module: module.into(),
+                links,
+            });
+        }
+        self.entries.retain(|k, _| !k.starts_with(&prefix));
+        self.order.retain(|m| m != module);
+        self.modules.remove(module);
         Ok(())
     }
 
