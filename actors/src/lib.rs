@@ -12,6 +12,7 @@ mod agent;
 mod blackboard;
 mod cell;
 pub mod config;
+pub mod expr;
 mod handle;
 mod module;
 mod module_actor;
