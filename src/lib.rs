@@ -51,9 +51,9 @@ impl Default for Petrel {
 impl Petrel {
     /// The built-in module types.
     pub fn new() -> Self {
-        Petrel {
-            registry: petrel_modules::builtin(),
-        }
+        let mut registry = petrel_modules::builtin();
+        petrel_contexts::register(&mut registry);
+        Petrel { registry }
     }
 
     /// Adds module type `M`.

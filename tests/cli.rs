@@ -177,3 +177,35 @@ fn the_chaos_demo_keeps_going_and_loses_nothing() {
         .expect("the consumer reports");
     assert!(last.ends_with("gaps 0, duplicates 0"), "{last}");
 }
+
+#[test]
+fn check_validates_context_rules_with_the_config() {
+    let ok = petrel(&["check", "configs/contexts-demo.ron"]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("agent.ron"),
+        r#"Agent(name: "r1", contexts: "rules.ron", modules: [(name: "s", type: "demo.signal"), (name: "c", type: "demo.camera")])"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("rules.ron"),
+        "Contexts(contexts: [\n  (name: \"fast\", when: \"s/out/value > \\\"x\\\"\", set: {\"c/params/deblur\": \"1\"}),\n])",
+    )
+    .unwrap();
+    let out = petrel(&["check", dir.path().join("agent.ron").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    let rules = dir.path().join("rules.ron");
+    assert!(
+        err.contains(&format!(
+            "{}:2:24: error: context `fast`: in `s/out/value > \"x\"`",
+            rules.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains("context `fast`: in `1`:"),
+        "a number cannot set a bool: {err}"
+    );
+}

@@ -37,6 +37,10 @@ pub struct AgentConfig {
     /// Named groups of modules with their own strategy and intensity.
     #[serde(default)]
     pub groups: Vec<GroupConfig>,
+    /// A context rules file (relative to this config's folder) run by a `context.manager`
+    /// module named `contexts` that the runtime adds to the agent.
+    #[serde(default)]
+    pub contexts: Option<String>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,

@@ -13,7 +13,7 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use crate::agent::AgentControl;
+use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::cell::{cause, Endpoint};
 use crate::handle::{AnyHandle, Input, Output, QueueReader};
@@ -201,6 +201,7 @@ impl Cause {
 
 /// What the runtime tells a module while it runs.
 pub struct Context {
+    pub(crate) modules: ModuleControl,
     pub(crate) blackboard: Blackboard,
     pub(crate) control: AgentControl,
     pub(crate) agent: Arc<str>,
@@ -214,10 +215,12 @@ impl Context {
     pub(crate) fn new(
         agent: &str,
         module: &str,
+        modules: ModuleControl,
         blackboard: Blackboard,
         control: AgentControl,
     ) -> Self {
         Context {
+            modules,
             blackboard,
             control,
             agent: agent.into(),
@@ -233,6 +236,11 @@ impl Context {
     /// blackboard actor: keep it out of hot loops; keep the handles it returns instead.
     pub fn blackboard(&self) -> &Blackboard {
         &self.blackboard
+    }
+
+    /// Stop, start, restart, add and remove the agent's modules (for mission and context layers).
+    pub fn modules(&self) -> &ModuleControl {
+        &self.modules
     }
 
     /// Asks the agent to stop: `petrel run` then stops every module and exits with `code`

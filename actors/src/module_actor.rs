@@ -14,7 +14,7 @@ use tokio::sync::watch;
 use tokio::time::{Instant, MissedTickBehavior};
 use tracing::Instrument;
 
-use crate::agent::AgentControl;
+use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
 use crate::handle::Output;
@@ -104,6 +104,7 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
 }
 
 pub(crate) struct ModuleArgs {
+    pub modules: ModuleControl,
     /// Overrides the module's own watchdog.
     pub watchdog: Option<Duration>,
     pub agent: Arc<str>,
@@ -169,7 +170,13 @@ impl<M: Module> Actor for ModuleActor<M> {
             return Err(ports.errors.join("; ").into());
         }
         builtins.status.set(status::INITIALIZING.into());
-        let mut ctx = Context::new(&args.agent, &args.name, args.blackboard, args.control);
+        let mut ctx = Context::new(
+            &args.agent,
+            &args.name,
+            args.modules,
+            args.blackboard,
+            args.control,
+        );
         if let Err(e) = module.init(&mut ctx).instrument(span.clone()).await {
             builtins.status.set(status::FAILED.into());
             return Err(format!("init failed: {e:#}").into());

@@ -13,7 +13,7 @@ use tokio::sync::watch;
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
-use crate::agent::AgentControl;
+use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::config::ModuleConfig;
 use crate::handle::QueueWriter;
@@ -279,6 +279,9 @@ impl SupervisorState {
         let slot = &mut self.slots[i];
         slot.stop = stop;
         let args = ModuleArgs {
+            modules: ModuleControl {
+                supervisor: self.me.clone(),
+            },
             watchdog: slot.spec.watchdog,
             agent: self.agent.clone(),
             name: slot.spec.name.clone(),

@@ -6,12 +6,14 @@ mod plan;
 mod run;
 
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use petrel_actors::{ConfigErrors, ConfigFile, ModuleRegistry};
+use petrel_actors::{
+    ConfigError, ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry, Registry,
+};
 
 /// Exit code for bad input (config errors, unknown names).
 const EXIT_BAD_INPUT: u8 = 2;
@@ -116,18 +118,69 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
     }
 }
 
-/// Loads a config with its overlays.
+/// Loads a config with its overlays, and adds the `contexts` module its `contexts:` field asks for.
 pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile, ConfigErrors> {
     let mut file = ConfigFile::load(config)?;
     for overlay in overlays {
         file.overlay(ConfigFile::load(overlay)?);
     }
+    if let Some(rules) = &file.config.contexts {
+        let folder = config.parent().unwrap_or(Path::new("."));
+        let rules = folder.join(rules).display().to_string();
+        let exists = file
+            .config
+            .modules
+            .iter()
+            .any(|m| m.name == CONTEXTS_MODULE);
+        if !exists {
+            file.config.modules.push(ModuleConfig {
+                name: CONTEXTS_MODULE.into(),
+                type_name: "context.manager".into(),
+                values: [("params/rules".to_string(), ron::Value::String(rules))].into(),
+                ..Default::default()
+            });
+        }
+    }
     Ok(file)
+}
+
+/// The name of the context manager that an agent's `contexts:` field adds.
+const CONTEXTS_MODULE: &str = "contexts";
+
+/// Builds the agent's registry and checks the context rules of every `context.manager`.
+pub(crate) fn check_all(
+    file: &ConfigFile,
+    registry: &ModuleRegistry,
+) -> Result<Registry, ConfigErrors> {
+    let built = file.build(registry)?;
+    let mut errors = Vec::new();
+    for m in file
+        .config
+        .modules
+        .iter()
+        .filter(|m| m.type_name == "context.manager")
+    {
+        let Some(ron::Value::String(rules)) = m.values.get("params/rules") else {
+            continue;
+        };
+        if let Err(rule_errors) = petrel_contexts::check_rules(Path::new(rules), &built) {
+            errors.extend(rule_errors.into_iter().map(|e| ConfigError {
+                file: e.file,
+                line: e.line,
+                column: e.column,
+                message: e.message,
+            }));
+        }
+    }
+    match errors.is_empty() {
+        true => Ok(built),
+        false => Err(ConfigErrors(errors)),
+    }
 }
 
 fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[PathBuf]) -> ExitCode {
     let result =
-        load(config, overlays).and_then(|file| file.build(registry).map(|reg| (file, reg)));
+        load(config, overlays).and_then(|file| check_all(&file, registry).map(|reg| (file, reg)));
     match result {
         Ok((file, reg)) => {
             let links = file

@@ -4,7 +4,7 @@ use std::process::ExitCode;
 
 use petrel_actors::{status, Agent, ModuleRegistry, StartError};
 
-use super::{bad_input, load, logging, RunArgs};
+use super::{bad_input, check_all, load, logging, RunArgs};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
     logging::init(args.log_format);
@@ -12,6 +12,9 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         Ok(file) => file,
         Err(errors) => return bad_input(&errors),
     };
+    if let Err(errors) = check_all(&file, registry) {
+        return bad_input(&errors);
+    }
     let runtime = match tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
@@ -35,6 +38,7 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         let (why, mut code) = tokio::select! {
             exit = agent.finished() => (exit.reason, ExitCode::from(exit.code)),
             _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), ExitCode::SUCCESS),
+            _ = reload_on_hangup(&agent) => unreachable!("reloading never ends"),
             _ = async {
                 match args.duration {
                     Some(d) => tokio::time::sleep(d).await,
@@ -69,4 +73,38 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         }
         code
     })
+}
+
+/// On every SIGHUP, asks each `context.manager` to re-read its rules (its `params/reload`).
+async fn reload_on_hangup(agent: &Agent) {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        if let Ok(mut hangups) = signal(SignalKind::hangup()) {
+            while hangups.recv().await.is_some() {
+                let summary = agent.summary().await;
+                for m in summary
+                    .modules
+                    .iter()
+                    .filter(|m| m.module_type == "context.manager")
+                {
+                    let key = format!("{}/params/reload", m.name);
+                    let next = agent
+                        .blackboard()
+                        .get::<i64>(&key)
+                        .await
+                        .map_or(1, |n| *n + 1);
+                    match agent.blackboard().set(&key, next).await {
+                        Ok(()) => {
+                            tracing::info!(module = %m.name, "SIGHUP: reloading context rules")
+                        }
+                        Err(e) => {
+                            tracing::error!(module = %m.name, error = %e, "SIGHUP: cannot ask for a reload")
+                        }
+                    }
+                }
+            }
+        }
+    }
+    std::future::pending::<()>().await
 }

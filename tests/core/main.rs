@@ -2,6 +2,7 @@
 //! observed through the blackboard. Timing uses tokio's paused clock, never wall-clock sleeps.
 
 mod config_errors;
+mod contexts;
 mod custom_module;
 mod failures;
 mod links;

@@ -8,7 +8,7 @@ use petrel::actors::{
 
 /// Built-in module types plus the test modules below.
 pub fn registry() -> ModuleRegistry {
-    let mut r = petrel::modules::builtin();
+    let mut r = petrel::Petrel::new().registry().clone();
     r.register::<Echo>()
         .register::<TickLog>()
         .register::<Faulty>()

@@ -45,6 +45,7 @@ pub(crate) enum BlackboardMsg {
     Get(String, Reply<(TypeInfo, AnyValue)>),
     Endpoint(String, Reply<Arc<crate::cell::Endpoint>>),
     Snapshot(Reply<String>),
+    LinkOf(String, Reply<Option<String>>),
     AddModule(
         Box<ModuleConfig>,
         ModuleType,
@@ -142,6 +143,12 @@ impl Actor for BlackboardActor {
                 tracing::info!(agent = reg.agent(), %module, ok = result.is_ok(), "module removed");
                 let _ = reply.send(result);
             }
+            BlackboardMsg::LinkOf(address, reply) => {
+                let result = reg
+                    .key_of(&address)
+                    .map(|key| reg.link_of(&key).map(str::to_string));
+                let _ = reply.send(result);
+            }
             BlackboardMsg::Snapshot(reply) => {
                 let _ = reply.send(Ok(crate::snapshot::write(reg)));
             }
@@ -185,6 +192,12 @@ impl Blackboard {
     /// Links `from` to `to` while running; readers of `from` see `to` from their next read.
     pub async fn link(&self, from: &str, to: &str) -> Result<(), BlackboardError> {
         self.call(|r| BlackboardMsg::Link(from.to_string(), to.to_string(), r))
+            .await
+    }
+
+    /// Where `address` links to (`module/path`), or `None` if it is not linked.
+    pub async fn link_of(&self, address: &str) -> Result<Option<String>, BlackboardError> {
+        self.call(|r| BlackboardMsg::LinkOf(address.to_string(), r))
             .await
     }
 

@@ -2,6 +2,7 @@
 //! scale/filter (in → out with parameters), a queue producer and a queue consumer that checks
 //! order, a printer, and a chaos monkey that makes modules fail.
 
+mod camera;
 mod chaos;
 mod consumer;
 mod counter;
@@ -10,6 +11,7 @@ mod producer;
 mod scale;
 mod signal;
 
+pub use camera::Camera;
 pub use chaos::Chaos;
 pub use consumer::Consumer;
 pub use counter::Counter;
@@ -29,7 +31,8 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<Producer>()
         .register::<Consumer>()
         .register::<Printer>()
-        .register::<Chaos>();
+        .register::<Chaos>()
+        .register::<Camera>();
 }
 
 fn period(ms: i64) -> std::time::Duration {

@@ -1,0 +1,187 @@
+//! The context rules file (RON) and where things are in it.
+//!
+//! ```ron
+//! Contexts(
+//!     contexts: [
+//!         (
+//!             name: "fast",
+//!             when: "robot/out/actualSpeed.v > 0.6",    // entry condition (an expression)
+//!             until: "robot/out/actualSpeed.v < 0.4",   // exit condition; default: not `when`
+//!             min_dwell_ms: 500,                        // stay active/inactive at least this long
+//!             priority: 10,                             // higher wins on a shared target
+//!             set: {"vision/params/deblur": "true"},    // values are expressions, re-evaluated
+//!             relink: {"mapper/in/pose": "hw/out/odometry"},
+//!             enable: ["featureSeeker"], disable: ["explorer"],
+//!             start: ["recorder"], stop: ["planner"],
+//!             sticky: false,                            // true: keep effects when it ends
+//!         ),
+//!     ],
+//! )
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+/// A whole rules file.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(rename = "Contexts", deny_unknown_fields)]
+pub struct RulesFile {
+    /// The contexts, in declaration order (which breaks no tie: equal priorities on a shared
+    /// target are an error).
+    #[serde(default)]
+    pub contexts: Vec<ContextRule>,
+}
+
+/// One context: when it holds, and what it changes while it does.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContextRule {
+    /// Unique name.
+    pub name: String,
+    /// Entry condition.
+    pub when: String,
+    /// Exit condition (hysteresis); default `not (when)`.
+    #[serde(default)]
+    pub until: Option<String>,
+    /// Minimum time the context stays active or inactive after a change, ms.
+    #[serde(default)]
+    pub min_dwell_ms: u64,
+    /// Higher priority wins when active contexts set the same target.
+    #[serde(default)]
+    pub priority: i64,
+    /// Property → expression giving its value while active.
+    #[serde(default)]
+    pub set: BTreeMap<String, String>,
+    /// Input → new source while active.
+    #[serde(default)]
+    pub relink: BTreeMap<String, String>,
+    /// Modules whose `enabled` is set true while active.
+    #[serde(default)]
+    pub enable: Vec<String>,
+    /// Modules whose `enabled` is set false while active.
+    #[serde(default)]
+    pub disable: Vec<String>,
+    /// Module instances started while active.
+    #[serde(default)]
+    pub start: Vec<String>,
+    /// Module instances stopped while active.
+    #[serde(default)]
+    pub stop: Vec<String>,
+    /// Keep the effects when the context ends (default: restore what it changed).
+    #[serde(default)]
+    pub sticky: bool,
+}
+
+/// A problem in a rules file, located in it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RuleError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// 1-based column (0 when unknown).
+    pub column: usize,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl std::fmt::Display for RuleError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.line {
+            0 => write!(f, "{}: error: {}", self.file.display(), self.message),
+            _ => write!(
+                f,
+                "{}:{}:{}: error: {}",
+                self.file.display(),
+                self.line,
+                self.column,
+                self.message
+            ),
+        }
+    }
+}
+
+/// A parsed rules file with its text, to locate errors.
+#[derive(Debug, Clone)]
+pub struct LoadedRules {
+    /// The rules.
+    pub rules: RulesFile,
+    /// Where they came from.
+    pub path: PathBuf,
+    text: String,
+}
+
+impl LoadedRules {
+    /// Reads and parses a rules file.
+    pub fn load(path: &Path) -> Result<Self, Vec<RuleError>> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            vec![RuleError {
+                file: path.into(),
+                line: 0,
+                column: 0,
+                message: format!("cannot read context rules: {e}"),
+            }]
+        })?;
+        Self::parse(path, &text)
+    }
+
+    /// Parses rules text; `path` names it in errors.
+    pub fn parse(path: &Path, text: &str) -> Result<Self, Vec<RuleError>> {
+        let options = ron::Options::default()
+            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        match options.from_str::<RulesFile>(text) {
+            Ok(rules) => Ok(LoadedRules {
+                rules,
+                path: path.into(),
+                text: text.to_string(),
+            }),
+            Err(e) => Err(vec![RuleError {
+                file: path.into(),
+                line: e.span.start.line,
+                column: e.span.start.col,
+                message: format!("{} (RON syntax of context rules)", e.code),
+            }]),
+        }
+    }
+
+    /// An error about context `context`, at the first quoted `needle` after its name (or at
+    /// the name), shifted by `offset` (line, column) inside the quoted text when given.
+    pub fn error(
+        &self,
+        context: &str,
+        needle: Option<&str>,
+        offset: Option<(u32, u32)>,
+        message: String,
+    ) -> RuleError {
+        let mut err = RuleError {
+            file: self.path.clone(),
+            line: 0,
+            column: 0,
+            message,
+        };
+        let Some(start) = self.text.find(&format!("\"{context}\"")) else {
+            return err;
+        };
+        let at = needle
+            .and_then(|n| {
+                self.text[start..]
+                    .find(&format!("\"{n}\""))
+                    .map(|i| start + i + 1)
+            })
+            .unwrap_or(start);
+        err.line = self.text[..at].matches('\n').count() + 1;
+        err.column = at - self.text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+        if let Some((line, column)) = offset {
+            // Expressions are one line in practice; a multi-line one is located by its own lines.
+            if line > 1 {
+                err.line += line as usize - 1;
+                err.column = column as usize;
+            } else {
+                err.column += column as usize - 1;
+            }
+        }
+        err
+    }
+}

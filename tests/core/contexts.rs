@@ -1,0 +1,138 @@
+//! The context manager in a running agent: effects applied and undone, reload, start/stop.
+
+use std::path::Path;
+
+use petrel::actors::{status, DEFAULT_STOP_TIMEOUT};
+
+use crate::support::{advance, start};
+
+fn agent_with_rules(rules_path: &Path) -> String {
+    format!(
+        r#"Agent(name: "r1", modules: [
+            (name: "quality", type: "demo.scale"),
+            (name: "odometry", type: "demo.counter", values: {{"params/period_ms": 10, "params/start": 100.0}}),
+            (name: "localizer", type: "demo.counter", values: {{"params/period_ms": 10}}),
+            (name: "mapper", type: "test.echo", links: {{"in/value": "localizer/out/value"}}),
+            (name: "recorder", type: "demo.counter", values: {{"params/period_ms": 10}}),
+            (name: "contexts", type: "context.manager", values: {{"params/rules": {:?}, "params/tick_ms": 10}}),
+        ])"#,
+        rules_path.display().to_string()
+    )
+}
+
+const LOST: &str = r#"Contexts(contexts: [
+    (name: "lost", when: "quality/out/value < 0.3", until: "quality/out/value > 0.5",
+     relink: {"mapper/in/value": "odometry/out/value"}, set: {"localizer/params/increment": "0.0"}, stop: ["recorder"]),
+])"#;
+
+#[tokio::test(start_paused = true)]
+async fn a_context_relinks_sets_and_stops_then_restores_everything() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(&rules, LOST).unwrap();
+    let agent = start(&agent_with_rules(&rules)).await;
+    let bb = agent.blackboard().clone();
+    bb.set("quality/in/value", 0.9).await.unwrap();
+    advance(50).await;
+    assert!(
+        *bb.get::<f64>("mapper/out/value").await.unwrap() < 100.0,
+        "mapper follows the localizer"
+    );
+    bb.set("quality/in/value", 0.1).await.unwrap();
+    advance(30).await;
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "lost"
+    );
+    assert!(
+        *bb.get::<f64>("mapper/out/value").await.unwrap() > 100.0,
+        "relinked to odometry"
+    );
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        0.0
+    );
+    assert_eq!(
+        *bb.get::<String>("recorder/stats/status").await.unwrap(),
+        status::STOPPED
+    );
+    bb.set("quality/in/value", 0.4).await.unwrap();
+    advance(30).await;
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "lost",
+        "between thresholds: still lost"
+    );
+    bb.set("quality/in/value", 0.8).await.unwrap();
+    advance(30).await;
+    assert_eq!(*bb.get::<String>("contexts/out/active").await.unwrap(), "");
+    assert_eq!(
+        bb.link_of("mapper/in/value").await.unwrap().as_deref(),
+        Some("localizer/out/value"),
+        "link restored"
+    );
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        1.0,
+        "value restored"
+    );
+    assert_eq!(
+        *bb.get::<String>("recorder/stats/status").await.unwrap(),
+        status::RUNNING,
+        "restarted"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn reloading_applies_the_difference_and_a_broken_file_changes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(&rules, LOST).unwrap();
+    let agent = start(&agent_with_rules(&rules)).await;
+    let bb = agent.blackboard().clone();
+    bb.set("quality/in/value", 0.1).await.unwrap();
+    advance(30).await;
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "lost"
+    );
+
+    std::fs::write(
+        &rules,
+        "Contexts(contexts: [(name: \"lost\", when: \"quality/out/value <\")])",
+    )
+    .unwrap();
+    bb.set("contexts/params/reload", 1_i64).await.unwrap();
+    advance(20).await;
+    let errors = bb.get::<String>("contexts/out/errors").await.unwrap();
+    assert!(errors.contains("rules.ron:1:"), "{errors}");
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        0.0,
+        "the running rules stay"
+    );
+
+    // The new rules keep the relink but drop the parameter change and the stop.
+    let kept = r#"Contexts(contexts: [(name: "lost", when: "quality/out/value < 0.3", until: "quality/out/value > 0.5",
+        relink: {"mapper/in/value": "odometry/out/value"})])"#;
+    std::fs::write(&rules, kept).unwrap();
+    bb.set("contexts/params/reload", 2_i64).await.unwrap();
+    advance(30).await;
+    assert_eq!(*bb.get::<String>("contexts/out/errors").await.unwrap(), "");
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        1.0,
+        "what the removed rule changed is restored"
+    );
+    assert_eq!(
+        *bb.get::<String>("recorder/stats/status").await.unwrap(),
+        status::RUNNING
+    );
+    assert_eq!(
+        bb.link_of("mapper/in/value").await.unwrap().as_deref(),
+        Some("odometry/out/value"),
+        "the kept effect stays"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
