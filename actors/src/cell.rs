@@ -20,6 +20,12 @@ pub(crate) mod cause {
     pub const CHANGE: u8 = 2;
     pub const ITEMS: u8 = 4;
     pub const TIMEOUT: u8 = 8;
+    /// The module's `enabled` changed.
+    pub const ENABLED: u8 = 16;
+    /// The module is asked to stop.
+    pub const STOP: u8 = 32;
+    /// Causes that make a module step.
+    pub const STEPS: u8 = PERIOD | CHANGE | ITEMS | TIMEOUT;
 }
 
 /// The wake-up signal of one module: one per module name, kept across restarts.
@@ -60,7 +66,8 @@ pub(crate) struct Slot {
 pub(crate) struct Cell {
     pub type_info: TypeInfo,
     slot: RwLock<Slot>,
-    watchers: ArcSwap<Vec<Arc<Signal>>>,
+    /// Signals to raise on a write, each with the cause its subscriber asked for.
+    watchers: ArcSwap<Vec<(Arc<Signal>, u8)>>,
 }
 
 impl Cell {
@@ -93,23 +100,26 @@ impl Cell {
         };
         // The previous value (maybe a large image) is freed outside the lock.
         drop(old);
-        for watcher in self.watchers.load().iter() {
-            watcher.raise(cause::CHANGE);
+        for (watcher, cause) in self.watchers.load().iter() {
+            watcher.raise(*cause);
         }
     }
 
-    fn add_watcher(&self, signal: &Arc<Signal>) {
+    fn add_watcher(&self, signal: &Arc<Signal>, cause: u8) {
         self.watchers.rcu(|w| {
             let mut w = Vec::clone(w);
-            w.push(signal.clone());
+            w.push((signal.clone(), cause));
             w
         });
     }
 
-    fn remove_watcher(&self, signal: &Arc<Signal>) {
+    fn remove_watcher(&self, signal: &Arc<Signal>, cause: u8) {
         self.watchers.rcu(|w| {
             let mut w = Vec::clone(w);
-            if let Some(i) = w.iter().position(|s| Arc::ptr_eq(s, signal)) {
+            if let Some(i) = w
+                .iter()
+                .position(|(s, c)| Arc::ptr_eq(s, signal) && *c == cause)
+            {
                 w.swap_remove(i);
             }
             w
@@ -124,7 +134,7 @@ pub(crate) struct Endpoint {
     pub key: Arc<str>,
     pub own: Arc<Cell>,
     resolved: ArcSwap<Cell>,
-    subscribers: Mutex<Vec<Arc<Signal>>>,
+    subscribers: Mutex<Vec<(Arc<Signal>, u8)>>,
 }
 
 impl Endpoint {
@@ -159,10 +169,18 @@ impl Endpoint {
 
     /// Wakes `signal` whenever the value seen through this endpoint changes, including after a relink.
     pub fn subscribe(&self, signal: &Arc<Signal>) {
+        self.subscribe_with(signal, cause::CHANGE)
+    }
+
+    /// Like [`subscribe`](Self::subscribe), raising `cause` (one module signal serves all events).
+    pub fn subscribe_with(&self, signal: &Arc<Signal>, cause: u8) {
         let mut subs = self.subscribers.lock();
-        if !subs.iter().any(|s| Arc::ptr_eq(s, signal)) {
-            subs.push(signal.clone());
-            self.resolved.load().add_watcher(signal);
+        if !subs
+            .iter()
+            .any(|(s, c)| Arc::ptr_eq(s, signal) && *c == cause)
+        {
+            subs.push((signal.clone(), cause));
+            self.resolved.load().add_watcher(signal, cause);
         }
     }
 
@@ -173,13 +191,13 @@ impl Endpoint {
         if Arc::ptr_eq(&old, &target) {
             return;
         }
-        for s in subs.iter() {
-            old.remove_watcher(s);
-            target.add_watcher(s);
+        for (s, c) in subs.iter() {
+            old.remove_watcher(s, *c);
+            target.add_watcher(s, *c);
         }
         if !Arc::ptr_eq(&old.value(), &target.value()) {
-            for s in subs.iter() {
-                s.raise(cause::CHANGE);
+            for (s, c) in subs.iter() {
+                s.raise(*c);
             }
         }
     }

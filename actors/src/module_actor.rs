@@ -6,11 +6,11 @@
 //! error ends the actor and reaches the supervisor, and a kill drops the running step.
 
 use std::marker::PhantomData;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
 use ractor::{Actor, ActorProcessingErr, ActorRef};
-use tokio::sync::watch;
 use tokio::time::{Instant, MissedTickBehavior};
 use tracing::Instrument;
 
@@ -103,6 +103,36 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
     }
 }
 
+/// A request to stop one module instance, shared by its supervisor and its actor. Stopping
+/// raises the module's signal, so the request is seen at once, even by a waiting module.
+#[derive(Default)]
+pub(crate) struct StopRequest {
+    requested: AtomicBool,
+    signal: parking_lot::Mutex<Option<Arc<Signal>>>,
+}
+
+impl StopRequest {
+    pub fn request(&self) {
+        let signal = self.signal.lock();
+        self.requested.store(true, Ordering::SeqCst);
+        if let Some(signal) = signal.as_ref() {
+            signal.raise(cause::STOP);
+        }
+    }
+
+    fn attach(&self, signal: &Arc<Signal>) {
+        let mut slot = self.signal.lock();
+        *slot = Some(signal.clone());
+        if self.requested.load(Ordering::SeqCst) {
+            signal.raise(cause::STOP);
+        }
+    }
+
+    fn is_requested(&self) -> bool {
+        self.requested.load(Ordering::Relaxed)
+    }
+}
+
 pub(crate) struct ModuleArgs {
     pub modules: ModuleControl,
     /// Overrides the module's own watchdog.
@@ -111,7 +141,7 @@ pub(crate) struct ModuleArgs {
     pub name: String,
     pub blackboard: Blackboard,
     pub control: AgentControl,
-    pub stop: watch::Receiver<bool>,
+    pub stop: Arc<StopRequest>,
 }
 
 pub(crate) struct ModuleActor<M>(PhantomData<fn() -> M>);
@@ -130,8 +160,7 @@ pub(crate) struct Running<M> {
     ctx: Context,
     builtins: Builtins,
     signal: Arc<Signal>,
-    enabled_signal: Arc<Signal>,
-    stop: watch::Receiver<bool>,
+    stop: Arc<StopRequest>,
     span: tracing::Span,
     stats: StepStats,
 }
@@ -191,7 +220,6 @@ impl<M: Module> Actor for ModuleActor<M> {
             ctx,
             builtins,
             signal: binding.signal,
-            enabled_signal: binding.enabled_signal,
             stop: args.stop,
             span,
             stats: StepStats::default(),
@@ -249,7 +277,11 @@ impl<M: Module> Running<M> {
                 WatchTarget::Queue(reader) => reader.subscribe(&self.signal),
             }
         }
-        self.builtins.enabled.ep.subscribe(&self.enabled_signal);
+        self.builtins
+            .enabled
+            .ep
+            .subscribe_with(&self.signal, cause::ENABLED);
+        self.stop.attach(&self.signal);
         let mut ticker = period.map(|p| {
             let mut t = tokio::time::interval_at(Instant::now() + p, p);
             t.set_missed_tick_behavior(MissedTickBehavior::Skip);
@@ -265,22 +297,29 @@ impl<M: Module> Running<M> {
         let mut pending: Option<u8> = Some(0);
         let mut last_step = Instant::now();
         loop {
+            if self.stop.is_requested() {
+                return Ok(());
+            }
             if enabled {
                 if let Some(causes) = pending.take() {
                     self.step(causes).await?;
-                    last_step = Instant::now();
+                    last_step = self.ctx.now;
                     continue;
                 }
             }
-            let causes = tokio::select! {
-                biased;
-                _ = self.stop.wait_for(|stop| *stop) => return Ok(()),
-                _ = self.enabled_signal.wait() => None,
-                c = self.signal.wait() => Some(c),
-                _ = tick(&mut ticker) => Some(cause::PERIOD | self.signal.take()),
-                _ = tokio::time::sleep_until(last_step + timeout.unwrap_or_default()), if timeout.is_some() => Some(cause::TIMEOUT),
+            // One signal carries every event (data, `enabled`, stop), so a purely event-driven
+            // module waits on a single `Notify`: the hot path of `property_wake`.
+            let causes = if ticker.is_none() && timeout.is_none() {
+                self.signal.wait().await
+            } else {
+                tokio::select! {
+                    biased;
+                    c = self.signal.wait() => c,
+                    _ = tick(&mut ticker) => cause::PERIOD | self.signal.take(),
+                    _ = tokio::time::sleep_until(last_step + timeout.unwrap_or_default()), if timeout.is_some() => cause::TIMEOUT,
+                }
             };
-            let Some(causes) = causes else {
+            if causes & cause::ENABLED != 0 {
                 let now_enabled = self.builtins.enabled.value();
                 if now_enabled != enabled {
                     enabled = now_enabled;
@@ -292,9 +331,10 @@ impl<M: Module> Running<M> {
                         status::DISABLED
                     });
                 }
-                continue;
-            };
-            pending = Some(pending.unwrap_or(0) | causes);
+            }
+            if causes & cause::STEPS != 0 {
+                pending = Some(pending.unwrap_or(0) | (causes & cause::STEPS));
+            }
         }
     }
 

@@ -9,7 +9,6 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use ractor::{Actor, ActorCell, ActorProcessingErr, ActorRef, RpcReplyPort, SupervisionEvent};
-use tokio::sync::watch;
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
@@ -17,7 +16,7 @@ use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::config::ModuleConfig;
 use crate::handle::QueueWriter;
-use crate::module_actor::{status, ModuleArgs};
+use crate::module_actor::{status, ModuleArgs, StopRequest};
 use crate::module_types::{ModuleRegistry, ModuleType};
 use crate::summary::ModuleReport;
 use crate::supervision::{
@@ -63,7 +62,7 @@ struct Slot {
     generation: u64,
     actor: Option<ActorCell>,
     join: Option<JoinHandle<()>>,
-    stop: watch::Sender<bool>,
+    stop: Arc<StopRequest>,
     backoff: Backoff,
     failures: u64,
     restarts: u64,
@@ -143,7 +142,7 @@ impl Actor for AgentSupervisor {
                 generation: 0,
                 actor: None,
                 join: None,
-                stop: watch::channel(false).0,
+                stop: Arc::default(),
                 backoff: Backoff::new(config.backoff),
                 failures: 0,
                 restarts: 0,
@@ -275,9 +274,8 @@ impl SupervisorState {
 
     /// Starts slot `i`'s module; a failure to start comes back as a `StartFailed` message.
     async fn spawn(&mut self, i: usize) {
-        let (stop, stop_rx) = watch::channel(false);
         let slot = &mut self.slots[i];
-        slot.stop = stop;
+        slot.stop = Arc::default();
         let args = ModuleArgs {
             modules: ModuleControl {
                 supervisor: self.me.clone(),
@@ -287,7 +285,7 @@ impl SupervisorState {
             name: slot.spec.name.clone(),
             blackboard: self.blackboard.clone(),
             control: self.control.clone(),
-            stop: stop_rx,
+            stop: slot.stop.clone(),
         };
         slot.backoff.started(Instant::now());
         match slot.spec.module_type.spawn(args, self.me.get_cell()).await {
@@ -310,7 +308,7 @@ impl SupervisorState {
         let slot = &mut self.slots[i];
         slot.generation += 1;
         slot.state = SlotState::Stopped;
-        let _ = slot.stop.send(true);
+        slot.stop.request();
         let timeout = timeout.unwrap_or(slot.spec.shutdown_timeout);
         let actor = slot.actor.take();
         if let Some(join) = slot.join.take() {
@@ -539,7 +537,7 @@ impl SupervisorState {
             generation: 0,
             actor: None,
             join: None,
-            stop: watch::channel(false).0,
+            stop: Arc::default(),
             backoff: Backoff::new(self.config.backoff),
             failures: 0,
             restarts: 0,

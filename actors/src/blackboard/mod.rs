@@ -25,7 +25,6 @@ pub use registry::{BlackboardError, Registry};
 pub(crate) struct Binding {
     pub handles: HashMap<String, Handle>,
     pub signal: Arc<Signal>,
-    pub enabled_signal: Arc<Signal>,
 }
 
 type Reply<T> = RpcReplyPort<Result<T, BlackboardError>>;
@@ -89,7 +88,6 @@ impl Actor for BlackboardActor {
                     .map(|(handles, m)| Binding {
                         handles,
                         signal: m.signal.clone(),
-                        enabled_signal: m.enabled_signal.clone(),
                     });
                 let _ = reply.send(
                     binding.ok_or_else(|| reg.key_of(&format!("{module}/enabled")).unwrap_err()),

@@ -128,8 +128,6 @@ pub(crate) struct ModuleEntry {
     pub type_name: String,
     /// Raised when a watched input or queue changes; kept across restarts.
     pub signal: Arc<Signal>,
-    /// Raised when `enabled` changes.
-    pub enabled_signal: Arc<Signal>,
 }
 
 /// All properties, queues and links of one agent.
@@ -218,7 +216,6 @@ impl Registry {
         let entry = ModuleEntry {
             type_name: type_name.to_string(),
             signal: Arc::default(),
-            enabled_signal: Arc::default(),
         };
         self.modules.insert(module.to_string(), entry);
         Ok(())
@@ -337,7 +334,6 @@ impl Registry {
         let entry = ModuleEntry {
             type_name: "runtime.supervisor".into(),
             signal: Arc::default(),
-            enabled_signal: Arc::default(),
         };
         self.modules.insert(EVENTS_MODULE.to_string(), entry);
     }
