@@ -27,7 +27,7 @@ pub fn runtime() -> tokio::runtime::Runtime {
 
 /// The built-in types plus the bench modules.
 pub fn registry() -> ModuleRegistry {
-    let mut r = petrel::modules::builtin();
+    let mut r = petrel::Petrel::new().registry().clone();
     r.register::<Echo>()
         .register::<Ping>()
         .register::<QueueSource>()

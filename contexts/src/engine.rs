@@ -2,7 +2,7 @@
 //! should be (resolved by priority), and the actions that take the blackboard from what is
 //! applied to what is desired. No I/O and no clock of its own: values and times are passed in.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::time::Duration;
 
 use petrel_actors::expr::{parse, properties, ExprId, ExprSet, Ty, TypeEnv, Value};
@@ -96,6 +96,11 @@ pub struct Engine {
     runs: BTreeMap<String, Applied<bool>>,
     /// The expected type of each `set` target, to convert values.
     targets: HashMap<String, TypeInfo>,
+    /// The rule whose `when` or `until` each condition is, so a step looks only at rules whose
+    /// conditions changed.
+    by_condition: HashMap<ExprId, usize>,
+    /// Rules whose switch waits for their `min_dwell` to pass.
+    waiting: BTreeSet<usize>,
 }
 
 impl Engine {
@@ -109,6 +114,8 @@ impl Engine {
             links: BTreeMap::new(),
             runs: BTreeMap::new(),
             targets: HashMap::new(),
+            by_condition: HashMap::new(),
+            waiting: BTreeSet::new(),
         };
         let mut names = Vec::new();
         for rule in &loaded.rules.contexts {
@@ -217,6 +224,14 @@ impl Engine {
                 since: None,
             });
         }
+        for (i, rule) in engine.rules.iter().enumerate() {
+            engine.by_condition.insert(rule.when, i);
+            if let Some(until) = rule.until {
+                engine.by_condition.insert(until, i);
+            }
+        }
+        // Every rule is looked at once, on the first step.
+        engine.waiting = (0..engine.rules.len()).collect();
         errors.extend(engine.conflicts(loaded));
         errors.extend(engine.never_hold(loaded));
         match errors.is_empty() {
@@ -313,26 +328,36 @@ impl Engine {
 
     /// Evaluates what changed at `now`, switches contexts, and returns the actions to apply.
     pub fn step(&mut self, now: Instant) -> Vec<Action> {
-        self.exprs.evaluate(now);
+        let changed = self.exprs.evaluate(now);
+        let mut candidates = std::mem::take(&mut self.waiting);
+        candidates.extend(changed.iter().filter_map(|id| self.by_condition.get(id)));
         let mut actions = Vec::new();
-        for rule in &mut self.rules {
-            let dwelt = rule
-                .since
-                .is_none_or(|t| now.duration_since(t) >= rule.min_dwell);
+        for i in candidates {
+            let rule = &mut self.rules[i];
             let holds = self.exprs.bool(rule.when) == Some(true);
             let ends = match rule.until {
                 Some(until) => self.exprs.bool(until) == Some(true),
                 None => self.exprs.bool(rule.when) == Some(false),
             };
-            if dwelt && !rule.active && holds {
-                rule.active = true;
-                rule.since = Some(now);
-                actions.push(Action::Activated(rule.name.clone()));
-            } else if dwelt && rule.active && ends {
-                rule.active = false;
-                rule.since = Some(now);
-                actions.push(Action::Deactivated(rule.name.clone()));
+            let wants_switch = if rule.active { ends } else { holds };
+            if !wants_switch {
+                continue;
             }
+            if rule
+                .since
+                .is_some_and(|t| now.duration_since(t) < rule.min_dwell)
+            {
+                self.waiting.insert(i);
+                continue;
+            }
+            rule.active = !rule.active;
+            rule.since = Some(now);
+            let name = rule.name.clone();
+            actions.push(if rule.active {
+                Action::Activated(name)
+            } else {
+                Action::Deactivated(name)
+            });
         }
         self.diff(&mut actions);
         actions

@@ -1,0 +1,114 @@
+//! `context_reaction`: a property changes → a context activates (or ends) → a parameter
+//! changes → the module reading it is woken and answers; against `property_wake`'s petrel round
+//! trip in the same run, and with 1 000 rules of which one reads the changed property
+//! (`rules_1000`) against a single rule (`rules_1`).
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use criterion::{criterion_group, criterion_main, Criterion};
+
+/// Rules: `react` reads the trigger; `others` more rules read a property that never changes.
+fn rules(others: usize) -> String {
+    let mut rules = String::from(
+        r#"Contexts(contexts: [(name: "react", when: "trigger/in/value > 0.5", set: {"target/in/value": "1.0"}),"#,
+    );
+    for i in 0..others {
+        rules.push_str(&format!(
+            r#"(name: "idle{i}", when: "idle/in/value > {i}.5"),"#
+        ));
+    }
+    rules.push_str("])");
+    rules
+}
+
+fn config(rules_path: &std::path::Path) -> String {
+    format!(
+        r#"Agent(name: "bench", modules: [
+            (name: "trigger", type: "bench.idle"),
+            (name: "idle", type: "bench.idle"),
+            (name: "target", type: "bench.echo"),
+            (name: "contexts", type: "context.manager", values: {{"params/rules": {:?}, "params/tick_ms": 100000}}),
+        ])"#,
+        rules_path.display().to_string()
+    )
+}
+
+const PING_PONG: &str = r#"Agent(name: "bench", modules: [
+    (name: "a", type: "bench.ping", links: {"in/pong": "b/out/value"}),
+    (name: "b", type: "bench.echo", links: {"in/value": "a/out/ping"}),
+])"#;
+
+fn bench(c: &mut Criterion) {
+    let rt = common::runtime();
+    let mut group = c.benchmark_group("context_reaction");
+    let dir = std::env::temp_dir().join(format!("petrel-context-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, others) in [("rules_1", 0), ("rules_1000", 999)] {
+        let path = dir.join(format!("{name}.ron"));
+        std::fs::write(&path, rules(others)).unwrap();
+        let (agent, trigger, answer) = rt.block_on(async {
+            let agent = common::start(&config(&path)).await;
+            let trigger = agent
+                .blackboard()
+                .handle::<f64>("trigger/in/value")
+                .await
+                .unwrap();
+            let answer = agent
+                .blackboard()
+                .handle::<f64>("target/out/value")
+                .await
+                .unwrap();
+            (agent, trigger, answer)
+        });
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                rt.block_on(async {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..iters {
+                        // Alternate: the context activates (target 1.0) or ends (restored to 0.0).
+                        let want = if *answer.get() == 1.0 { 0.0 } else { 1.0 };
+                        let start = Instant::now();
+                        trigger.set(want);
+                        while *answer.get() != want {
+                            answer.changed().await;
+                        }
+                        total += start.elapsed();
+                    }
+                    total
+                })
+            })
+        });
+        rt.block_on(agent.stop(Duration::from_secs(1)));
+    }
+    let (agent, go, done) = rt.block_on(async {
+        let agent = common::start(PING_PONG).await;
+        let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
+        let done = agent
+            .blackboard()
+            .handle::<i64>("a/out/done")
+            .await
+            .unwrap();
+        (agent, go, done)
+    });
+    group.bench_function("property_wake_baseline", |b| {
+        b.iter_custom(|iters| {
+            rt.block_on(async {
+                let target = *done.get() + 1;
+                let start = Instant::now();
+                go.set(iters as i64);
+                while *done.get() < target {
+                    done.changed().await;
+                }
+                start.elapsed()
+            })
+        })
+    });
+    group.finish();
+    rt.block_on(agent.stop(Duration::from_secs(1)));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group! { name = benches; config = common::criterion(); targets = bench }
+criterion_main!(benches);
