@@ -35,11 +35,6 @@ fn config(rules_path: &std::path::Path) -> String {
     )
 }
 
-const PING_PONG: &str = r#"Agent(name: "bench", modules: [
-    (name: "a", type: "bench.ping", links: {"in/pong": "b/out/value"}),
-    (name: "b", type: "bench.echo", links: {"in/value": "a/out/ping"}),
-])"#;
-
 fn bench(c: &mut Criterion) {
     let rt = common::runtime();
     let mut group = c.benchmark_group("context_reaction");
@@ -82,31 +77,12 @@ fn bench(c: &mut Criterion) {
         });
         rt.block_on(agent.stop(Duration::from_secs(1)));
     }
-    let (agent, go, done) = rt.block_on(async {
-        let agent = common::start(PING_PONG).await;
-        let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
-        let done = agent
-            .blackboard()
-            .handle::<i64>("a/out/done")
-            .await
-            .unwrap();
-        (agent, go, done)
-    });
+    let ping_pong = rt.block_on(common::PingPong::start());
     group.bench_function("property_wake_baseline", |b| {
-        b.iter_custom(|iters| {
-            rt.block_on(async {
-                let target = *done.get() + 1;
-                let start = Instant::now();
-                go.set(iters as i64);
-                while *done.get() < target {
-                    done.changed().await;
-                }
-                start.elapsed()
-            })
-        })
+        b.iter_custom(|iters| rt.block_on(ping_pong.round_trips(iters)))
     });
     group.finish();
-    rt.block_on(agent.stop(Duration::from_secs(1)));
+    rt.block_on(ping_pong.agent.stop(Duration::from_secs(1)));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -10,37 +10,13 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use ractor::{Actor, ActorProcessingErr, ActorRef, RpcReplyPort};
 use tokio::sync::{mpsc, oneshot, watch};
 
-const PING_PONG: &str = r#"Agent(name: "bench", modules: [
-    (name: "a", type: "bench.ping", links: {"in/pong": "b/out/value"}),
-    (name: "b", type: "bench.echo", links: {"in/value": "a/out/ping"}),
-])"#;
-
 fn bench(c: &mut Criterion) {
     let rt = common::runtime();
     let mut group = c.benchmark_group("property_wake");
 
-    let (agent, go, done) = rt.block_on(async {
-        let agent = common::start(PING_PONG).await;
-        let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
-        let done = agent
-            .blackboard()
-            .handle::<i64>("a/out/done")
-            .await
-            .unwrap();
-        (agent, go, done)
-    });
+    let ping_pong = rt.block_on(common::PingPong::start());
     group.bench_function("petrel", |b| {
-        b.iter_custom(|iters| {
-            rt.block_on(async {
-                let target = *done.get() + 1;
-                let start = Instant::now();
-                go.set(iters as i64);
-                while *done.get() < target {
-                    done.changed().await;
-                }
-                start.elapsed()
-            })
-        })
+        b.iter_custom(|iters| rt.block_on(ping_pong.round_trips(iters)))
     });
 
     let floor = rt.block_on(async { spawn_watch_pair() });
@@ -54,7 +30,7 @@ fn bench(c: &mut Criterion) {
     });
 
     group.finish();
-    rt.block_on(agent.stop(Duration::from_secs(1)));
+    rt.block_on(ping_pong.agent.stop(Duration::from_secs(1)));
 }
 
 /// A driver task that plays `n` round trips on request and reports the elapsed time.

@@ -91,6 +91,40 @@ pub struct ConfigError {
     pub message: String,
 }
 
+impl ConfigError {
+    /// An error at byte `offset` of `text`, the contents of `file`.
+    pub fn at(file: &Path, text: &str, offset: usize, message: String) -> Self {
+        let (line, column) = line_column(text, offset);
+        ConfigError {
+            file: file.into(),
+            line,
+            column,
+            message,
+        }
+    }
+
+    /// An error about `file` as a whole.
+    pub fn in_file(file: &Path, message: String) -> Self {
+        ConfigError {
+            file: file.into(),
+            line: 0,
+            column: 0,
+            message,
+        }
+    }
+
+    /// A RON syntax error in `file`; `what` names the kind of file for the reader.
+    pub fn from_ron(file: &Path, error: &ron::error::SpannedError, what: &str) -> Self {
+        let message = format!("{} (RON syntax of {what})", error.code);
+        ConfigError {
+            file: file.into(),
+            line: error.span.start.line,
+            column: error.span.start.col,
+            message,
+        }
+    }
+}
+
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self.line {
@@ -138,38 +172,20 @@ impl ConfigFile {
     /// Reads and parses a config file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigErrors> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            ConfigErrors(vec![ConfigError {
-                file: path.into(),
-                line: 0,
-                column: 0,
-                message: format!("cannot read config: {e}"),
-            }])
-        })?;
+        let text = read_text(path, "config").map_err(|e| ConfigErrors(vec![e]))?;
         Self::parse(path, &text)
     }
 
     /// Parses config text; `path` names it in errors.
     pub fn parse(path: impl AsRef<Path>, text: &str) -> Result<Self, ConfigErrors> {
         let path = path.as_ref();
-        // Optional fields are written plainly (`group: "nav"`, not `group: Some("nav")`).
-        let options = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        match options.from_str::<AgentConfig>(text) {
-            Ok(config) => Ok(ConfigFile {
-                config,
-                sources: vec![(path.into(), text.to_string())],
-            }),
-            Err(e) => Err(ConfigErrors(vec![ConfigError {
-                file: path.into(),
-                line: e.span.start.line,
-                column: e.span.start.col,
-                message: format!(
-                    "{} (RON syntax; see the config example in the README)",
-                    e.code
-                ),
-            }])),
-        }
+        let what = "an agent config; see the example in the README";
+        let config =
+            parse_ron::<AgentConfig>(path, text, what).map_err(|e| ConfigErrors(vec![e]))?;
+        Ok(ConfigFile {
+            config,
+            sources: vec![(path.into(), text.to_string())],
+        })
     }
 
     /// Applies `overlay` (e.g. a snapshot) on top: modules match by name; its values, links and
@@ -379,21 +395,10 @@ impl ConfigFile {
     fn locate(&self, needle: &str, message: String) -> ConfigError {
         for (file, text) in self.sources.iter().rev() {
             if let Some(at) = text.find(needle) {
-                let (line, column) = line_column(text, at);
-                return ConfigError {
-                    file: file.clone(),
-                    line,
-                    column,
-                    message,
-                };
+                return ConfigError::at(file, text, at, message);
             }
         }
-        ConfigError {
-            file: self.path().into(),
-            line: 0,
-            column: 0,
-            message,
-        }
+        ConfigError::in_file(self.path(), message)
     }
 
     /// An error located at the first quoted `needle` after module `module`'s name, in the
@@ -422,21 +427,30 @@ impl ConfigFile {
                     .or_else(|| rest.find(&format!("{n}:")))
             };
             let at = needle.and_then(find).map_or(start, |i| start + i);
-            let (line, column) = line_column(text, at);
-            return ConfigError {
-                file: file.clone(),
-                line,
-                column,
-                message,
-            };
+            return ConfigError::at(file, text, at, message);
         }
-        ConfigError {
-            file: self.path().into(),
-            line: 0,
-            column: 0,
-            message,
-        }
+        ConfigError::in_file(self.path(), message)
     }
+}
+
+/// Reads a text file; `what` names it in the error ("config", "context rules").
+pub fn read_text(path: &Path, what: &str) -> Result<String, ConfigError> {
+    std::fs::read_to_string(path)
+        .map_err(|e| ConfigError::in_file(path, format!("cannot read {what}: {e}")))
+}
+
+/// Parses RON text as petrel writes its files: optional fields are written plainly
+/// (`group: "nav"`, not `group: Some("nav")`). `what` names the kind of file in errors.
+pub fn parse_ron<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    text: &str,
+    what: &str,
+) -> Result<T, ConfigError> {
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    options
+        .from_str::<T>(text)
+        .map_err(|e| ConfigError::from_ron(path, &e, what))
 }
 
 /// Largest `max_restarts` accepted.

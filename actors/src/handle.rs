@@ -23,6 +23,16 @@ fn downcast<T: PropertyType>(value: AnyValue) -> Arc<T> {
         .unwrap_or_else(|_| unreachable!("property holds a {}", T::TYPE_NAME))
 }
 
+/// Reads `ep` as a typed sample.
+fn sample<T: PropertyType>(ep: &Endpoint) -> Sample<T> {
+    let slot = ep.read();
+    Sample {
+        value: downcast(slot.value),
+        version: slot.version,
+        written: slot.written,
+    }
+}
+
 /// A value read from a property, with its version and write time.
 #[derive(Debug, Clone)]
 pub struct Sample<T: ?Sized> {
@@ -66,12 +76,7 @@ impl<T: PropertyType> Input<T> {
 
     /// The current value with its version and write time.
     pub fn read(&self) -> Sample<T> {
-        let slot = self.ep.read();
-        Sample {
-            value: downcast(slot.value),
-            version: slot.version,
-            written: slot.written,
-        }
+        sample(&self.ep)
     }
 
     /// The property's `module/path`.
@@ -126,12 +131,7 @@ impl<T: PropertyType> Output<T> {
 
     /// The current value with its version and write time.
     pub fn read(&self) -> Sample<T> {
-        let slot = self.ep.read();
-        Sample {
-            value: downcast(slot.value),
-            version: slot.version,
-            written: slot.written,
-        }
+        sample(&self.ep)
     }
 
     /// The property's `module/path`.
@@ -175,12 +175,7 @@ impl<T: PropertyType> PropertyHandle<T> {
 
     /// The current value with its version and write time.
     pub fn read(&self) -> Sample<T> {
-        let slot = self.ep.read();
-        Sample {
-            value: downcast(slot.value),
-            version: slot.version,
-            written: slot.written,
-        }
+        sample(&self.ep)
     }
 
     /// Writes a value (to the link target, if linked) and wakes its watchers.

@@ -69,6 +69,23 @@ struct Slot {
     last_error: Option<String>,
 }
 
+impl Slot {
+    fn new(spec: ModuleSpec, backoff: crate::supervision::BackoffConfig) -> Self {
+        Slot {
+            spec,
+            state: SlotState::Stopped,
+            generation: 0,
+            actor: None,
+            join: None,
+            stop: Arc::default(),
+            backoff: Backoff::new(backoff),
+            failures: 0,
+            restarts: 0,
+            last_error: None,
+        }
+    }
+}
+
 pub(crate) struct SupervisorArgs {
     pub types: ModuleRegistry,
     pub agent: Arc<str>,
@@ -136,18 +153,7 @@ impl Actor for AgentSupervisor {
         let slots = args
             .modules
             .into_iter()
-            .map(|spec| Slot {
-                spec,
-                state: SlotState::Stopped,
-                generation: 0,
-                actor: None,
-                join: None,
-                stop: Arc::default(),
-                backoff: Backoff::new(config.backoff),
-                failures: 0,
-                restarts: 0,
-                last_error: None,
-            })
+            .map(|spec| Slot::new(spec, config.backoff))
             .collect();
         let seed = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
@@ -531,18 +537,7 @@ impl SupervisorState {
             ),
         };
         self.blackboard.add_module(config, module_type).await?;
-        self.slots.push(Slot {
-            spec,
-            state: SlotState::Stopped,
-            generation: 0,
-            actor: None,
-            join: None,
-            stop: Arc::default(),
-            backoff: Backoff::new(self.config.backoff),
-            failures: 0,
-            restarts: 0,
-            last_error: None,
-        });
+        self.slots.push(Slot::new(spec, self.config.backoff));
         let i = self.slots.len() - 1;
         self.event(&self.slots[i].spec.name, "added", "on request", 0);
         self.spawn(i).await;

@@ -45,6 +45,43 @@ pub async fn start(text: &str) -> Agent {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Two modules playing ping-pong through two links: `a` (bench.ping) and `b` (bench.echo).
+pub const PING_PONG: &str = r#"Agent(name: "bench", modules: [
+    (name: "a", type: "bench.ping", links: {"in/pong": "b/out/value"}),
+    (name: "b", type: "bench.echo", links: {"in/value": "a/out/ping"}),
+])"#;
+
+/// A running [`PING_PONG`] agent with the handles that drive it.
+pub struct PingPong {
+    pub agent: Agent,
+    go: petrel::actors::PropertyHandle<i64>,
+    done: petrel::actors::PropertyHandle<i64>,
+}
+
+impl PingPong {
+    pub async fn start() -> Self {
+        let agent = start(PING_PONG).await;
+        let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
+        let done = agent
+            .blackboard()
+            .handle::<i64>("a/out/done")
+            .await
+            .unwrap();
+        PingPong { agent, go, done }
+    }
+
+    /// Plays `n` round trips; returns how long they took.
+    pub async fn round_trips(&self, n: u64) -> Duration {
+        let target = *self.done.get() + 1;
+        let start = std::time::Instant::now();
+        self.go.set(n as i64);
+        while *self.done.get() < target {
+            self.done.changed().await;
+        }
+        start.elapsed()
+    }
+}
+
 /// `bench.echo`: copies `in/value` to `out/value` on change.
 pub struct Echo {
     input: Input<f64>,

@@ -22,6 +22,9 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use petrel_actors::config::{parse_ron, read_text};
+use petrel_actors::ConfigError;
+
 use serde::Deserialize;
 
 /// A whole rules file.
@@ -74,34 +77,8 @@ pub struct ContextRule {
     pub sticky: bool,
 }
 
-/// A problem in a rules file, located in it.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct RuleError {
-    /// The file.
-    pub file: PathBuf,
-    /// 1-based line (0 when unknown).
-    pub line: usize,
-    /// 1-based column (0 when unknown).
-    pub column: usize,
-    /// What is wrong and what was expected.
-    pub message: String,
-}
-
-impl std::fmt::Display for RuleError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self.line {
-            0 => write!(f, "{}: error: {}", self.file.display(), self.message),
-            _ => write!(
-                f,
-                "{}:{}:{}: error: {}",
-                self.file.display(),
-                self.line,
-                self.column,
-                self.message
-            ),
-        }
-    }
-}
+/// A problem in a rules file, located in it (the same shape as a config error).
+pub type RuleError = ConfigError;
 
 /// A parsed rules file with its text, to locate errors.
 #[derive(Debug, Clone)]
@@ -116,34 +93,18 @@ pub struct LoadedRules {
 impl LoadedRules {
     /// Reads and parses a rules file.
     pub fn load(path: &Path) -> Result<Self, Vec<RuleError>> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![RuleError {
-                file: path.into(),
-                line: 0,
-                column: 0,
-                message: format!("cannot read context rules: {e}"),
-            }]
-        })?;
+        let text = read_text(path, "context rules").map_err(|e| vec![e])?;
         Self::parse(path, &text)
     }
 
     /// Parses rules text; `path` names it in errors.
     pub fn parse(path: &Path, text: &str) -> Result<Self, Vec<RuleError>> {
-        let options = ron::Options::default()
-            .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
-        match options.from_str::<RulesFile>(text) {
-            Ok(rules) => Ok(LoadedRules {
-                rules,
-                path: path.into(),
-                text: text.to_string(),
-            }),
-            Err(e) => Err(vec![RuleError {
-                file: path.into(),
-                line: e.span.start.line,
-                column: e.span.start.col,
-                message: format!("{} (RON syntax of context rules)", e.code),
-            }]),
-        }
+        let rules = parse_ron::<RulesFile>(path, text, "context rules").map_err(|e| vec![e])?;
+        Ok(LoadedRules {
+            rules,
+            path: path.into(),
+            text: text.to_string(),
+        })
     }
 
     /// An error about context `context`, at the first quoted `needle` after its name (or at
@@ -155,14 +116,8 @@ impl LoadedRules {
         offset: Option<(u32, u32)>,
         message: String,
     ) -> RuleError {
-        let mut err = RuleError {
-            file: self.path.clone(),
-            line: 0,
-            column: 0,
-            message,
-        };
         let Some(start) = self.text.find(&format!("\"{context}\"")) else {
-            return err;
+            return RuleError::in_file(&self.path, message);
         };
         let at = needle
             .and_then(|n| {
@@ -171,8 +126,7 @@ impl LoadedRules {
                     .map(|i| start + i + 1)
             })
             .unwrap_or(start);
-        err.line = self.text[..at].matches('\n').count() + 1;
-        err.column = at - self.text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+        let mut err = RuleError::at(&self.path, &self.text, at, message);
         if let Some((line, column)) = offset {
             // Expressions are one line in practice; a multi-line one is located by its own lines.
             if line > 1 {

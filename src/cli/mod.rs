@@ -11,9 +11,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use petrel_actors::{
-    ConfigError, ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry, Registry,
-};
+use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry, Registry};
 
 /// Exit code for bad input (config errors, unknown names).
 const EXIT_BAD_INPUT: u8 = 2;
@@ -164,12 +162,7 @@ pub(crate) fn check_all(
             continue;
         };
         if let Err(rule_errors) = petrel_contexts::check_rules(Path::new(rules), &built) {
-            errors.extend(rule_errors.into_iter().map(|e| ConfigError {
-                file: e.file,
-                line: e.line,
-                column: e.column,
-                message: e.message,
-            }));
+            errors.extend(rule_errors);
         }
     }
     match errors.is_empty() {

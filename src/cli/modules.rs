@@ -4,12 +4,20 @@ use std::process::ExitCode;
 
 use petrel_actors::ModuleRegistry;
 
+/// Like `println!`, but a closed pipe (`petrel modules | head`) is not an error.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 pub(crate) fn list(registry: &ModuleRegistry) -> ExitCode {
     let width = registry.types().map(|t| t.name().len()).max().unwrap_or(0);
     for t in registry.types() {
-        println!("{:<width$}  {}", t.name(), t.description());
+        say!("{:<width$}  {}", t.name(), t.description());
     }
-    println!("\n`petrel modules describe TYPE` lists a type's properties.");
+    say!("\n`petrel modules describe TYPE` lists a type's properties.");
     ExitCode::SUCCESS
 }
 
@@ -24,7 +32,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
         eprintln!("error: unknown module type `{type_name}`{hint} (`petrel modules` lists them)");
         return ExitCode::from(2);
     };
-    println!("{}: {}\n", t.name(), t.description());
+    say!("{}: {}\n", t.name(), t.description());
     // The module's own properties first, then those the runtime adds to every module.
     let (own, runtime): (Vec<_>, Vec<_>) = t
         .properties()
@@ -54,7 +62,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
         })
         .collect();
     for row in std::iter::once(&header).chain(&rows) {
-        println!(
+        say!(
             "  {:<w0$}  {:<w1$}  {:<w2$}  {:<w3$}  {}",
             row[0],
             row[1],

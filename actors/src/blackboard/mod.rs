@@ -211,19 +211,8 @@ impl Blackboard {
         address: &str,
         value: T,
     ) -> Result<(), BlackboardError> {
-        let (key, type_info, value) = (
-            address.to_string(),
-            TypeInfo::of::<T>(),
-            Arc::new(value) as AnyValue,
-        );
-        self.call(|reply| BlackboardMsg::Set {
-            key,
-            type_info,
-            value,
-            runtime: false,
-            reply,
-        })
-        .await
+        self.set_any(address, Arc::new(value), TypeInfo::of::<T>(), false)
+            .await
     }
 
     /// Sets a runtime-owned property (`stats/...`); for the supervisor.
@@ -232,16 +221,23 @@ impl Blackboard {
         address: &str,
         value: T,
     ) -> Result<(), BlackboardError> {
-        let (key, type_info, value) = (
-            address.to_string(),
-            TypeInfo::of::<T>(),
-            Arc::new(value) as AnyValue,
-        );
+        self.set_any(address, Arc::new(value), TypeInfo::of::<T>(), true)
+            .await
+    }
+
+    async fn set_any(
+        &self,
+        address: &str,
+        value: AnyValue,
+        type_info: TypeInfo,
+        runtime: bool,
+    ) -> Result<(), BlackboardError> {
+        let key = address.to_string();
         self.call(|reply| BlackboardMsg::Set {
             key,
             type_info,
             value,
-            runtime: true,
+            runtime,
             reply,
         })
         .await
