@@ -61,3 +61,6 @@ fn count(name: &str, value: i64) -> anyhow::Result<usize> {
         anyhow::anyhow!("invalid parameter `params/{name}`: expected a count >= 0, got {value}")
     })
 }
+
+#[cfg(test)]
+mod tests;
