@@ -161,3 +161,21 @@ async fn a_missing_world_file_fails_init_naming_the_file() {
         "{error}"
     );
 }
+
+#[test]
+fn every_shipped_config_checks() {
+    let registry = petrel::modules::builtin();
+    let mut checked = 0;
+    for entry in std::fs::read_dir("configs").unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "ron") {
+            let file = ConfigFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            file.build(&registry).unwrap_or_else(|e| panic!("{e}"));
+            checked += 1;
+        }
+    }
+    assert!(
+        checked >= 4,
+        "pipeline, reactive, navigate, navigate-warehouse: {checked}"
+    );
+}

@@ -179,3 +179,25 @@ async fn bad_parameters_fail_init_naming_the_parameter() {
         );
     }
 }
+
+#[tokio::test(start_paused = true)]
+async fn time_scale_sets_the_pace_of_simulated_time_in_both_modes() {
+    for deterministic in [true, false] {
+        let agent = start(&format!(
+            r#"(name: "robot", type: "sim.world", values: {{"params/world": "{WORLD}",
+                "params/time_scale": 4.0, "params/deterministic": {deterministic}}})"#
+        ))
+        .await;
+        tokio::time::sleep(Duration::from_secs(2)).await;
+        let t = *agent
+            .blackboard()
+            .get::<f64>("robot/out/simTime")
+            .await
+            .unwrap();
+        agent.stop(DEFAULT_STOP_TIMEOUT).await;
+        assert!(
+            (t - 8.0).abs() < 0.05,
+            "deterministic {deterministic}: {t} s"
+        );
+    }
+}

@@ -81,7 +81,7 @@ impl Module for SimWorld {
             seed: ports.param("params/seed", 1, "seed of every noise source"),
             dt: ports.param("params/dt", 0.01, "simulated seconds per step"),
             time_scale: ports.param("params/time_scale", 1.0, "simulated seconds per wall second: steps run every dt / time_scale"),
-            deterministic: ports.param("params/deterministic", true, "true: every step advances exactly dt (reproducible; slower hosts slow the sim down); false: follow the wall clock"),
+            deterministic: ports.param("params/deterministic", true, "true: every step advances exactly dt (a slow host slows simulated time down); false: follow the wall clock"),
             command_timeout: ports.param("params/command_timeout_s", 0.5, "stop the robot when in/controlSpeed is not rewritten for this many simulated seconds (0 = never)"),
             radius: ports.param("params/radius", 0.2, "robot footprint radius, m"),
             drive: ports.param("params/drive", "differential".to_string(), "differential or holonomic"),
@@ -219,10 +219,14 @@ impl SimWorld {
             other => bail!("invalid parameter `params/odom_noise`: expected `[trans_std, rot_std, rot_per_trans_std]` or `[]`, got {other:?}"),
         };
         let rate = self.laser_rate.value();
+        let fov_deg = self.laser_fov_deg.value();
+        if !(fov_deg > 0.0 && fov_deg <= 360.0) {
+            bail!("invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {fov_deg}");
+        }
         let laser = self.laser_enabled.value().then(|| LaserConfig {
             mount: self.laser_mount.value(),
             rays: 0,
-            fov: self.laser_fov_deg.value().to_radians(),
+            fov: fov_deg.to_radians(),
             range_max: self.laser_range_max.value(),
             range_noise_std: self.laser_noise.value(),
             rate_hz: (rate != 0.0).then_some(rate),
@@ -252,7 +256,6 @@ impl SimWorld {
                 e,
                 &[
                     ("rays", "laser/rays"),
-                    ("fov", "laser/fov_deg (in radians)"),
                     ("range_max", "laser/range_max"),
                     ("range_noise_std", "laser/noise_std"),
                     ("rate_hz", "laser/rate_hz"),
