@@ -26,7 +26,7 @@ pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
-pub use sequencer::GoalSequencerModule;
+pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
 pub use world::SimWorld;
 
 use petrel_actors::ModuleRegistry;
