@@ -48,6 +48,7 @@ property_types! {
     LaserScan => "LaserScan",
     Image => "Image",
     OccupancyGrid => "OccupancyGrid",
+    Path2 => "Path2",
 }
 
 /// A planar pose (position and heading), an [`Isometry2`] written as `(x: 1.0, y: 2.0, theta: 0.5)`.
@@ -153,6 +154,25 @@ impl<'de> Deserialize<'de> for Point2 {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let r = PointRepr::deserialize(d)?;
         Ok(Point2::new(r.x, r.y))
+    }
+}
+
+/// A list of planar points: a planned path, a trajectory or a list of goals, written as
+/// `[(x: 1.0, y: 2.0), (x: 3.0, y: 2.0)]`. The points are shared, not copied, when cloned.
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Path2(pub Arc<[Point2]>);
+
+impl Path2 {
+    /// The points, in order.
+    pub fn points(&self) -> &[Point2] {
+        &self.0
+    }
+}
+
+impl From<Vec<Point2>> for Path2 {
+    fn from(points: Vec<Point2>) -> Self {
+        Path2(points.into())
     }
 }
 
@@ -267,6 +287,16 @@ mod tests {
         };
         let copy = img.clone();
         assert!(Arc::ptr_eq(&img.data, &copy.data));
+    }
+
+    #[test]
+    fn path_is_written_as_a_list_of_points() {
+        let p = Path2::from(vec![Point2::new(1.0, 2.0), Point2::new(3.0, -1.5)]);
+        let text = ron::to_string(&p).unwrap();
+        assert_eq!(text, "[(x:1.0,y:2.0),(x:3.0,y:-1.5)]");
+        let back: Path2 = ron::from_str("[(x: 1.0, y: 2.0), (x: 3.0, y: -1.5)]").unwrap();
+        assert_eq!(back, p);
+        assert_eq!(ron::from_str::<Path2>("[]").unwrap().points().len(), 0);
     }
 
     #[test]

@@ -1,11 +1,13 @@
 //! Built-in petrel functional modules.
 //!
 //! [`sim`] and [`nav`] are the pure, deterministic cores of the simulator and the navigation
-//! modules: plain structs with `step`-style methods, no actors and no async.
+//! modules: plain structs with `step`-style methods, no actors and no async; [`robot`] wraps
+//! them as runtime modules (`sim.world`, `nav.localizer`, ...).
 #![warn(missing_docs)]
 
 pub mod demo;
 pub mod nav;
+pub mod robot;
 pub mod sim;
 
 use petrel_actors::ModuleRegistry;
@@ -20,4 +22,5 @@ pub fn builtin() -> ModuleRegistry {
 /// Adds every built-in module type to `registry`.
 pub fn register(registry: &mut ModuleRegistry) {
     demo::register(registry);
+    robot::register(registry);
 }

@@ -1,0 +1,129 @@
+//! `nav.mapper`: pose + laser scans → occupancy grid.
+
+use std::collections::VecDeque;
+
+use petrel_actors::{
+    Context, Input, Item, LaserScan, Module, OccupancyGrid, Output, Point2, Ports, Pose2,
+    QueueReader, Schedule,
+};
+
+use super::param_error;
+use crate::nav::{Mapper, MapperParams};
+
+/// Scans kept waiting for a matching pose; beyond this the pose source is presumed silent and
+/// the oldest scan is mapped with the latest pose.
+const MAX_PENDING: usize = 4;
+
+/// `nav.mapper`: wraps [`Mapper`].
+pub struct MapperModule {
+    scans: QueueReader<LaserScan>,
+    pose: Input<Pose2>,
+    resolution: Input<f64>,
+    size: Input<Point2>,
+    origin: Input<Point2>,
+    laser_mount: Input<Pose2>,
+    map: Output<OccupancyGrid>,
+    pending: VecDeque<Item<LaserScan>>,
+    core: Option<Mapper>,
+}
+
+impl Module for MapperModule {
+    const TYPE: &'static str = "nav.mapper";
+    const DESCRIPTION: &'static str =
+        "Builds an occupancy grid from laser scans taken at the estimated pose.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        MapperModule {
+            scans: ports.queue_in("in/laserScan", "laser scans"),
+            pose: ports.input(
+                "in/pose",
+                Pose2::default(),
+                "robot pose the scans were taken from",
+            ),
+            resolution: ports.param("params/resolution", 0.1, "cell size, m"),
+            size: ports.param(
+                "params/size",
+                Point2::new(20.0, 20.0),
+                "extent of the map (x: width, y: height), m",
+            ),
+            origin: ports.param(
+                "params/origin",
+                Point2::new(0.0, 0.0),
+                "world position of the map's lower-left corner",
+            ),
+            laser_mount: ports.param(
+                "params/laser_mount",
+                Pose2::default(),
+                "laser pose in the robot frame",
+            ),
+            map: ports.output(
+                "out/map",
+                OccupancyGrid::default(),
+                "the map (written only when it changed)",
+            ),
+            pending: VecDeque::new(),
+            core: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.scans).on_change(&self.pose)
+    }
+
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let (res, size, origin) = (
+            self.resolution.value(),
+            self.size.value(),
+            self.origin.value(),
+        );
+        if !(res.is_finite() && res > 0.0) {
+            anyhow::bail!(
+                "invalid parameter `params/resolution`: expected a finite value > 0, got {res}"
+            );
+        }
+        let cells = |m: f64| (m / res).ceil();
+        let (w, h) = (cells(size.0.x), cells(size.0.y));
+        if !(w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
+            anyhow::bail!(
+                "invalid parameter `params/size`: expected a positive extent of at most {} cells, got {} x {} m at {res} m per cell",
+                crate::sim::Grid::MAX_CELLS, size.0.x, size.0.y
+            );
+        }
+        let params = MapperParams {
+            width: w as u32,
+            height: h as u32,
+            resolution: res,
+            origin: (origin.0.x, origin.0.y),
+            laser_mount: self.laser_mount.value(),
+            ..MapperParams::default()
+        };
+        let mut core = Mapper::new(params).map_err(|e| param_error(e, &[("width", "size")]))?;
+        self.map.set(core.grid());
+        self.core = Some(core);
+        Ok(())
+    }
+
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let core = self
+            .core
+            .as_mut()
+            .expect("stepping only after a successful init");
+        self.pending.extend(self.scans.drain());
+        let pose = self.pose.read();
+        let mut changed = 0;
+        // A scan is mapped with the first pose written at or after it: the pose estimated
+        // from the same simulation step, not the previous one (which would smear the map
+        // while turning).
+        while let Some(scan) = self.pending.front() {
+            if pose.written < scan.stamp && self.pending.len() <= MAX_PENDING {
+                break;
+            }
+            changed += core.update(*pose.value, &scan.value);
+            self.pending.pop_front();
+        }
+        if changed > 0 {
+            self.map.set(core.grid());
+        }
+        Ok(())
+    }
+}

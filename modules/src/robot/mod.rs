@@ -1,0 +1,66 @@
+//! Robot modules: thin runtime wrappers around the pure [`crate::sim`] and [`crate::nav`] cores.
+//!
+//! Each module reads its input properties, calls one core, and publishes the result; the
+//! modules never name each other and are wired only by config links:
+//!
+//! ```text
+//! sim.world ──odometry──▶ nav.localizer ──estimatedPose──▶ nav.mapper ──map──┐
+//!     ▲   └──laserScan──▶ nav.mapper, nav.obstacle_avoidance                 ▼
+//!     │                  nav.goal_sequencer ──targetPose──▶ nav.path_planner
+//!     └──controlSpeed── nav.obstacle_avoidance ◀──localTargetPose──┘
+//! ```
+//!
+//! `sim.recorder` watches the run and writes the summary and a PNG at the end. A real robot's
+//! driver replaces `sim.world` by publishing the same properties.
+
+mod avoidance;
+mod localizer;
+mod mapper;
+mod path_planner;
+mod recorder;
+mod sequencer;
+mod world;
+
+pub use avoidance::ObstacleAvoidance;
+pub use localizer::LocalizerModule;
+pub use mapper::MapperModule;
+pub use path_planner::PathPlanner;
+pub use recorder::Recorder;
+pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use world::SimWorld;
+
+use petrel_actors::ModuleRegistry;
+
+use crate::sim::ParamError;
+
+/// Registers every robot module type.
+pub fn register(registry: &mut ModuleRegistry) {
+    registry
+        .register::<SimWorld>()
+        .register::<LocalizerModule>()
+        .register::<MapperModule>()
+        .register::<PathPlanner>()
+        .register::<ObstacleAvoidance>()
+        .register::<GoalSequencerModule>()
+        .register::<Recorder>();
+}
+
+/// A core parameter error, renamed to the property a user sets: `renames` maps core names to
+/// property paths under `params/` where they differ.
+fn param_error(e: ParamError, renames: &[(&str, &str)]) -> anyhow::Error {
+    let name = renames
+        .iter()
+        .find(|(core, _)| *core == e.param)
+        .map_or(e.param.as_str(), |(_, prop)| prop);
+    anyhow::anyhow!("invalid parameter `params/{name}`: {}", e.message)
+}
+
+/// An `i64` parameter as a count, or an error naming it when it is negative.
+fn count(name: &str, value: i64) -> anyhow::Result<usize> {
+    usize::try_from(value).map_err(|_| {
+        anyhow::anyhow!("invalid parameter `params/{name}`: expected a count >= 0, got {value}")
+    })
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,203 @@
+//! The robot modules running as real agents on tokio's paused clock.
+
+use std::time::Duration;
+
+use petrel_actors::{status, Agent, ConfigFile, Twist2, DEFAULT_STOP_TIMEOUT};
+
+/// The cluttered world, from this crate's directory (where `cargo test` runs unit tests).
+const WORLD: &str = "../configs/worlds/cluttered.txt";
+
+async fn start(modules: &str) -> Agent {
+    let text = format!(r#"Agent(name: "r", modules: [{modules}])"#);
+    let file = ConfigFile::parse("test.ron", &text).unwrap_or_else(|e| panic!("{e}"));
+    Agent::start(&file, &crate::builtin())
+        .await
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The base driven by obstacle avoidance toward a point 2 m ahead, 5x faster than real time.
+fn reactive() -> String {
+    format!(
+        r#"(name: "robot", type: "sim.world", values: {{"params/world": "{WORLD}", "params/time_scale": 5.0}},
+            links: {{"in/controlSpeed": "avoid/out/controlSpeed"}}),
+           (name: "avoid", type: "nav.obstacle_avoidance",
+            values: {{"in/localTargetPose": (x: 2.0, y: 0.0, theta: 0.0), "params/maxSpeed": 0.5, "params/maxTurn": 1.0}},
+            links: {{"in/laserScan": "robot/out/laserScan"}})"#
+    )
+}
+
+/// Samples `robot/out/actualSpeed` and `avoid/out/controlSpeed` every 20 ms for `ms`.
+async fn sample(agent: &Agent, ms: u64) -> Vec<(Twist2, Twist2)> {
+    let bb = agent.blackboard();
+    let mut out = Vec::new();
+    for _ in 0..ms / 20 {
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        let actual = *bb.get::<Twist2>("robot/out/actualSpeed").await.unwrap();
+        let command = *bb.get::<Twist2>("avoid/out/controlSpeed").await.unwrap();
+        out.push((actual, command));
+    }
+    out
+}
+
+#[tokio::test(start_paused = true)]
+async fn lowering_max_speed_while_running_slows_the_robot_down() {
+    let agent = start(&reactive()).await;
+    let before = sample(&agent, 2000).await;
+    let fastest = before.iter().map(|(a, _)| a.v).fold(0.0, f64::max);
+    assert!(fastest > 0.45, "cruises near maxSpeed first: {fastest}");
+    // What a context rule does on rough terrain.
+    agent
+        .blackboard()
+        .set("avoid/params/maxSpeed", 0.2)
+        .await
+        .unwrap();
+    // Braking from 0.5 to 0.2 m/s at 1.5 m/s² takes 0.2 s of simulated time (40 ms here).
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let after = sample(&agent, 2000).await;
+    let sim_time = *agent
+        .blackboard()
+        .get::<f64>("robot/out/simTime")
+        .await
+        .unwrap();
+    let collisions = *agent
+        .blackboard()
+        .get::<i64>("robot/out/collisions")
+        .await
+        .unwrap();
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    for (actual, command) in &after {
+        assert!(
+            actual.v <= 0.2 + 1e-9 && command.v <= 0.2 + 1e-9,
+            "{actual:?} {command:?}"
+        );
+        assert!(
+            command.omega.abs() <= 1.0 + 1e-9,
+            "maxTurn bounds turning: {command:?}"
+        );
+    }
+    assert!(after.iter().any(|(a, _)| a.v > 0.15), "still moving");
+    assert!(sim_time > 20.0, "5x real time: {sim_time}");
+    assert_eq!(collisions, 0);
+}
+
+#[tokio::test(start_paused = true)]
+async fn bad_parameters_fail_init_naming_the_parameter() {
+    let cases = [
+        (
+            "sim.world",
+            format!(r#""params/world": "{WORLD}", "params/drive": "tracked""#),
+            "`params/drive`: expected differential or holonomic, got `tracked`",
+        ),
+        (
+            "sim.world",
+            format!(r#""params/world": "{WORLD}", "params/start": [1.0, 2.0]"#),
+            "`params/start`: expected `[x, y, heading_deg]`",
+        ),
+        (
+            "sim.world",
+            format!(r#""params/world": "{WORLD}", "params/start": [0.0, 0.0, 0.0]"#),
+            "overlaps a wall",
+        ),
+        (
+            "sim.world",
+            format!(r#""params/world": "{WORLD}", "params/max_speed": -1.0"#),
+            "`params/max_speed`: expected a finite value > 0, got -1",
+        ),
+        (
+            "sim.world",
+            r#""params/world": """#.to_string(),
+            "params/world is empty",
+        ),
+        (
+            "nav.localizer",
+            r#""params/lost_episodes": [3.0]"#.to_string(),
+            "`params/lost_episodes`: expected pairs",
+        ),
+        (
+            "nav.localizer",
+            r#""params/lost_episodes": [3.0, 1.0]"#.to_string(),
+            "`params/lost_episodes`: expected [start, end)",
+        ),
+        (
+            "nav.mapper",
+            r#""params/resolution": 0.0"#.to_string(),
+            "`params/resolution`",
+        ),
+        (
+            "nav.mapper",
+            r#""params/size": (x: 0.0, y: 5.0)"#.to_string(),
+            "`params/size`",
+        ),
+        (
+            "nav.path_planner",
+            r#""params/occupied_threshold": 300"#.to_string(),
+            "`params/occupied_threshold`: expected 1..=100, got 300",
+        ),
+        (
+            "nav.path_planner",
+            r#""params/lookahead": 0.0"#.to_string(),
+            "`params/lookahead`",
+        ),
+        (
+            "nav.obstacle_avoidance",
+            r#""params/maxSpeed": -0.5"#.to_string(),
+            "`params/maxSpeed`: expected a finite value > 0, got -0.5",
+        ),
+        (
+            "nav.goal_sequencer",
+            r#""params/goals": []"#.to_string(),
+            "params/goals is empty",
+        ),
+        (
+            "nav.goal_sequencer",
+            r#""params/goals": [(x: 1.0, y: 1.0)], "params/timeout_s": 0.0"#.to_string(),
+            "`params/timeout_s`",
+        ),
+        (
+            "sim.recorder",
+            r#""params/png": "/proc/no/such/dir/x.png""#.to_string(),
+            "params/png is `/proc/no/such/dir/x.png`",
+        ),
+    ];
+    let modules: Vec<String> = cases
+        .iter()
+        .enumerate()
+        .map(|(i, (ty, values, _))| {
+            format!(r#"(name: "m{i}", type: "{ty}", values: {{{values}}})"#)
+        })
+        .collect();
+    let agent = start(&modules.join(",\n")).await;
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    for (i, (ty, _, expected)) in cases.iter().enumerate() {
+        let report = summary.module(&format!("m{i}")).unwrap();
+        let error = report.last_error.clone().unwrap_or_default();
+        assert_eq!(report.status, status::FAILED, "{ty} case {i}");
+        assert!(
+            error.contains("init failed") && error.contains(expected),
+            "{ty} case {i}: {error}"
+        );
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn time_scale_sets_the_pace_of_simulated_time_in_both_modes() {
+    for deterministic in [true, false] {
+        let agent = start(&format!(
+            r#"(name: "robot", type: "sim.world", values: {{"params/world": "{WORLD}",
+                "params/time_scale": 4.0, "params/deterministic": {deterministic}}})"#
+        ))
+        .await;
+        tokio::time::sleep(Duration::from_secs(2)).await;
+        let t = *agent
+            .blackboard()
+            .get::<f64>("robot/out/simTime")
+            .await
+            .unwrap();
+        agent.stop(DEFAULT_STOP_TIMEOUT).await;
+        assert!(
+            (t - 8.0).abs() < 0.05,
+            "deterministic {deterministic}: {t} s"
+        );
+    }
+}

@@ -1,0 +1,270 @@
+//! `sim.world`: the simulator as a module, standing where a real robot's driver would.
+
+use std::path::Path;
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use petrel_actors::types::Path2;
+use petrel_actors::{
+    Context, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter, Schedule, Twist2,
+};
+use tokio::time::Instant;
+
+use super::{count, param_error};
+use crate::sim::{
+    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
+};
+
+/// Simulation steps run at most per wake-up in real-time mode: a host that falls further
+/// behind slows simulated time down instead of freezing in a catch-up burst.
+const MAX_CATCH_UP_STEPS: u32 = 10;
+
+/// `sim.world`: loads a world file and simulates one robot in it.
+///
+/// One robot per instance: a second robot is a second `sim.world` instance (they do not see
+/// each other; the pure [`World`] supports that, the module does not yet).
+pub struct SimWorld {
+    world_file: Input<String>,
+    start: Input<Vec<f64>>,
+    seed: Input<i64>,
+    dt: Input<f64>,
+    time_scale: Input<f64>,
+    deterministic: Input<bool>,
+    command_timeout: Input<f64>,
+    radius: Input<f64>,
+    drive: Input<String>,
+    max_speed: Input<f64>,
+    max_lateral_speed: Input<f64>,
+    max_turn: Input<f64>,
+    max_accel: Input<f64>,
+    max_turn_accel: Input<f64>,
+    odom_noise: Input<Vec<f64>>,
+    laser_enabled: Input<bool>,
+    laser_rays: Input<i64>,
+    laser_fov_deg: Input<f64>,
+    laser_range_max: Input<f64>,
+    laser_noise: Input<f64>,
+    laser_rate: Input<f64>,
+    laser_mount: Input<Pose2>,
+    command: Input<Twist2>,
+    odometry: QueueWriter<Pose2>,
+    scans: QueueWriter<LaserScan>,
+    pose: Output<Pose2>,
+    speed: Output<Twist2>,
+    collisions: Output<i64>,
+    sim_time: Output<f64>,
+    world_goals: Output<Path2>,
+    sim: Option<Sim>,
+}
+
+/// What exists only after a successful init.
+struct Sim {
+    world: World,
+    id: RobotId,
+    dt: f64,
+    /// Real-time mode: simulated seconds owed to the wall clock since the last step.
+    owed: f64,
+    last_wake: Instant,
+    /// Version of `in/controlSpeed` last seen, and the simulated time it was first seen.
+    command_seen: (u64, f64),
+}
+
+impl Module for SimWorld {
+    const TYPE: &'static str = "sim.world";
+    const DESCRIPTION: &'static str =
+        "Simulates one robot (kinematics, odometry, laser, collisions) in a world file.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        SimWorld {
+            world_file: ports.param("params/world", String::new(), "world file: `.txt` ASCII grid or `.yaml` map_server map (relative to the working directory)"),
+            start: ports.param("params/start", Vec::new(), "start pose `[x, y, heading_deg]`; empty = the world file's `R` marker"),
+            seed: ports.param("params/seed", 1, "seed of every noise source"),
+            dt: ports.param("params/dt", 0.01, "simulated seconds per step"),
+            time_scale: ports.param("params/time_scale", 1.0, "simulated seconds per wall second: steps run every dt / time_scale"),
+            deterministic: ports.param("params/deterministic", true, "true: every step advances exactly dt (a slow host slows simulated time down); false: follow the wall clock"),
+            command_timeout: ports.param("params/command_timeout_s", 0.5, "stop the robot when in/controlSpeed is not rewritten for this many simulated seconds (0 = never)"),
+            radius: ports.param("params/radius", 0.2, "robot footprint radius, m"),
+            drive: ports.param("params/drive", "differential".to_string(), "differential or holonomic"),
+            max_speed: ports.param("params/max_speed", 0.7, "largest |forward speed|, m/s"),
+            max_lateral_speed: ports.param("params/max_lateral_speed", 0.5, "largest |sideways speed| (holonomic), m/s"),
+            max_turn: ports.param("params/max_turn", 2.0, "largest |turn rate|, rad/s"),
+            max_accel: ports.param("params/max_accel", 1.5, "largest linear acceleration, m/s²"),
+            max_turn_accel: ports.param("params/max_turn_accel", 4.0, "largest turn acceleration, rad/s²"),
+            odom_noise: ports.param("params/odom_noise", Vec::new(), "odometry noise `[trans_std, rot_std, rot_per_trans_std]`; empty = exact odometry"),
+            laser_enabled: ports.param("params/laser/enabled", true, "whether the robot has a laser"),
+            laser_rays: ports.param("params/laser/rays", 181, "rays per scan"),
+            laser_fov_deg: ports.param("params/laser/fov_deg", 180.0, "field of view, degrees"),
+            laser_range_max: ports.param("params/laser/range_max", 8.0, "maximum range, m"),
+            laser_noise: ports.param("params/laser/noise_std", 0.0, "Gaussian range noise, m"),
+            laser_rate: ports.param("params/laser/rate_hz", 20.0, "scans per simulated second (0 = every step)"),
+            laser_mount: ports.param("params/laser/mount", Pose2::default(), "laser pose in the robot frame"),
+            command: ports.input("in/controlSpeed", Twist2::default(), "velocity command (clamped to the limits)"),
+            odometry: ports.queue_out("out/odometry", 256, "odometric pose at every step (item stamp = push time; simulated time is out/simTime)"),
+            scans: ports.queue_out("out/laserScan", 16, "laser scans, in the laser frame"),
+            pose: ports.output("out/pose", Pose2::default(), "ground-truth pose (for evaluation: a real robot has none)"),
+            speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
+            collisions: ports.output("out/collisions", 0, "collision events so far"),
+            sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
+            world_goals: ports.output("out/worldGoals", Path2::default(), "goal markers `1`..`9` of an ASCII world file, in order"),
+            sim: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        let period = self.sim.as_ref().map_or(0.01, |s| s.dt) / self.time_scale.value();
+        Schedule::every(Duration::from_secs_f64(period))
+    }
+
+    async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let file = self.world_file.get();
+        if file.is_empty() {
+            bail!("params/world is empty; expected the path of a world file (`.txt` or `.yaml`)");
+        }
+        let map = load_world(Path::new(file.as_str()))?;
+        let start = match self.start.get().as_slice() {
+            [] => *map.starts.first().with_context(|| {
+                format!("{file} has no `R` start marker; set params/start to `[x, y, heading_deg]`")
+            })?,
+            &[x, y, deg] => Pose2::new(x, y, deg.to_radians()),
+            other => bail!("invalid parameter `params/start`: expected `[x, y, heading_deg]` or `[]`, got {other:?}"),
+        };
+        let dt = self.dt.value();
+        let scale = self.time_scale.value();
+        for (name, v) in [("dt", dt), ("time_scale", scale)] {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("invalid parameter `params/{name}`: expected a finite value > 0, got {v}");
+            }
+        }
+        let timeout = self.command_timeout.value();
+        if !(timeout.is_finite() && timeout >= 0.0) {
+            bail!("invalid parameter `params/command_timeout_s`: expected a finite value >= 0, got {timeout}");
+        }
+        let config = self.robot_config()?;
+        let seed = self.seed.value() as u64;
+        let mut world = World::new(map.grid, seed);
+        let id = world
+            .add_robot(config, start)
+            .map_err(|e| param_error(e, &[("start", "start")]))?;
+        self.world_goals.set(
+            map.goals
+                .iter()
+                .map(|g| g.position())
+                .collect::<Vec<_>>()
+                .into(),
+        );
+        self.pose.set(start);
+        tracing::info!(module = ctx.module(), world = %file, ?start, "world loaded");
+        self.sim = Some(Sim {
+            world,
+            id,
+            dt,
+            owed: 0.0,
+            last_wake: ctx.now(),
+            command_seen: (0, 0.0),
+        });
+        Ok(())
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let sim = self
+            .sim
+            .as_mut()
+            .expect("stepping only after a successful init");
+        let steps = if self.deterministic.value() {
+            1
+        } else {
+            let elapsed = ctx.now().duration_since(sim.last_wake).as_secs_f64();
+            sim.owed += elapsed * self.time_scale.value();
+            let n = (sim.owed / sim.dt).floor().min(MAX_CATCH_UP_STEPS as f64) as u32;
+            sim.owed = (sim.owed - n as f64 * sim.dt).min(sim.dt);
+            n
+        };
+        sim.last_wake = ctx.now();
+        // A silent controller must not leave the robot driving: stop it, as real bases do.
+        let command = self.command.read();
+        if command.version != sim.command_seen.0 {
+            sim.command_seen = (command.version, sim.world.time());
+        }
+        let timeout = self.command_timeout.value();
+        let stale = timeout > 0.0 && sim.world.time() - sim.command_seen.1 > timeout;
+        let cmd = if stale { Twist2::default() } else { *command };
+        sim.world.set_command(sim.id, cmd)?;
+        for _ in 0..steps {
+            let out = &sim.world.step(sim.dt)?[sim.id];
+            // The scan goes first: a consumer pairing a scan with the pose estimated from the
+            // odometry of the same step then sees the scan before that pose exists.
+            if let Some(scan) = &out.scan {
+                self.scans.push(scan.clone());
+            }
+            self.odometry.push(out.odometry.pose);
+            self.pose.set(out.ground_truth);
+            self.speed.set(out.speed);
+            self.collisions.set(out.collisions as i64);
+            self.sim_time.set(out.odometry.stamp);
+        }
+        Ok(())
+    }
+}
+
+impl SimWorld {
+    fn robot_config(&self) -> anyhow::Result<RobotConfig> {
+        let drive = match self.drive.get().as_str() {
+            "differential" => DriveKind::Differential,
+            "holonomic" => DriveKind::Holonomic,
+            other => bail!("invalid parameter `params/drive`: expected differential or holonomic, got `{other}`"),
+        };
+        let odom_noise = match self.odom_noise.get().as_slice() {
+            [] => None,
+            &[trans_std, rot_std, rot_per_trans_std] => Some(OdomNoise { trans_std, rot_std, rot_per_trans_std }),
+            other => bail!("invalid parameter `params/odom_noise`: expected `[trans_std, rot_std, rot_per_trans_std]` or `[]`, got {other:?}"),
+        };
+        let rate = self.laser_rate.value();
+        let fov_deg = self.laser_fov_deg.value();
+        if !(fov_deg > 0.0 && fov_deg <= 360.0) {
+            bail!("invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {fov_deg}");
+        }
+        let laser = self.laser_enabled.value().then(|| LaserConfig {
+            mount: self.laser_mount.value(),
+            rays: 0,
+            fov: fov_deg.to_radians(),
+            range_max: self.laser_range_max.value(),
+            range_noise_std: self.laser_noise.value(),
+            rate_hz: (rate != 0.0).then_some(rate),
+        });
+        let laser = match laser {
+            Some(l) => Some(LaserConfig {
+                rays: count("laser/rays", self.laser_rays.value())?,
+                ..l
+            }),
+            None => None,
+        };
+        let config = RobotConfig {
+            radius: self.radius.value(),
+            drive,
+            limits: Limits {
+                max_speed: self.max_speed.value(),
+                max_lateral_speed: self.max_lateral_speed.value(),
+                max_turn: self.max_turn.value(),
+                max_accel: self.max_accel.value(),
+                max_turn_accel: self.max_turn_accel.value(),
+            },
+            odom_noise,
+            laser,
+        };
+        config.validate().map_err(|e| {
+            param_error(
+                e,
+                &[
+                    ("rays", "laser/rays"),
+                    ("range_max", "laser/range_max"),
+                    ("range_noise_std", "laser/noise_std"),
+                    ("rate_hz", "laser/rate_hz"),
+                    ("trans_std", "odom_noise[0]"),
+                    ("rot_std", "odom_noise[1]"),
+                    ("rot_per_trans_std", "odom_noise[2]"),
+                ],
+            )
+        })?;
+        Ok(config)
+    }
+}

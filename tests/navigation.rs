@@ -1,0 +1,181 @@
+//! Whole-system navigation tests: the shipped RON configs run as real agents (simulator,
+//! localizer, mapper, planner, avoidance, goal sequencer, recorder) on tokio's paused clock,
+//! so simulated time runs as fast as the CPU allows and nothing sleeps on the wall clock.
+
+use std::path::Path;
+use std::time::Duration;
+
+use petrel::actors::{status, Agent, AgentExit, ConfigFile, DEFAULT_STOP_TIMEOUT};
+
+/// Virtual (paused-clock) time after which a test gives up waiting for the agent to finish.
+const GUARD: Duration = Duration::from_secs(120);
+
+/// Loads `configs/<name>` with `overlay` (RON module list) laid on top.
+fn config(name: &str, overlay: &str) -> ConfigFile {
+    let mut file = ConfigFile::load(Path::new("configs").join(name))
+        .unwrap_or_else(|e| panic!("{name} should load:\n{e}"));
+    let overlay = ConfigFile::parse(
+        "overlay.ron",
+        &format!(r#"Agent(name: "robot1", modules: [{overlay}])"#),
+    )
+    .unwrap_or_else(|e| panic!("overlay should parse:\n{e}"));
+    file.overlay(overlay);
+    file
+}
+
+async fn start(file: &ConfigFile) -> Agent {
+    Agent::start(file, &petrel::modules::builtin())
+        .await
+        .unwrap_or_else(|e| panic!("agent should start:\n{e}"))
+}
+
+async fn finished(agent: &Agent) -> AgentExit {
+    tokio::time::timeout(GUARD, agent.finished())
+        .await
+        .expect("the mission should end by itself")
+}
+
+/// Runs a navigation config to its end and checks every goal was reached without collision.
+async fn navigate(name: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("map.png");
+    let file = config(
+        name,
+        &format!(
+            r#"(name: "recorder", type: "sim.recorder", values: {{"params/png": {:?}}})"#,
+            png.display().to_string()
+        ),
+    );
+    let agent = start(&file).await;
+    let exit = finished(&agent).await;
+    let bb = agent.blackboard().clone();
+    let get_i = |p: &'static str| {
+        let bb = bb.clone();
+        async move { *bb.get::<i64>(p).await.unwrap() }
+    };
+    let (reached, collisions) = (
+        get_i("goals/out/reached").await,
+        get_i("robot/out/collisions").await,
+    );
+    let sim_time = *bb.get::<f64>("robot/out/simTime").await.unwrap();
+    let distance = *bb.get::<f64>("recorder/out/distance").await.unwrap();
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    println!("{name}: {exit:?}, {reached} goals, {distance:.1} m, {sim_time:.1} s sim, {collisions} collisions");
+    assert_eq!(exit.code, 0, "{name}: {}", exit.reason);
+    assert!(
+        exit.reason.contains("all 3 goals reached"),
+        "{}",
+        exit.reason
+    );
+    assert_eq!(reached, 3, "{name}");
+    assert_eq!(collisions, 0, "{name}");
+    assert!(
+        distance > 20.0 && sim_time < 400.0,
+        "{name}: {distance} m in {sim_time} s"
+    );
+    assert_eq!(summary.failures(), 0, "{name}:\n{summary}");
+    let bytes = std::fs::read(&png).expect("the recorder wrote the PNG at cleanup");
+    assert!(bytes.starts_with(b"\x89PNG"), "{name}: not a PNG");
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_robot_visits_three_goals_in_the_cluttered_world() {
+    navigate("navigate.ron").await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_robot_visits_three_goals_in_the_warehouse() {
+    navigate("navigate-warehouse.ron").await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_mission_that_runs_out_of_time_fails_with_a_non_zero_code() {
+    let file = config(
+        "navigate.ron",
+        r#"(name: "goals", type: "nav.goal_sequencer", values: {"params/timeout_s": 5.0}),
+           (name: "recorder", type: "sim.recorder", values: {"params/png": ""})"#,
+    );
+    let agent = start(&file).await;
+    let exit = finished(&agent).await;
+    let sim_time = *agent
+        .blackboard()
+        .get::<f64>("robot/out/simTime")
+        .await
+        .unwrap();
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(exit.code, 1, "{}", exit.reason);
+    assert!(
+        exit.reason
+            .contains("timeout after 5.0 s; 0 of 3 goals reached"),
+        "{}",
+        exit.reason
+    );
+    assert!(
+        (5.0..5.2).contains(&sim_time),
+        "stopped right after the timeout: {sim_time}"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_reactive_layer_wanders_without_collisions() {
+    let file = config(
+        "reactive.ron",
+        r#"(name: "recorder", type: "sim.recorder", values: {"params/png": ""})"#,
+    );
+    let agent = start(&file).await;
+    // 5x real time: 6 s of (virtual) wall time are 30 s of simulated time.
+    tokio::time::sleep(Duration::from_secs(6)).await;
+    let bb = agent.blackboard().clone();
+    let sim_time = *bb.get::<f64>("robot/out/simTime").await.unwrap();
+    let distance = *bb.get::<f64>("recorder/out/distance").await.unwrap();
+    let collisions = *bb.get::<i64>("robot/out/collisions").await.unwrap();
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert!((29.0..=30.1).contains(&sim_time), "{sim_time}");
+    assert!(distance > 8.0, "it moves: {distance} m");
+    assert_eq!(collisions, 0);
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_missing_world_file_fails_init_naming_the_file() {
+    let file = ConfigFile::parse(
+        "bad.ron",
+        r#"Agent(name: "robot1", modules: [
+            (name: "robot", type: "sim.world", values: {"params/world": "configs/worlds/nowhere.txt"}),
+        ])"#,
+    )
+    .unwrap();
+    let agent = start(&file).await;
+    let bb = agent.blackboard().clone();
+    for _ in 0..100 {
+        if *bb.get::<String>("robot/stats/status").await.unwrap() == status::FAILED {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    let report = summary.module("robot").unwrap();
+    let error = report.last_error.clone().unwrap_or_default();
+    assert_eq!(report.status, status::FAILED);
+    assert!(
+        error.contains("init failed: configs/worlds/nowhere.txt: cannot read"),
+        "{error}"
+    );
+}
+
+#[test]
+fn every_shipped_config_checks() {
+    let registry = petrel::modules::builtin();
+    let mut checked = 0;
+    for entry in std::fs::read_dir("configs").unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "ron") {
+            let file = ConfigFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            file.build(&registry).unwrap_or_else(|e| panic!("{e}"));
+            checked += 1;
+        }
+    }
+    assert!(
+        checked >= 4,
+        "pipeline, reactive, navigate, navigate-warehouse: {checked}"
+    );
+}
