@@ -2,17 +2,21 @@
 //! changes → the module reading it is woken and answers; against `property_wake`'s petrel round
 //! trip in the same run, and with 1 000 rules of which one reads the changed property
 //! (`rules_1000`) against a single rule (`rules_1`).
+//!
+//! Like `property_wake`, it is driven from inside the runtime: module `a` (bench.ping) flips
+//! `a/out/ping` between 0 and 1; the rule follows it into `target/in/value`; `target` (an echo)
+//! answers into `a/in/pong`. One round trip = three wake-ups (a → contexts → target → a).
 
 mod common;
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 
 /// Rules: `react` reads the trigger; `others` more rules read a property that never changes.
 fn rules(others: usize) -> String {
     let mut rules = String::from(
-        r#"Contexts(contexts: [(name: "react", when: "trigger/in/value > 0.5", set: {"target/in/value": "1.0"}),"#,
+        r#"Contexts(contexts: [(name: "react", when: "a/out/ping > 0.5", set: {"target/in/value": "1.0"}),"#,
     );
     for i in 0..others {
         rules.push_str(&format!(
@@ -26,7 +30,7 @@ fn rules(others: usize) -> String {
 fn config(rules_path: &std::path::Path) -> String {
     format!(
         r#"Agent(name: "bench", modules: [
-            (name: "trigger", type: "bench.idle"),
+            (name: "a", type: "bench.ping", values: {{"params/alternate": true}}, links: {{"in/pong": "target/out/value"}}),
             (name: "idle", type: "bench.idle"),
             (name: "target", type: "bench.echo"),
             (name: "contexts", type: "context.manager", values: {{"params/rules": {:?}, "params/tick_ms": 100000}}),
@@ -43,39 +47,11 @@ fn bench(c: &mut Criterion) {
     for (name, others) in [("rules_1", 0), ("rules_1000", 999)] {
         let path = dir.join(format!("{name}.ron"));
         std::fs::write(&path, rules(others)).unwrap();
-        let (agent, trigger, answer) = rt.block_on(async {
-            let agent = common::start(&config(&path)).await;
-            let trigger = agent
-                .blackboard()
-                .handle::<f64>("trigger/in/value")
-                .await
-                .unwrap();
-            let answer = agent
-                .blackboard()
-                .handle::<f64>("target/out/value")
-                .await
-                .unwrap();
-            (agent, trigger, answer)
-        });
+        let rig = rt.block_on(common::PingPong::start_with(&config(&path)));
         group.bench_function(name, |b| {
-            b.iter_custom(|iters| {
-                rt.block_on(async {
-                    let mut total = Duration::ZERO;
-                    for _ in 0..iters {
-                        // Alternate: the context activates (target 1.0) or ends (restored to 0.0).
-                        let want = if *answer.get() == 1.0 { 0.0 } else { 1.0 };
-                        let start = Instant::now();
-                        trigger.set(want);
-                        while *answer.get() != want {
-                            answer.changed().await;
-                        }
-                        total += start.elapsed();
-                    }
-                    total
-                })
-            })
+            b.iter_custom(|iters| rt.block_on(rig.round_trips(iters)))
         });
-        rt.block_on(agent.stop(Duration::from_secs(1)));
+        rt.block_on(rig.agent.stop(Duration::from_secs(1)));
     }
     let ping_pong = rt.block_on(common::PingPong::start());
     group.bench_function("property_wake_baseline", |b| {

@@ -60,7 +60,12 @@ pub struct PingPong {
 
 impl PingPong {
     pub async fn start() -> Self {
-        let agent = start(PING_PONG).await;
+        Self::start_with(PING_PONG).await
+    }
+
+    /// Starts an agent with a `bench.ping` module named `a`.
+    pub async fn start_with(config: &str) -> Self {
+        let agent = start(config).await;
         let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
         let done = agent
             .blackboard()
@@ -107,8 +112,10 @@ impl Module for Echo {
 }
 
 /// `bench.ping`: when `in/go` is set to N, plays N round trips: writes `out/ping`, waits for
-/// `in/pong` to answer, and so on; then increments `out/done`.
+/// `in/pong` to answer, and so on; then increments `out/done`. With `params/alternate`, the
+/// ping alternates between 0 and 1 instead of counting up.
 pub struct Ping {
+    alternate: Input<bool>,
     go: Input<i64>,
     pong: Input<f64>,
     ping: Output<f64>,
@@ -122,6 +129,11 @@ impl Module for Ping {
     const DESCRIPTION: &'static str = "Plays in/go round trips through out/ping and in/pong.";
     fn declare(ports: &mut Ports) -> Self {
         Ping {
+            alternate: ports.param(
+                "params/alternate",
+                false,
+                "ping 0, 1, 0, ... instead of 1, 2, 3, ...",
+            ),
             go: ports.input("in/go", 0, "rounds to play"),
             pong: ports.input("in/pong", 0.0, "the answer"),
             ping: ports.output("out/ping", 0.0, "the question"),
@@ -147,7 +159,12 @@ impl Module for Ping {
         } else {
             return Ok(());
         }
-        self.ping.set(self.ping.value() + 1.0);
+        let next = if self.alternate.value() {
+            1.0 - self.ping.value()
+        } else {
+            self.ping.value() + 1.0
+        };
+        self.ping.set(next);
         Ok(())
     }
 }
