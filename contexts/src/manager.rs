@@ -279,8 +279,15 @@ impl ContextManager {
                     .map(|e| e.active().join(", "))
                     .unwrap_or_default();
                 let now_active = active.split(", ").any(|a| a == context);
-                let trigger = self.trigger_values();
-                tracing::info!(%context, active = now_active, %trigger, "context {}", if now_active { "activated" } else { "deactivated" });
+                if tracing::enabled!(tracing::Level::INFO) {
+                    let trigger = self.trigger_values();
+                    let what = if now_active {
+                        "activated"
+                    } else {
+                        "deactivated"
+                    };
+                    tracing::info!(%context, active = now_active, %trigger, "context {what}");
+                }
                 let time_s = self
                     .started
                     .map_or(0.0, |t| ctx.now().duration_since(t).as_secs_f64());
@@ -304,12 +311,14 @@ impl ContextManager {
                     .entry(target.clone())
                     .or_insert_with(|| old.clone());
                 let new = to_property(&value, info).map_err(|e| anyhow!("{target}: {e}"))?;
-                let (old, shown) = (info.short(&old), info.short(&new));
                 // Continuous expressions update often: the first change is news, the rest detail.
-                if first {
-                    tracing::info!(%context, %target, %old, new = %shown, "context sets");
-                } else {
-                    tracing::debug!(%context, %target, %old, new = %shown, "context updates");
+                // Values are formatted only when someone listens.
+                if first && tracing::enabled!(tracing::Level::INFO) {
+                    let (old, new) = (info.short(&old), info.short(&new));
+                    tracing::info!(%context, %target, %old, %new, "context sets");
+                } else if tracing::enabled!(tracing::Level::DEBUG) {
+                    let (old, new) = (info.short(&old), info.short(&new));
+                    tracing::debug!(%context, %target, %old, %new, "context updates");
                 }
                 handle.set(new)?;
             }

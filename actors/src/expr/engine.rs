@@ -45,6 +45,9 @@ pub struct ExprSet {
     readers: Vec<Vec<usize>>,
     exprs: Vec<Entry>,
     held: Vec<Option<Instant>>,
+    /// Expressions to evaluate next time (dirty ones and time-dependent ones), so that an
+    /// evaluation costs what changed, not the size of the set.
+    due: Vec<usize>,
 }
 
 struct Resolver<'a> {
@@ -151,6 +154,7 @@ impl ExprSet {
             self.readers[d].push(id);
         }
         let timed = timed || uses_age(&node);
+        self.due.push(id);
         self.exprs.push(Entry {
             node,
             ty,
@@ -184,17 +188,22 @@ impl ExprSet {
             written,
         };
         for &e in &self.readers[prop.0] {
-            self.exprs[e].dirty = true;
+            let entry = &mut self.exprs[e];
+            if !entry.dirty && !entry.timed {
+                self.due.push(e);
+            }
+            entry.dirty = true;
         }
     }
 
     /// Re-evaluates the expressions that need it at time `now`; returns those whose value changed.
     pub fn evaluate(&mut self, now: Instant) -> Vec<ExprId> {
         let mut changed = Vec::new();
-        for (i, e) in self.exprs.iter_mut().enumerate() {
-            if !(e.dirty || e.timed) {
-                continue;
-            }
+        let mut due = std::mem::take(&mut self.due);
+        // Evaluate in insertion order, as a full scan would.
+        due.sort_unstable();
+        for &i in &due {
+            let e = &mut self.exprs[i];
             let mut ev = Eval {
                 props: &self.props,
                 held: &mut self.held,
@@ -210,6 +219,9 @@ impl ExprSet {
                 changed.push(ExprId(i));
             }
         }
+        // Time-dependent expressions stay due.
+        due.retain(|&i| self.exprs[i].timed);
+        self.due = due;
         changed
     }
 
