@@ -4,6 +4,7 @@
 //! they apply one at a time in a single place. Values do not go through the actor: modules hold
 //! direct handles to the cells (see [`crate::handle`]).
 
+mod error;
 mod registry;
 
 use std::collections::HashMap;
@@ -19,7 +20,8 @@ use crate::ports::Handle;
 use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
 
-pub use registry::{BlackboardError, Registry};
+pub use error::BlackboardError;
+pub use registry::Registry;
 
 /// What a (re)starting module instance needs from the blackboard.
 pub(crate) struct Binding {

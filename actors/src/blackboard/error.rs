@@ -1,0 +1,102 @@
+//! Why the blackboard refused a structure change.
+
+use crate::ports::PropertyKind;
+
+/// Why a structure change (link, value, declaration) was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum BlackboardError {
+    /// No module of that name in the agent.
+    #[error("no module `{module}` in agent `{agent}` (modules: {known})")]
+    UnknownModule {
+        /// The name asked for.
+        module: String,
+        /// The agent.
+        agent: String,
+        /// The modules it has.
+        known: String,
+    },
+    /// The module has no such property.
+    #[error("module `{module}` has no property `{path}`; it has: {known}")]
+    UnknownProperty {
+        /// The module.
+        module: String,
+        /// The path asked for.
+        path: String,
+        /// The module's properties.
+        known: String,
+    },
+    /// The address does not parse or names another agent.
+    #[error("{0}")]
+    BadAddress(String),
+    /// Only inputs, parameters and queue inputs can be linked.
+    #[error(
+        "cannot link `{key}` ({kind}): only inputs, parameters and queue inputs can be linked"
+    )]
+    NotLinkable {
+        /// The property.
+        key: String,
+        /// Its kind.
+        kind: PropertyKind,
+    },
+    /// Queue inputs link to queues, value properties to values.
+    #[error("cannot link `{from}` ({from_kind}) to `{to}` ({to_kind}): a queue input links to a queue, a value to a value")]
+    KindMismatch {
+        /// Link source.
+        from: String,
+        /// Its kind.
+        from_kind: PropertyKind,
+        /// Link target.
+        to: String,
+        /// Its kind.
+        to_kind: PropertyKind,
+    },
+    /// Linked properties must have the same type.
+    #[error("cannot link `{from}` ({from_type}) to `{to}` ({to_type}): the types differ")]
+    TypeMismatch {
+        /// Link source.
+        from: String,
+        /// Its type.
+        from_type: &'static str,
+        /// Link target.
+        to: String,
+        /// Its type.
+        to_type: &'static str,
+    },
+    /// The link would close a cycle.
+    #[error("link cycle: {}", .0.join(" -> "))]
+    Cycle(Vec<String>),
+    /// A value does not fit the property.
+    #[error("wrong value for `{key}`: expected {expected}: {reason}")]
+    BadValue {
+        /// The property.
+        key: String,
+        /// The type it has.
+        expected: &'static str,
+        /// What the conversion said.
+        reason: String,
+    },
+    /// The property cannot be set (stats, queues).
+    #[error(
+        "`{key}` ({kind}) cannot be set: only inputs, parameters, outputs, state and `enabled` can"
+    )]
+    NotSettable {
+        /// The property.
+        key: String,
+        /// Its kind.
+        kind: PropertyKind,
+    },
+    /// Other properties link into the module being removed.
+    #[error("module `{module}` cannot be removed: linked from {}", .links.join(", "))]
+    InUse {
+        /// The module.
+        module: String,
+        /// The properties that link into it.
+        links: Vec<String>,
+    },
+    /// A module declared its properties wrongly.
+    #[error("{0}")]
+    Declaration(String),
+    /// The blackboard actor is gone.
+    #[error("the blackboard of this agent has stopped")]
+    Stopped,
+}

@@ -1,0 +1,92 @@
+//! Runtime control of modules through the supervisor: stop, start, restart, add, remove.
+
+use std::time::Duration;
+
+use super::{ControlRequest, ModuleSpec, Slot, SlotState, SupervisorState};
+use crate::config::ModuleConfig;
+
+impl SupervisorState {
+    pub(super) async fn control_request(&mut self, request: ControlRequest) -> Result<(), String> {
+        if self.stopping {
+            return Err("the agent is stopping".into());
+        }
+        tracing::info!(agent = %self.agent, ?request, "control request");
+        match request {
+            ControlRequest::Stop(name) => {
+                let i = self.find(&name)?;
+                self.stop_slot(i, None).await;
+                self.event(&name, "stopped", "on request", self.slots[i].restarts);
+            }
+            ControlRequest::Start(name) => {
+                let i = self.find(&name)?;
+                if self.slots[i].actor.is_some() {
+                    return Err(format!("module `{name}` is already running"));
+                }
+                self.slots[i].generation += 1;
+                self.spawn(i).await;
+            }
+            ControlRequest::Restart(name) => {
+                let i = self.find(&name)?;
+                self.stop_slot(i, None).await;
+                self.slots[i].restarts += 1;
+                let restarts = self.slots[i].restarts;
+                self.set_stat(i, "stats/restarts", restarts as i64).await;
+                self.event(&name, "restarted", "on request", restarts);
+                self.spawn(i).await;
+            }
+            ControlRequest::Add(config) => self.add(*config).await?,
+            ControlRequest::Remove(name) => {
+                let i = self.find(&name)?;
+                self.blackboard
+                    .remove_module(&name)
+                    .await
+                    .map_err(|e| e.to_string())?;
+                self.stop_slot(i, None).await;
+                self.slots[i].state = SlotState::Removed;
+                self.event(&name, "removed", "on request", self.slots[i].restarts);
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds a module instance while running: declared in the blackboard, then started.
+    async fn add(&mut self, config: ModuleConfig) -> Result<(), String> {
+        if self.find(&config.name).is_ok() {
+            return Err(format!("a module `{}` already exists", config.name));
+        }
+        let Some(module_type) = self.types.get(&config.type_name).copied() else {
+            let near = self.types.nearest(&config.type_name).join(", ");
+            return Err(format!(
+                "unknown module type `{}` (nearest: {near})",
+                config.type_name
+            ));
+        };
+        let group = match &config.group {
+            None => None,
+            Some(g) => Some(
+                self.groups
+                    .iter()
+                    .position(|x| &x.name == g)
+                    .ok_or_else(|| format!("unknown group `{g}`"))?,
+            ),
+        };
+        let spec = ModuleSpec {
+            name: config.name.clone(),
+            module_type,
+            group,
+            policy: config.restart,
+            watchdog: config.watchdog_ms.map(Duration::from_millis),
+            shutdown_timeout: Duration::from_millis(
+                config
+                    .shutdown_timeout_ms
+                    .unwrap_or(self.config.shutdown_timeout_ms),
+            ),
+        };
+        self.blackboard.add_module(config, module_type).await?;
+        self.slots.push(Slot::new(spec, self.config.backoff));
+        let i = self.slots.len() - 1;
+        self.event(&self.slots[i].spec.name, "added", "on request", 0);
+        self.spawn(i).await;
+        Ok(())
+    }
+}

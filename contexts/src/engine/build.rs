@@ -1,0 +1,223 @@
+//! Building an engine from a rules file: every check `petrel check` reports.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::time::Duration;
+
+use petrel_actors::expr::{parse, properties, ExprId, ExprSet, Ty, TypeEnv};
+use petrel_actors::TypeInfo;
+use tokio::time::Instant;
+
+use super::{Engine, Rule, Schema};
+use crate::rules::{LoadedRules, RuleError};
+
+impl Engine {
+    /// Checks `loaded` against `schema` and builds an engine; returns every problem found.
+    pub fn build(loaded: &LoadedRules, schema: &dyn Schema) -> Result<Engine, Vec<RuleError>> {
+        let mut errors = Vec::new();
+        let mut engine = Engine {
+            exprs: ExprSet::new(),
+            rules: Vec::new(),
+            values: BTreeMap::new(),
+            links: BTreeMap::new(),
+            runs: BTreeMap::new(),
+            targets: HashMap::new(),
+            by_condition: HashMap::new(),
+            waiting: BTreeSet::new(),
+        };
+        let mut names = Vec::new();
+        for rule in &loaded.rules.contexts {
+            let err = |needle: Option<&str>, offset, message| {
+                loaded.error(&rule.name, needle, offset, message)
+            };
+            if names.contains(&rule.name) {
+                errors.push(err(
+                    None,
+                    None,
+                    format!("duplicate context name `{}`", rule.name),
+                ));
+                continue;
+            }
+            names.push(rule.name.clone());
+            let mut add = |src: &str, want: &Ty, errors: &mut Vec<RuleError>| -> Option<ExprId> {
+                let env = env_for(src, schema);
+                match engine.exprs.add(src, &env, Some(want)) {
+                    Ok(id) => Some(id),
+                    Err(e) => {
+                        let message = format!("context `{}`: in `{src}`: {}", rule.name, e.message);
+                        errors.push(err(Some(src), Some((e.line, e.column)), message));
+                        None
+                    }
+                }
+            };
+            let when = add(&rule.when, &Ty::Bool, &mut errors);
+            let until = rule.until.as_ref().map(|u| add(u, &Ty::Bool, &mut errors));
+            let mut sets = Vec::new();
+            // `enable`/`disable` are sets of `<module>/enabled`; errors point at the module name.
+            let toggles = rule
+                .enable
+                .iter()
+                .map(|m| (m, "true"))
+                .chain(rule.disable.iter().map(|m| (m, "false")));
+            let toggles = toggles.map(|(m, v)| (format!("{m}/enabled"), v.to_string(), m.clone()));
+            let plain = rule
+                .set
+                .iter()
+                .map(|(t, s)| (t.clone(), s.clone(), t.clone()));
+            for (target, src, needle) in plain.chain(toggles) {
+                let Some((info, _)) = schema.property(&target) else {
+                    errors.push(err(
+                        Some(&needle),
+                        None,
+                        format!("context `{}`: unknown property `{target}`", rule.name),
+                    ));
+                    continue;
+                };
+                let Some(want) = settable_ty(info) else {
+                    let message = format!("context `{}`: `{target}` is a {}; `set` takes bool, number or string properties", rule.name, info.name());
+                    errors.push(err(Some(&needle), None, message));
+                    continue;
+                };
+                engine.targets.insert(target.clone(), info);
+                if let Some(id) = add(&src, &want, &mut errors) {
+                    sets.push((target, id));
+                }
+            }
+            for (input, source) in &rule.relink {
+                match (schema.property(input), schema.property(source)) {
+                    (Some((a, _)), Some((b, _))) if a != b => errors.push(err(
+                        Some(source),
+                        None,
+                        format!("context `{}`: cannot relink `{input}` ({}) to `{source}` ({}): the types differ", rule.name, a.name(), b.name()),
+                    )),
+                    (Some(_), Some(_)) => {}
+                    (None, _) => errors.push(err(Some(input), None, format!("context `{}`: unknown property `{input}`", rule.name))),
+                    (_, None) => errors.push(err(Some(source), None, format!("context `{}`: unknown property `{source}`", rule.name))),
+                }
+            }
+            let runs: Vec<(String, bool)> = rule
+                .start
+                .iter()
+                .map(|m| (m.clone(), true))
+                .chain(rule.stop.iter().map(|m| (m.clone(), false)))
+                .collect();
+            for (module, _) in &runs {
+                if schema.property(&format!("{module}/enabled")).is_none() {
+                    errors.push(err(
+                        Some(module),
+                        None,
+                        format!("context `{}`: unknown module `{module}`", rule.name),
+                    ));
+                }
+            }
+            let (Some(when), Some(until)) = (when, until.unwrap_or(Some(ExprId(usize::MAX))))
+            else {
+                continue;
+            };
+            engine.rules.push(Rule {
+                name: rule.name.clone(),
+                when,
+                until: (until.0 != usize::MAX).then_some(until),
+                min_dwell: Duration::from_millis(rule.min_dwell_ms),
+                priority: rule.priority,
+                sets,
+                relinks: rule
+                    .relink
+                    .iter()
+                    .map(|(a, b)| (a.clone(), b.clone()))
+                    .collect(),
+                runs,
+                sticky: rule.sticky,
+                active: false,
+                since: None,
+            });
+        }
+        for (i, rule) in engine.rules.iter().enumerate() {
+            engine.by_condition.insert(rule.when, i);
+            if let Some(until) = rule.until {
+                engine.by_condition.insert(until, i);
+            }
+        }
+        // Every rule is looked at once, on the first step.
+        engine.waiting = (0..engine.rules.len()).collect();
+        errors.extend(engine.conflicts(loaded));
+        errors.extend(engine.never_hold(loaded));
+        match errors.is_empty() {
+            true => Ok(engine),
+            false => Err(errors),
+        }
+    }
+
+    /// Equal priorities on a shared target cannot be resolved deterministically.
+    fn conflicts(&self, loaded: &LoadedRules) -> Vec<RuleError> {
+        let mut errors = Vec::new();
+        let mut owners: BTreeMap<(String, i64), &str> = BTreeMap::new();
+        for rule in &self.rules {
+            let targets = rule
+                .sets
+                .iter()
+                .map(|(t, _)| t.clone())
+                .chain(rule.relinks.iter().map(|(i, _)| format!("link of {i}")))
+                .chain(
+                    rule.runs
+                        .iter()
+                        .map(|(m, _)| format!("running state of {m}")),
+                );
+            for target in targets {
+                if let Some(other) = owners.insert((target.clone(), rule.priority), &rule.name) {
+                    errors.push(loaded.error(&rule.name, None, None, format!(
+                        "contexts `{other}` and `{}` both change the {target} with priority {}: give them different priorities",
+                        rule.name, rule.priority
+                    )));
+                }
+            }
+        }
+        errors
+    }
+
+    /// A `when` that reads no property and is false can never hold.
+    fn never_hold(&mut self, loaded: &LoadedRules) -> Vec<RuleError> {
+        self.exprs.evaluate(Instant::now());
+        self.rules
+            .iter()
+            .filter(|r| self.exprs.bool(r.when) == Some(false))
+            .map(|r| {
+                loaded.error(
+                    &r.name,
+                    None,
+                    None,
+                    format!(
+                        "context `{}` can never hold: its `when` is always false",
+                        r.name
+                    ),
+                )
+            })
+            .collect()
+    }
+}
+
+/// The expression type a property of type `info` can be set from.
+fn settable_ty(info: TypeInfo) -> Option<Ty> {
+    if info.is::<bool>() {
+        Some(Ty::Bool)
+    } else if info.is::<f64>() || info.is::<i64>() {
+        Some(Ty::Num)
+    } else if info.is::<String>() {
+        Some(Ty::Str)
+    } else {
+        None
+    }
+}
+
+/// Types for the properties `src` reads (unknown ones are left out: the checker reports them
+/// with their position).
+fn env_for(src: &str, schema: &dyn Schema) -> TypeEnv {
+    let mut env = TypeEnv::new();
+    if let Ok(ast) = parse(src) {
+        for path in properties(&ast) {
+            if let Some((info, sample)) = schema.property(&path) {
+                env.insert_property(&path, info, &sample);
+            }
+        }
+    }
+    env
+}
