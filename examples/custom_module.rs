@@ -37,7 +37,8 @@ impl Module for MovingAverage {
         while self.recent.len() > self.window.value().max(1) as usize {
             self.recent.pop_front();
         }
-        self.mean.set(self.recent.iter().sum::<f64>() / self.recent.len() as f64);
+        self.mean
+            .set(self.recent.iter().sum::<f64>() / self.recent.len() as f64);
         Ok(())
     }
 }

@@ -12,6 +12,7 @@ mod agent;
 mod blackboard;
 mod cell;
 pub mod config;
+pub mod expr;
 mod handle;
 mod module;
 mod module_actor;
@@ -29,7 +30,7 @@ pub use agent::{Agent, AgentExit, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{Blackboard, BlackboardError, Registry};
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{
-    Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
+    AnyHandle, Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
 };
 pub use module::{Cause, Context, Module, Schedule, Watchable};
 pub use module_actor::status;

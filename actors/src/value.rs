@@ -18,6 +18,7 @@ pub struct TypeInfo {
     from_ron: fn(ron::Value) -> Result<AnyValue, String>,
     to_ron: fn(&AnyValue) -> Result<String, String>,
     short: fn(&AnyValue) -> String,
+    to_dynamic: fn(&AnyValue) -> Result<ron::Value, String>,
 }
 
 /// Longest value text shown in traces and summaries.
@@ -41,6 +42,13 @@ impl TypeInfo {
             short: |v| match v.downcast_ref::<T>() {
                 Some(t) => shorten(format!("{t:?}")),
                 None => "<other type>".to_string(),
+            },
+            // Through RON text: slow-ish, but only used for field access on structured values
+            // (expressions), never on the hot path of plain numbers and booleans.
+            to_dynamic: |v| {
+                let t = v.downcast_ref::<T>().ok_or("value has another type")?;
+                let text = ron::to_string(t).map_err(|e| e.to_string())?;
+                ron::from_str::<ron::Value>(&text).map_err(|e| e.to_string())
             },
         }
     }
@@ -68,6 +76,12 @@ impl TypeInfo {
     /// Writes a value of this type as RON text.
     pub fn to_ron(&self, value: &AnyValue) -> Result<String, String> {
         (self.to_ron)(value)
+    }
+
+    /// A dynamic view of a value (structs become maps keyed by field name), for code that
+    /// inspects values of types it does not know, such as expression field access.
+    pub fn to_dynamic(&self, value: &AnyValue) -> Result<ron::Value, String> {
+        (self.to_dynamic)(value)
     }
 
     /// A short human-readable rendering of a value, for traces and summaries.
@@ -125,6 +139,11 @@ mod tests {
         let back = t.from_ron(ron::from_str(&text).unwrap()).unwrap();
         assert_eq!(back.downcast_ref::<Pose2>().unwrap().y(), 2.0);
         assert_eq!(t.short(&v), "Pose2(x: 1.000, y: 2.000, theta: 0.500)");
+        let ron::Value::Map(fields) = t.to_dynamic(&v).unwrap() else {
+            panic!("a struct is a map")
+        };
+        let y = fields.get(&ron::Value::String("y".into())).unwrap();
+        assert!(matches!(y, ron::Value::Number(n) if n.into_f64() == 2.0), "{y:?}");
         let long: AnyValue = Arc::new(vec![0.5_f64; 100]);
         let shown = TypeInfo::of::<Vec<f64>>().short(&long);
         assert!(

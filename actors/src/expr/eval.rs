@@ -1,0 +1,132 @@
+//! The evaluator: a typed tree, the current property values, the time, and `held` states.
+
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use super::check::Node;
+use super::parse::BinOp;
+use super::value::Value;
+
+/// The last value of a property as the evaluator sees it.
+#[derive(Debug, Clone)]
+pub(crate) struct PropSlot {
+    /// Converted once per write; an error if the value could not be read.
+    pub value: Result<Value, String>,
+    pub written: Instant,
+}
+
+/// Everything one evaluation reads and updates.
+pub(crate) struct Eval<'a> {
+    pub props: &'a [PropSlot],
+    /// Per `held`: since when its condition has been true.
+    pub held: &'a mut [Option<Instant>],
+    pub now: Instant,
+    /// The earliest future instant at which a time-dependent result may change.
+    pub deadline: Option<Instant>,
+}
+
+/// Slack added to `age` deadlines so that `age(p) > 2` is already true when re-evaluated.
+const AGE_SLACK: Duration = Duration::from_millis(1);
+
+impl Eval<'_> {
+    fn wake_at(&mut self, t: Instant) {
+        if t > self.now && self.deadline.is_none_or(|d| t < d) {
+            self.deadline = Some(t);
+        }
+    }
+
+    fn num(&mut self, n: &Node) -> Result<f64, String> {
+        match self.eval(n)? {
+            Value::Num(x) => Ok(x),
+            other => Err(format!("expected a number, found {other}")),
+        }
+    }
+
+    fn bool(&mut self, n: &Node) -> Result<bool, String> {
+        match self.eval(n)? {
+            Value::Bool(x) => Ok(x),
+            other => Err(format!("expected a boolean, found {other}")),
+        }
+    }
+
+    /// Evaluates `n`. Both sides of `and`/`or` are evaluated (no short cut) so that every
+    /// `held` sees its condition at every evaluation.
+    pub fn eval(&mut self, n: &Node) -> Result<Value, String> {
+        Ok(match n {
+            Node::Const(v) => v.clone(),
+            Node::Prop(i) => self.props[*i].value.clone()?,
+            Node::Field(base, name) => self.eval(base)?.field(name)?,
+            Node::Neg(x) => Value::Num(-self.num(x)?),
+            Node::Not(x) => Value::Bool(!self.bool(x)?),
+            Node::Abs(x) => Value::Num(self.num(x)?.abs()),
+            Node::MinMax(max, xs) => {
+                let mut acc = self.num(&xs[0])?;
+                for x in &xs[1..] {
+                    let v = self.num(x)?;
+                    acc = if *max { acc.max(v) } else { acc.min(v) };
+                }
+                Value::Num(acc)
+            }
+            Node::Clamp(x, lo, hi) => {
+                let (x, lo, hi) = (self.num(x)?, self.num(lo)?, self.num(hi)?);
+                // Not f64::clamp: it panics when lo > hi, and bad bounds must not panic.
+                Value::Num(x.max(lo).min(hi))
+            }
+            Node::Age(i) => Value::Num(
+                self.now
+                    .saturating_duration_since(self.props[*i].written)
+                    .as_secs_f64(),
+            ),
+            Node::Held(cond, secs, slot) => {
+                let c = self.bool(cond)?;
+                let since = if c {
+                    *self.held[*slot].get_or_insert(self.now)
+                } else {
+                    self.held[*slot] = None;
+                    return Ok(Value::Bool(false));
+                };
+                let until = since + Duration::from_secs_f64(secs.max(0.0));
+                self.wake_at(until);
+                Value::Bool(self.now >= until)
+            }
+            Node::Bin(op, a, b) => self.binary(*op, a, b)?,
+        })
+    }
+
+    fn binary(&mut self, op: BinOp, a: &Node, b: &Node) -> Result<Value, String> {
+        use BinOp::*;
+        let (x, y) = (self.eval(a)?, self.eval(b)?);
+        if matches!(op, Lt | Le | Gt | Ge) {
+            self.age_deadline(a, &y);
+            self.age_deadline(b, &x);
+        }
+        Ok(match (op, x, y) {
+            (And, Value::Bool(x), Value::Bool(y)) => Value::Bool(x && y),
+            (Or, Value::Bool(x), Value::Bool(y)) => Value::Bool(x || y),
+            (Eq, x, y) => Value::Bool(x == y),
+            (Ne, x, y) => Value::Bool(x != y),
+            (op, Value::Num(x), Value::Num(y)) => match op {
+                Add => Value::Num(x + y),
+                Sub => Value::Num(x - y),
+                Mul => Value::Num(x * y),
+                Div => Value::Num(x / y),
+                Lt => Value::Bool(x < y),
+                Le => Value::Bool(x <= y),
+                Gt => Value::Bool(x > y),
+                _ => Value::Bool(x >= y),
+            },
+            (op, x, y) => return Err(format!("`{}` cannot apply to {x} and {y}", op.symbol())),
+        })
+    }
+
+    /// `age(p) < limit` (either way round) flips when the age crosses `limit`: wake then.
+    fn age_deadline(&mut self, side: &Node, other: &Value) {
+        if let (Node::Age(i), Value::Num(limit)) = (side, other) {
+            if limit.is_finite() && *limit >= 0.0 {
+                let t = self.props[*i].written + Duration::from_secs_f64(*limit) + AGE_SLACK;
+                self.wake_at(t);
+            }
+        }
+    }
+}
