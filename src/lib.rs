@@ -1,7 +1,7 @@
 //! petrel: an async, actor-based, context-aware mission runtime for robots.
 //!
 //! This crate is the facade: it re-exports the runtime core ([`actors`]), the built-in
-//! modules ([`modules`]), and holds the `petrel` command line. To add your own module types,
+//! modules ([`modules`]), the plans library and its `mission.pnp` module ([`plans`]), and holds the `petrel` command line. To add your own module types,
 //! build your own binary with [`Petrel`]:
 //!
 //! ```no_run
@@ -51,9 +51,9 @@ impl Default for Petrel {
 impl Petrel {
     /// The built-in module types.
     pub fn new() -> Self {
-        Petrel {
-            registry: petrel_modules::builtin(),
-        }
+        let mut registry = petrel_modules::builtin();
+        petrel_plans::register(&mut registry);
+        Petrel { registry }
     }
 
     /// Adds module type `M`.

@@ -143,7 +143,10 @@ mod tests {
             panic!("a struct is a map")
         };
         let y = fields.get(&ron::Value::String("y".into())).unwrap();
-        assert!(matches!(y, ron::Value::Number(n) if n.into_f64() == 2.0), "{y:?}");
+        assert!(
+            matches!(y, ron::Value::Number(n) if n.into_f64() == 2.0),
+            "{y:?}"
+        );
         let long: AnyValue = Arc::new(vec![0.5_f64; 100]);
         let shown = TypeInfo::of::<Vec<f64>>().short(&long);
         assert!(
