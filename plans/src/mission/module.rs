@@ -85,51 +85,17 @@ impl Module for Mission {
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let path = self.plan_path.get();
-        anyhow::ensure!(
-            !path.is_empty(),
-            "{}/params/plan is empty; expected a plan file",
-            ctx.module()
-        );
-        let rules = self.rules.get();
-        let rules = (!rules.is_empty()).then(|| Path::new(rules.as_str()));
-        let loaded = load_plan(Path::new(path.as_str()), rules)
-            .with_context(|| format!("{}/params/plan", ctx.module()))?;
-        let plan = loaded.plan;
-        let params = Params {
-            module: ctx.module(),
-            actions: &self.actions.get(),
-            conditions: &self.conditions.get(),
-            allow_unbound: self.allow_unbound.value(),
-        };
-        let bound = bind(ctx.blackboard(), &plan, params)
-            .await
-            .map_err(|e| anyhow::anyhow!("plan {}: bad bindings:\n{e}", path))?;
-        if !bound.defaults.is_empty() {
-            tracing::info!(atoms = ?bound.defaults, "conditions read from in/conditions");
+        let result = self.start(ctx).await;
+        if let Err(e) = &result {
+            if self.is_mission.value() {
+                // The run exists for this mission: end it rather than idle forever.
+                ctx.stop_agent(
+                    2,
+                    format!("mission `{}` could not start: {e:#}", ctx.module()),
+                );
+            }
         }
-        let wake = ctx
-            .blackboard()
-            .any_handle(&format!("{}/state/wake", ctx.module()))
-            .await?;
-        let (timer, rx) = watch::channel(None);
-        tokio::spawn(deadline_timer(rx, wake));
-        tracing::info!(
-            plan = plan.name(),
-            actions = bound.actions.len(),
-            conditions = bound.conditions.len(),
-            "mission bound"
-        );
-        let state = PlanState::new(&plan);
-        publish(&self.marking, marking(&plan, &state));
-        self.run = Some(Run {
-            state,
-            plan,
-            bound,
-            timer,
-            done: false,
-        });
-        Ok(())
+        result
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -203,6 +169,57 @@ impl Module for Mission {
         if let Some(run) = self.run.as_mut() {
             let _ = run.timer.send(None);
         }
+        Ok(())
+    }
+}
+
+impl Mission {
+    /// Loads the plan and binds it (the body of `init`).
+    async fn start(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let path = self.plan_path.get();
+        anyhow::ensure!(
+            !path.is_empty(),
+            "{}/params/plan is empty; expected a plan file",
+            ctx.module()
+        );
+        let rules = self.rules.get();
+        let rules = (!rules.is_empty()).then(|| Path::new(rules.as_str()));
+        let loaded = load_plan(Path::new(path.as_str()), rules)
+            .with_context(|| format!("{}/params/plan", ctx.module()))?;
+        let plan = loaded.plan;
+        let params = Params {
+            module: ctx.module(),
+            actions: &self.actions.get(),
+            conditions: &self.conditions.get(),
+            allow_unbound: self.allow_unbound.value(),
+        };
+        let bound = bind(ctx.blackboard(), &plan, params)
+            .await
+            .map_err(|e| anyhow::anyhow!("plan {}: bad bindings:\n{e}", path))?;
+        if !bound.defaults.is_empty() {
+            tracing::info!(atoms = ?bound.defaults, "conditions read from in/conditions");
+        }
+        let wake = ctx
+            .blackboard()
+            .any_handle(&format!("{}/state/wake", ctx.module()))
+            .await?;
+        let (timer, rx) = watch::channel(None);
+        tokio::spawn(deadline_timer(rx, wake));
+        tracing::info!(
+            plan = plan.name(),
+            actions = bound.actions.len(),
+            conditions = bound.conditions.len(),
+            "mission bound"
+        );
+        let state = PlanState::new(&plan);
+        publish(&self.marking, marking(&plan, &state));
+        self.run = Some(Run {
+            state,
+            plan,
+            bound,
+            timer,
+            done: false,
+        });
         Ok(())
     }
 }
