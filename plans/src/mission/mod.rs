@@ -30,9 +30,9 @@
 //! unbound actions finish at once instead). Changing bindings or the plan later has no effect.
 //!
 //! Event-driven: the module steps the plan when a property read by a binding changes, when
-//! `in/conditions` changes, when a `held`/`age` deadline passes, and again right after a step
-//! that fired a transition (its `out/fired` changes), until nothing fires; `params/tick_ms`
-//! adds a periodic step (0 = none). Conditions are levels: an action's `finished` must be
+//! `in/conditions` changes, or a `held`/`age` deadline passes; within one module step, plan
+//! steps repeat while transitions fire (transitions enabled by a firing need the next plan
+//! step); `params/tick_ms` adds a periodic step (0 = none). Conditions are levels: an action's `finished` must be
 //! false when it starts (reset what it reads with `set`).
 
 mod bind;

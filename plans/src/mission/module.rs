@@ -63,16 +63,13 @@ impl Module for Mission {
             running: ports.output("out/running", String::new(), "running actions, comma-separated"),
             result: ports.output("out/result", "running".to_string(), "running, goal or fail"),
             fired: ports.output("out/fired", 0, "transitions fired so far"),
-            wake: ports.state("state/wake", 0, "bumped when a held/age deadline passes"),
+            wake: ports.state("state/wake", 0, "bumped to make the mission step again: a held/age deadline passed, or many steps fired in a row"),
             run: None,
         }
     }
 
     fn schedule(&self) -> Schedule {
-        let mut s = Schedule::new()
-            .on_change(&self.flags)
-            .on_change(&self.fired)
-            .on_change(&self.wake);
+        let mut s = Schedule::new().on_change(&self.flags).on_change(&self.wake);
         if let Some(run) = &self.run {
             for (_, h, _) in &run.bound.watched {
                 s = s.on_change(h);
@@ -105,49 +102,29 @@ impl Module for Mission {
         if run.done {
             return Ok(());
         }
-        let now = ctx.now();
-        for (id, h, seen) in &mut run.bound.watched {
-            let s = h.read();
-            if *seen != Some(s.version) {
-                *seen = Some(s.version);
-                run.bound
-                    .exprs
-                    .update(*id, h.type_info(), &s.value, s.written);
+        let mut fired = 0;
+        // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
+        // one. Step again at once while something fires (bounded, so a cycle of plain
+        // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
+        for round in 1.. {
+            let report = run.round(ctx.now(), &self.flags.get());
+            fired += report.fired.len();
+            if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
+                break;
+            }
+            if round == MAX_ROUNDS {
+                self.wake.set(self.wake.value() + 1);
+                break;
             }
         }
-        run.bound.exprs.evaluate(now);
-        let flags = self.flags.get();
-        let report = step(
-            &run.plan,
-            &mut run.state,
-            &mut MissionEnv {
-                bound: &mut run.bound,
-                flags: &flags,
-            },
-        );
         let _ = run.timer.send(run.bound.exprs.next_deadline());
-        for c in &report.unknown_conditions {
-            tracing::warn!(condition = %c, "unknown condition counts as false");
-        }
-        if !report.fired.is_empty() {
-            let fired: Vec<&str> = report
-                .fired
-                .iter()
-                .map(|&t| run.plan.transitions()[t].label.as_str())
-                .collect();
-            let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
-            tracing::info!(?fired, ?calls, "plan step");
+        if fired > 0 {
             publish(&self.marking, marking(&run.plan, &run.state));
             publish(
                 &self.running,
                 run.state.running_actions(&run.plan).join(", "),
             );
-            // Writing our own watched output makes us step again: transitions enabled by these
-            // firings are examined at once, with no polling.
-            self.fired
-                .set(self.fired.value() + report.fired.len() as i64);
-        } else {
-            tracing::trace!("plan step: nothing fired");
+            self.fired.set(self.fired.value() + fired as i64);
         }
         let status = run.state.status(&run.plan);
         if status != PlanStatus::Running {
@@ -170,6 +147,43 @@ impl Module for Mission {
             let _ = run.timer.send(None);
         }
         Ok(())
+    }
+}
+
+/// Plan steps run back to back in one module step at most (see [`Mission::step`]).
+const MAX_ROUNDS: usize = 64;
+
+impl Run {
+    /// One plan step: bring expressions up to date with changed properties, then step.
+    fn round(&mut self, now: Instant, flags: &Flags) -> crate::exec::StepReport {
+        for (id, h, seen) in &mut self.bound.watched {
+            let s = h.read();
+            if *seen != Some(s.version) {
+                *seen = Some(s.version);
+                self.bound
+                    .exprs
+                    .update(*id, h.type_info(), &s.value, s.written);
+            }
+        }
+        self.bound.exprs.evaluate(now);
+        let mut env = MissionEnv {
+            bound: &mut self.bound,
+            flags,
+        };
+        let report = step(&self.plan, &mut self.state, &mut env);
+        for c in &report.unknown_conditions {
+            tracing::warn!(condition = %c, "unknown condition counts as false");
+        }
+        if !report.fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
+            let fired: Vec<&str> = report
+                .fired
+                .iter()
+                .map(|&t| self.plan.transitions()[t].label.as_str())
+                .collect();
+            let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
+            tracing::info!(?fired, ?calls, "plan step");
+        }
+        report
     }
 }
 
