@@ -181,3 +181,34 @@ async fn the_mission_sleeps_until_an_event_and_held_deadlines_wake_it() {
     let steps = summary.module("m").unwrap().steps;
     assert!(steps <= 8, "no polling: {steps} steps in 12 s");
 }
+
+#[tokio::test(start_paused = true)]
+async fn tick_ms_adds_periodic_steps_for_conditions_time_alone_changes() {
+    // `age` inside arithmetic gives no deadline to wake on: a tick re-checks it.
+    let plans = Plans::new(&[("tick.plan", "a")]);
+    let config = |tick: u64| {
+        agent_with_mission(&format!(
+            r#""params/plan": "{}", "params/tick_ms": {tick}, "params/actions": {{
+                "a": (finished: "age(c1/out/value) * 2 > 1"),
+            }}"#,
+            plans.path("tick.plan")
+        ))
+    };
+    let ticking = start(&config(100)).await;
+    let still = start(&config(0)).await;
+    advance(450).await;
+    assert_eq!(text(&ticking, "m/out/result").await, "running");
+    advance(200).await;
+    assert_eq!(
+        text(&ticking, "m/out/result").await,
+        "goal",
+        "the 600 ms tick saw it"
+    );
+    assert_eq!(
+        text(&still, "m/out/result").await,
+        "running",
+        "no event, no tick: no step"
+    );
+    stop(ticking).await;
+    stop(still).await;
+}

@@ -32,7 +32,8 @@
 //! Event-driven: the module steps the plan when a property read by a binding changes, when
 //! `in/conditions` changes, or a `held`/`age` deadline passes; within one module step, plan
 //! steps repeat while transitions fire (transitions enabled by a firing need the next plan
-//! step); `params/tick_ms` adds a periodic step (0 = none). Conditions are levels: an action's `finished` must be
+//! step); `params/tick_ms` adds a periodic step (0 = none), needed only for conditions that
+//! time alone changes and no deadline covers (`age(p) > 2` has one, `age(p) * 2 > 4` not). Conditions are levels: an action's `finished` must be
 //! false when it starts (reset what it reads with `set`).
 
 mod bind;
