@@ -34,7 +34,8 @@
 //! steps repeat while transitions fire (transitions enabled by a firing need the next plan
 //! step); `params/tick_ms` adds a periodic step (0 = none), needed only for conditions that
 //! time alone changes and no deadline covers (`age(p) > 2` has one, `age(p) * 2 > 4` not). Conditions are levels: an action's `finished` must be
-//! false when it starts (reset what it reads with `set`).
+//! false when it starts (reset what it reads with `set`). A module enabled by two actions running
+//! in parallel is disabled when the first of them ends.
 
 mod bind;
 mod config;

@@ -165,7 +165,12 @@ impl Run {
                     .update(*id, h.type_info(), &s.value, s.written);
             }
         }
-        self.bound.exprs.evaluate(now);
+        for id in self.bound.exprs.evaluate(now) {
+            if let Some(Err(e)) = self.bound.exprs.value(id) {
+                // Types were checked at init, so this is a value of unexpected shape: say so.
+                tracing::warn!(error = %e, "a binding expression could not be evaluated; it counts as false");
+            }
+        }
         let mut env = MissionEnv {
             bound: &mut self.bound,
             flags,
