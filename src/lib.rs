@@ -1,7 +1,7 @@
 //! petrel: an async, actor-based, context-aware mission runtime for robots.
 //!
 //! This crate is the facade: it re-exports the runtime core ([`actors`]), the built-in
-//! modules ([`modules`]), and holds the `petrel` command line. To add your own module types,
+//! modules ([`modules`]), the plans library and its `mission.pnp` module ([`plans`]), and holds the `petrel` command line. To add your own module types,
 //! build your own binary with [`Petrel`]:
 //!
 //! ```no_run
@@ -53,6 +53,7 @@ impl Petrel {
     pub fn new() -> Self {
         let mut registry = petrel_modules::builtin();
         petrel_contexts::register(&mut registry);
+        petrel_plans::register(&mut registry);
         Petrel { registry }
     }
 

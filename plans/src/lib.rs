@@ -8,7 +8,8 @@
 //! * [`check`]: static analysis; [`to_dot`]: Graphviz; [`simulate`]: a
 //!   deterministic scripted simulator.
 //!
-//! No actors and no I/O besides reading the files asked for.
+//! No actors and no I/O besides reading the files asked for, except in [`mission`]: the
+//! `mission.pnp` module running a plan inside an agent ([`mission::register`]).
 //!
 //! # For the `petrel plan` CLI
 //! * load: [`load_plan`]`(path, rules)` (`.pnml`, or a text plan with any
@@ -52,6 +53,7 @@ mod exec;
 mod hot;
 mod label;
 mod load;
+pub mod mission;
 mod model;
 mod pnml;
 mod simulate;
@@ -64,6 +66,7 @@ pub use error::PlanError;
 pub use exec::{step, CallRecord, Environment, PlanState, PlanStatus, StepReport};
 pub use label::{split_label, CallKind};
 pub use load::{compile_to_pnml, load_plan, LoadedPlan};
+pub use mission::register;
 pub use model::{
     Atom, Call, Comment, Condition, Edge, Executable, Place, Plan, Position, Transition,
 };

@@ -131,6 +131,21 @@ fn every_construct_evaluates() {
 }
 
 #[test]
+fn struct_fields_keep_full_precision() {
+    let mut f = Fixture::new();
+    let id = f.set.add(
+        "loc/out/pose.x == 0.1 and loc/out/pose.y == 123456.789012345",
+        &env(),
+        None,
+    );
+    let id = id.unwrap();
+    f.put("loc/out/pose", Pose2::new(0.1, 123456.789012345, 0.0), 0);
+    let t = f.at(0);
+    f.set.evaluate(t);
+    assert_eq!(f.set.bool(id), Some(true), "{:?}", f.set.value(id));
+}
+
+#[test]
 fn precedence_shows_in_the_tree() {
     let ast = parse("not a/b < 1 + 2 * 3 and c/d").unwrap();
     let AstKind::Bin(BinOp::And, lhs, _) = ast.kind else {

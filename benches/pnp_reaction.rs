@@ -1,0 +1,103 @@
+//! `pnp_reaction`: a condition property changes → the mission's guard transition fires → the
+//! bound action starts and enables its module → the module steps and answers. Compared with
+//! the `property_wake` petrel round trip (module A writes, B wakes and answers, A wakes)
+//! measured in the same run.
+//!
+//! The plan loops `LABEL_top; <go ? work>; GOTO_LABEL_top`, `go` bound to
+//! `w/in/go > w/out/done`, `work` enabling `w` until `w/out/done >= w/in/go`. The module
+//! `bench.trigger` makes the requests (`w/in/go` is linked to its `out/request`) and times
+//! each from its write to `w`'s answer, inside the agent like the baseline; the mission's
+//! return to the waiting place between requests is not timed.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use criterion::{criterion_group, criterion_main, Criterion};
+
+const PING_PONG: &str = r#"Agent(name: "bench", modules: [
+    (name: "a", type: "bench.ping", links: {"in/pong": "b/out/value"}),
+    (name: "b", type: "bench.echo", links: {"in/value": "a/out/ping"}),
+])"#;
+
+fn mission_config(plan: &str) -> String {
+    format!(
+        r#"Agent(name: "bench", modules: [
+    (name: "t", type: "bench.trigger", links: {{"in/done": "w/out/done", "in/marking": "m/out/marking"}}),
+    (name: "w", type: "bench.work", values: {{"enabled": false}}, links: {{"in/go": "t/out/request"}}),
+    (name: "m", type: "mission.pnp", values: {{
+        "params/plan": "{plan}",
+        "params/conditions": {{"go": "w/in/go > w/out/done"}},
+        "params/actions": {{"work": (enable: ["w"], finished: "w/out/done >= w/in/go")}},
+    }}),
+])"#
+    )
+}
+
+fn bench(c: &mut Criterion) {
+    let rt = common::runtime();
+    let mut group = c.benchmark_group("pnp_reaction");
+
+    let dir = std::env::temp_dir().join(format!("petrel-pnp-reaction-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let plan = dir.join("loop.plan");
+    std::fs::write(&plan, "LABEL_top; <go ? work>; GOTO_LABEL_top\n").unwrap();
+
+    let (agent, go, total, batches) = rt.block_on(async {
+        let agent = common::start(&mission_config(&plan.display().to_string())).await;
+        let bb = agent.blackboard();
+        let marking = bb.handle::<String>("m/out/marking").await.unwrap();
+        // The mission publishes its initial (waiting) marking at init.
+        while marking.get().is_empty() {
+            marking.changed().await;
+        }
+        let go = bb.handle::<i64>("t/in/go").await.unwrap();
+        let total = bb.handle::<f64>("t/out/total_ns").await.unwrap();
+        let batches = bb.handle::<i64>("t/out/batches").await.unwrap();
+        (agent, go, total, batches)
+    });
+    group.bench_function("petrel", |b| {
+        b.iter_custom(|iters| {
+            rt.block_on(async {
+                let (before, target) = (*total.get(), *batches.get() + 1);
+                go.set(iters as i64);
+                while *batches.get() < target {
+                    batches.changed().await;
+                }
+                Duration::from_nanos((*total.get() - before) as u64)
+            })
+        })
+    });
+
+    let (ping, pgo, pdone) = rt.block_on(async {
+        let agent = common::start(PING_PONG).await;
+        let go = agent.blackboard().handle::<i64>("a/in/go").await.unwrap();
+        let done = agent
+            .blackboard()
+            .handle::<i64>("a/out/done")
+            .await
+            .unwrap();
+        (agent, go, done)
+    });
+    group.bench_function("property_wake_baseline", |b| {
+        b.iter_custom(|iters| {
+            rt.block_on(async {
+                let target = *pdone.get() + 1;
+                let start = Instant::now();
+                pgo.set(iters as i64);
+                while *pdone.get() < target {
+                    pdone.changed().await;
+                }
+                start.elapsed()
+            })
+        })
+    });
+
+    group.finish();
+    rt.block_on(agent.stop(Duration::from_secs(1)));
+    rt.block_on(ping.stop(Duration::from_secs(1)));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group! { name = benches; config = common::criterion(); targets = bench }
+criterion_main!(benches);

@@ -1,0 +1,104 @@
+//! The plan's [`Environment`] over the bound properties: conditions from expressions or
+//! `in/conditions`, action status from `finished`/`failed`, calls switching modules.
+
+use super::bind::{Bound, BoundAction};
+use super::config::Flags;
+use crate::exec::Environment;
+use crate::label::CallKind;
+
+/// One step's view of the world; expression values were brought up to date before the step.
+pub(crate) struct MissionEnv<'a> {
+    pub bound: &'a mut Bound,
+    pub flags: &'a Flags,
+}
+
+impl BoundAction {
+    /// `start` / `resume`: remember what `set` replaces (once), write it, enable the modules.
+    pub fn activate(&mut self) {
+        if self.saved.is_none() {
+            self.saved = Some(self.set.iter().map(|(h, _)| h.value()).collect());
+        }
+        for (h, v) in &self.set {
+            write(h, v.clone());
+        }
+        for e in &self.enable {
+            write(e, std::sync::Arc::new(true));
+        }
+    }
+
+    /// `end` / `interrupt` / `fail`: disable the modules, put back what `set` replaced.
+    pub fn deactivate(&mut self) {
+        for e in &self.enable {
+            write(e, std::sync::Arc::new(false));
+        }
+        if let Some(saved) = self.saved.take() {
+            if self.restore {
+                for ((h, _), old) in self.set.iter().zip(saved) {
+                    write(h, old);
+                }
+            }
+        }
+    }
+
+    /// Whether `start`/`resume` effects are in place.
+    pub fn active(&self) -> bool {
+        self.saved.is_some()
+    }
+}
+
+fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue) {
+    // Types were checked at init (`from_ron` into the property's own type, `enabled` is bool).
+    if let Err(e) = h.set(v) {
+        tracing::error!(property = h.key(), error = %e, "binding write refused");
+    }
+}
+
+impl MissionEnv<'_> {
+    fn expr(&self, id: Option<petrel_actors::expr::ExprId>) -> bool {
+        id.and_then(|id| self.bound.exprs.bool(id)).unwrap_or(false)
+    }
+}
+
+impl Environment for MissionEnv<'_> {
+    fn condition(&mut self, name: &str) -> Option<bool> {
+        match self.bound.conditions.get(name) {
+            Some(&id) => Some(self.bound.exprs.bool(id).unwrap_or(false)),
+            None => Some(self.flags.0.get(name).copied().unwrap_or(false)),
+        }
+    }
+
+    fn step_action(&mut self, _name: &str) {
+        // Bound modules step on their own schedules; the plan only watches their status.
+    }
+
+    fn action_finished(&mut self, name: &str) -> bool {
+        match self.bound.actions.get(name) {
+            Some(a) if a.unbound => true,
+            Some(a) => self.expr(a.finished),
+            None => false,
+        }
+    }
+
+    fn action_failed(&mut self, name: &str) -> bool {
+        match self.bound.actions.get(name) {
+            Some(a) => self.expr(a.failed),
+            None => false,
+        }
+    }
+
+    fn call(&mut self, name: &str, kind: CallKind) {
+        let Some(a) = self.bound.actions.get_mut(name) else {
+            return;
+        };
+        if a.unbound {
+            tracing::warn!(action = name, call = %kind, "unbound action: nothing to do");
+            return;
+        }
+        // The robot prefix (`robot#action`) is kept for multi-robot plans; all actions run here.
+        tracing::debug!(action = name, robot = a.name.robot.as_deref().unwrap_or("-"), call = %kind, "action call");
+        match kind {
+            CallKind::Start | CallKind::Resume => a.activate(),
+            CallKind::End | CallKind::Interrupt | CallKind::Fail => a.deactivate(),
+        }
+    }
+}

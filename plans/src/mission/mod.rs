@@ -1,0 +1,55 @@
+//! `mission.pnp`: runs one Petri Net Plan inside an agent, its actions bound to modules and
+//! its conditions to properties.
+//!
+//! ```ron
+//! (name: "mission", type: "mission.pnp", values: {
+//!     // Paths are relative to the working directory of `petrel run` (a module cannot know
+//!     // the config file's location); `.pnml`, or a text plan with optional rules.
+//!     "params/plan": "configs/plans/demo.plan",
+//!     "params/rules": "configs/plans/demo.er",
+//!     "params/is_mission": true,            // goal ends the run with 0, fail with 1
+//!     "params/actions": {
+//!         // `count` and every `count_P1_P2...` action ($1, $2... = P1, P2...).
+//!         "count": (
+//!             enable: ["counter"],              // enabled while the action runs
+//!             set: {"counter/state/count": 0},  // written at start, restored at the end
+//!             restore: true,                    // (default)
+//!             finished: "counter/out/value >= $1",  // boolean expressions
+//!             failed: "counter/stats/failures > 0",
+//!         ),
+//!     },
+//!     // Condition atom -> boolean expression. Atoms not listed read `in/conditions`
+//!     // (a map atom -> bool, false when absent; set it with tools or tests).
+//!     "params/conditions": {"overload": "held(scale/out/value > 60, 100ms)"},
+//! })
+//! ```
+//!
+//! Bindings are resolved and type-checked once, at init: an unknown module or property, a
+//! value of the wrong type, an expression error (with line and column) or a plan action with
+//! no binding stops the module with every problem listed (`params/allow_unbound: true` lets
+//! unbound actions finish at once instead). Changing bindings or the plan later has no effect.
+//!
+//! Event-driven: the module steps the plan when a property read by a binding changes, when
+//! `in/conditions` changes, or a `held`/`age` deadline passes; within one module step, plan
+//! steps repeat while transitions fire (transitions enabled by a firing need the next plan
+//! step); `params/tick_ms` adds a periodic step (0 = none), needed only for conditions that
+//! time alone changes and no deadline covers (`age(p) > 2` has one, `age(p) * 2 > 4` not). Conditions are levels: an action's `finished` must be
+//! false when it starts (reset what it reads with `set`). A module enabled by two actions running
+//! in parallel is disabled when the first of them ends.
+
+mod bind;
+mod config;
+mod env;
+mod module;
+
+pub use config::{
+    match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
+};
+pub use module::Mission;
+
+use petrel_actors::ModuleRegistry;
+
+/// Registers `mission.pnp`.
+pub fn register(registry: &mut ModuleRegistry) {
+    registry.register::<Mission>();
+}

@@ -1,0 +1,292 @@
+//! The `mission.pnp` module: declare, bind at init, step the plan on events.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use petrel_actors::{Context, Input, Module, Output, Param, Ports, Schedule, State};
+use tokio::sync::watch;
+use tokio::time::Instant;
+
+use super::bind::{bind, Bound, Params};
+use super::config::{ActionBindings, ConditionBindings, Flags};
+use super::env::MissionEnv;
+use crate::exec::{step, PlanState, PlanStatus};
+use crate::load::load_plan;
+use crate::model::Plan;
+
+/// `mission.pnp`: see the [module docs](super).
+pub struct Mission {
+    plan_path: Param<String>,
+    rules: Param<String>,
+    is_mission: Param<bool>,
+    tick_ms: Param<i64>,
+    allow_unbound: Param<bool>,
+    actions: Param<ActionBindings>,
+    conditions: Param<ConditionBindings>,
+    flags: Input<Flags>,
+    marking: Output<String>,
+    running: Output<String>,
+    result: Output<String>,
+    fired: Output<i64>,
+    wake: State<i64>,
+    run: Option<Run>,
+}
+
+/// What init builds.
+struct Run {
+    plan: Arc<Plan>,
+    state: PlanState,
+    bound: Bound,
+    /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
+    timer: watch::Sender<Option<Instant>>,
+    done: bool,
+}
+
+impl Module for Mission {
+    const TYPE: &'static str = "mission.pnp";
+    const DESCRIPTION: &'static str =
+        "Runs a Petri Net Plan: actions bound to modules, conditions to property expressions.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        Mission {
+            plan_path: ports.param("params/plan", String::new(), "plan file (.pnml or text plan), relative to the working directory"),
+            rules: ports.param("params/rules", String::new(), "execution rules file for a text plan (empty = none)"),
+            is_mission: ports.param("params/is_mission", false, "goal stops the agent with exit code 0, fail with 1"),
+            tick_ms: ports.param("params/tick_ms", 0, "also step every this many ms (0 = only on events)"),
+            allow_unbound: ports.param("params/allow_unbound", false, "let actions without a binding finish at once instead of refusing to start"),
+            actions: ports.param("params/actions", ActionBindings::default(), "action name (or prefix of `name_p1_p2`) -> (enable, set, restore, finished, failed)"),
+            conditions: ports.param("params/conditions", ConditionBindings::default(), "condition atom -> boolean expression over properties"),
+            flags: ports.input("in/conditions", Flags::default(), "values of condition atoms that params/conditions does not bind"),
+            marking: ports.output("out/marking", String::new(), "marked places, `label` or `label*n`, comma-separated"),
+            running: ports.output("out/running", String::new(), "running actions, comma-separated"),
+            result: ports.output("out/result", "running".to_string(), "running, goal or fail"),
+            fired: ports.output("out/fired", 0, "transitions fired so far"),
+            wake: ports.state("state/wake", 0, "bumped to make the mission step again: a held/age deadline passed, or many steps fired in a row"),
+            run: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        let mut s = Schedule::new().on_change(&self.flags).on_change(&self.wake);
+        if let Some(run) = &self.run {
+            for (_, h, _) in &run.bound.watched {
+                s = s.on_change(h);
+            }
+        }
+        match self.tick_ms.value() {
+            ms if ms > 0 => s.period(Duration::from_millis(ms as u64)),
+            _ => s,
+        }
+    }
+
+    async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let result = self.start(ctx).await;
+        if let Err(e) = &result {
+            if self.is_mission.value() {
+                // The run exists for this mission: end it rather than idle forever.
+                ctx.stop_agent(
+                    2,
+                    format!("mission `{}` could not start: {e:#}", ctx.module()),
+                );
+            }
+        }
+        result
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let Some(run) = self.run.as_mut() else {
+            return Ok(());
+        };
+        if run.done {
+            return Ok(());
+        }
+        let mut fired = 0;
+        // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
+        // one. Step again at once while something fires (bounded, so a cycle of plain
+        // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
+        for round in 1.. {
+            let report = run.round(ctx.now(), &self.flags.get());
+            fired += report.fired.len();
+            if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
+                break;
+            }
+            if round == MAX_ROUNDS {
+                self.wake.set(self.wake.value() + 1);
+                break;
+            }
+        }
+        let _ = run.timer.send(run.bound.exprs.next_deadline());
+        if fired > 0 {
+            publish(&self.marking, marking(&run.plan, &run.state));
+            publish(
+                &self.running,
+                run.state.running_actions(&run.plan).join(", "),
+            );
+            self.fired.set(self.fired.value() + fired as i64);
+        }
+        let status = run.state.status(&run.plan);
+        if status != PlanStatus::Running {
+            run.done = true;
+            for a in run.bound.actions.values_mut().filter(|a| a.active()) {
+                a.deactivate();
+            }
+            self.result.set(status.as_str().to_string());
+            let reason = format!("mission `{}` ended: {}", run.plan.name(), status.as_str());
+            tracing::info!(result = status.as_str(), "{reason}");
+            if self.is_mission.value() {
+                ctx.stop_agent(u8::from(status == PlanStatus::Fail), reason);
+            }
+        }
+        Ok(())
+    }
+
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        if let Some(run) = self.run.as_mut() {
+            let _ = run.timer.send(None);
+        }
+        Ok(())
+    }
+}
+
+/// Plan steps run back to back in one module step at most (see [`Mission::step`]).
+const MAX_ROUNDS: usize = 64;
+
+impl Run {
+    /// One plan step: bring expressions up to date with changed properties, then step.
+    fn round(&mut self, now: Instant, flags: &Flags) -> crate::exec::StepReport {
+        for (id, h, seen) in &mut self.bound.watched {
+            let s = h.read();
+            if *seen != Some(s.version) {
+                *seen = Some(s.version);
+                self.bound
+                    .exprs
+                    .update(*id, h.type_info(), &s.value, s.written);
+            }
+        }
+        for id in self.bound.exprs.evaluate(now) {
+            if let Some(Err(e)) = self.bound.exprs.value(id) {
+                // Types were checked at init, so this is a value of unexpected shape: say so.
+                tracing::warn!(error = %e, "a binding expression could not be evaluated; it counts as false");
+            }
+        }
+        let mut env = MissionEnv {
+            bound: &mut self.bound,
+            flags,
+        };
+        let report = step(&self.plan, &mut self.state, &mut env);
+        for c in &report.unknown_conditions {
+            tracing::warn!(condition = %c, "unknown condition counts as false");
+        }
+        if !report.fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
+            let fired: Vec<&str> = report
+                .fired
+                .iter()
+                .map(|&t| self.plan.transitions()[t].label.as_str())
+                .collect();
+            let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
+            tracing::info!(?fired, ?calls, "plan step");
+        }
+        report
+    }
+}
+
+impl Mission {
+    /// Loads the plan and binds it (the body of `init`).
+    async fn start(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let path = self.plan_path.get();
+        anyhow::ensure!(
+            !path.is_empty(),
+            "{}/params/plan is empty; expected a plan file",
+            ctx.module()
+        );
+        let rules = self.rules.get();
+        let rules = (!rules.is_empty()).then(|| Path::new(rules.as_str()));
+        let loaded = load_plan(Path::new(path.as_str()), rules)
+            .with_context(|| format!("{}/params/plan", ctx.module()))?;
+        let plan = loaded.plan;
+        let params = Params {
+            module: ctx.module(),
+            actions: &self.actions.get(),
+            conditions: &self.conditions.get(),
+            allow_unbound: self.allow_unbound.value(),
+        };
+        let bound = bind(ctx.blackboard(), &plan, params)
+            .await
+            .map_err(|e| anyhow::anyhow!("plan {}: bad bindings:\n{e}", path))?;
+        if !bound.defaults.is_empty() {
+            tracing::info!(atoms = ?bound.defaults, "conditions read from in/conditions");
+        }
+        let wake = ctx
+            .blackboard()
+            .any_handle(&format!("{}/state/wake", ctx.module()))
+            .await?;
+        let (timer, rx) = watch::channel(None);
+        tokio::spawn(deadline_timer(rx, wake));
+        tracing::info!(
+            plan = plan.name(),
+            actions = bound.actions.len(),
+            conditions = bound.conditions.len(),
+            "mission bound"
+        );
+        let state = PlanState::new(&plan);
+        publish(&self.marking, marking(&plan, &state));
+        self.run = Some(Run {
+            state,
+            plan,
+            bound,
+            timer,
+            done: false,
+        });
+        Ok(())
+    }
+}
+
+fn publish(out: &Output<String>, v: String) {
+    if *out.get() != v {
+        out.set(v);
+    }
+}
+
+fn marking(plan: &Plan, state: &PlanState) -> String {
+    let places = plan.places();
+    let shown: Vec<String> = state
+        .marked()
+        .map(|(p, n)| {
+            let l = if places[p].label.is_empty() {
+                &places[p].id
+            } else {
+                &places[p].label
+            };
+            if n == 1 {
+                l.clone()
+            } else {
+                format!("{l}*{n}")
+            }
+        })
+        .collect();
+    shown.join(", ")
+}
+
+/// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
+async fn deadline_timer(mut rx: watch::Receiver<Option<Instant>>, wake: petrel_actors::AnyHandle) {
+    loop {
+        let deadline = *rx.borrow_and_update();
+        let sleep = async {
+            match deadline {
+                Some(t) => tokio::time::sleep_until(t).await,
+                None => std::future::pending().await,
+            }
+        };
+        tokio::select! {
+            changed = rx.changed() => if changed.is_err() { return },
+            _ = sleep => {
+                let n = wake.get::<i64>().map_or(0, |v| *v);
+                let _ = wake.set(Arc::new(n + 1));
+                // Wait for the next deadline the mission computes.
+                if rx.changed().await.is_err() { return }
+            }
+        }
+    }
+}

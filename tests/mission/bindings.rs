@@ -1,0 +1,125 @@
+//! Bindings: condition expressions and defaults, parameterized actions, bad bindings.
+
+use crate::support::{agent_with_mission, finished, start, stop, Plans};
+
+#[tokio::test(start_paused = true)]
+async fn conditions_bound_to_expressions_choose_the_branch() {
+    let plans = Plans::new(&[("choose.plan", "<far ? a : near ? b>")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/conditions": {{"far": "c3/params/increment > 5", "near": "not (c3/params/increment > 5)"}},
+           "params/actions": {{
+            "a": (enable: ["c1"], finished: "c1/out/value >= 1"),
+            "b": (enable: ["c2"], finished: "c2/out/value >= 1"),
+        }}"#,
+        plans.path("choose.plan")
+    )))
+    .await;
+    assert_eq!(finished(&agent).await.code, 0);
+    let bb = agent.blackboard();
+    assert_eq!(
+        *bb.get::<f64>("c1/out/value").await.unwrap(),
+        0.0,
+        "a did not run"
+    );
+    assert_eq!(
+        *bb.get::<f64>("c2/out/value").await.unwrap(),
+        1.0,
+        "near: b ran"
+    );
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn parameterized_actions_substitute_their_parameters_and_restore_values() {
+    let plans = Plans::new(&[("params.plan", "count_4_1; r1#count_10_3")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/actions": {{
+            "count": (enable: ["c1"], set: {{"c1/params/increment": "$2"}},
+                      finished: "c1/out/value >= $1"),
+        }}"#,
+        plans.path("params.plan")
+    )))
+    .await;
+    assert_eq!(finished(&agent).await.code, 0);
+    let bb = agent.blackboard();
+    assert_eq!(
+        *bb.get::<f64>("c1/out/value").await.unwrap(),
+        15.0,
+        "4 counts of 1, then the 5th count times 3"
+    );
+    assert_eq!(
+        *bb.get::<f64>("c1/params/increment").await.unwrap(),
+        1.0,
+        "restored"
+    );
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn unbound_actions_may_be_allowed_to_finish_at_once() {
+    let plans = Plans::new(&[("u.plan", "say_hello; a")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/allow_unbound": true,
+           "params/actions": {{"a": (finished: "true")}}"#,
+        plans.path("u.plan")
+    )))
+    .await;
+    assert_eq!(finished(&agent).await.code, 0);
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn bad_bindings_are_all_refused_at_init_with_positions() {
+    let plans = Plans::new(&[("bad.plan", "a; b; c; d; e_1")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/conditions": {{"unused": "true"}},
+           "params/actions": {{
+            "a": (finished: "c1/out/value >= 3 and\n c1/out/valu > 0"),
+            "b": (finished: "c1/out/value and true"),
+            "c": (enable: ["nope"], set: {{"c1/params/period_ms": "fast"}}),
+            "e": (failed: "c1/out/value > $1 +"),
+        }}"#,
+        plans.path("bad.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 2, "{}", exit.reason);
+    let summary = stop(agent).await;
+    let m = summary.module("m").unwrap();
+    assert_eq!(m.status, "failed");
+    let err = m.last_error.clone().unwrap_or_default();
+    for want in [
+        "init failed: plan ",
+        r#"m/params/actions["a"].finished: 2:2: unknown property `c1/out/valu` (in `c1/out/value >= 3 and"#,
+        r#"m/params/actions["b"].finished: 1:1: the left operand of `and` must be a boolean, found a number"#,
+        r#"m/params/actions["c"].enable (action `c`): no module `nope` in this agent"#,
+        r#"m/params/actions["c"].set["c1/params/period_ms"] (action `c`): expected i64: "#,
+        r#"m/params/actions["e"].failed: 1:19: expected a value, found the end (in `c1/out/value > 1 +`)"#,
+        "m/params/actions: no binding for action `d` (bound: a, b, c, e); bind them, or set params/allow_unbound",
+    ] {
+        assert!(err.contains(want), "missing `{want}` in:\n{err}");
+    }
+    assert!(
+        exit.reason.contains("mission `m` could not start"),
+        "{}",
+        exit.reason
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_missing_plan_file_is_reported_with_its_path() {
+    let agent = start(&agent_with_mission(
+        r#""params/plan": "/nonexistent/p.plan", "params/is_mission": true"#,
+    ))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 2);
+    assert!(
+        exit.reason.contains("m/params/plan") && exit.reason.contains("/nonexistent/p.plan"),
+        "{}",
+        exit.reason
+    );
+    stop(agent).await;
+}

@@ -1,0 +1,7 @@
+//! The `mission.pnp` module driving demo modules, on tokio's paused clock; and the shipped
+//! mission demo run by the real binary.
+
+mod bindings;
+mod cli;
+mod execution;
+mod support;
