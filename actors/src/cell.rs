@@ -4,7 +4,7 @@
 //! move through these cells without any actor round trip. A write replaces the cell's value
 //! under a short lock and raises the [`Signal`] of every module watching the cell.
 
-use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicU8, Ordering};
 use std::sync::Arc;
 
 use arc_swap::ArcSwap;
@@ -66,6 +66,8 @@ pub(crate) struct Slot {
 pub(crate) struct Cell {
     pub type_info: TypeInfo,
     slot: RwLock<Slot>,
+    /// The slot's version, readable without the lock (for cheap "did it change?" checks).
+    version: AtomicU64,
     /// Signals to raise on a write, each with the cause its subscriber asked for.
     watchers: ArcSwap<Vec<(Arc<Signal>, u8)>>,
 }
@@ -74,6 +76,7 @@ impl Cell {
     pub fn new(type_info: TypeInfo, value: AnyValue) -> Arc<Self> {
         Arc::new(Cell {
             type_info,
+            version: AtomicU64::new(0),
             slot: RwLock::new(Slot {
                 value,
                 version: 0,
@@ -91,10 +94,15 @@ impl Cell {
         self.slot.read().value.clone()
     }
 
+    pub fn version(&self) -> u64 {
+        self.version.load(Ordering::Acquire)
+    }
+
     pub fn write(&self, value: AnyValue) {
         let old = {
             let mut slot = self.slot.write();
             slot.version += 1;
+            self.version.store(slot.version, Ordering::Release);
             slot.written = Instant::now();
             std::mem::replace(&mut slot.value, value)
         };
@@ -165,6 +173,12 @@ impl Endpoint {
     #[inline]
     pub fn write(&self, value: AnyValue) {
         self.resolved.load().write(value)
+    }
+
+    /// The version of the value seen through this endpoint, without locking it.
+    #[inline]
+    pub fn version(&self) -> u64 {
+        self.resolved.load().version()
     }
 
     /// Wakes `signal` whenever the value seen through this endpoint changes, including after a relink.

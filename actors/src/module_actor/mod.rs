@@ -295,10 +295,10 @@ impl<M: Module> Running<M> {
 
     /// A fault injected through `control/fault` since the last step, if any.
     fn take_fault(&mut self) -> Option<String> {
-        let fault = self.builtins.fault.read();
-        if fault.version == self.fault_seen {
+        if self.builtins.fault.ep.version() == self.fault_seen {
             return None;
         }
+        let fault = self.builtins.fault.read();
         self.fault_seen = fault.version;
         Some(fault.value.to_string()).filter(|f| !f.is_empty())
     }

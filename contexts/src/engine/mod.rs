@@ -176,7 +176,12 @@ impl Engine {
                 Action::Deactivated(name)
             });
         }
-        self.diff(&mut actions);
+        // Effects change only when a context switched or a value expression (any expression
+        // that is not a condition) changed; otherwise there is nothing to resolve.
+        let values_changed = changed.iter().any(|id| !self.by_condition.contains_key(id));
+        if !actions.is_empty() || values_changed {
+            self.diff(&mut actions);
+        }
         actions
     }
 
