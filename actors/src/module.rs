@@ -59,7 +59,8 @@ pub trait Module: Send + Sized + 'static {
     /// and to check configs. Mistakes (bad paths, duplicates) are reported by the runtime.
     fn declare(ports: &mut Ports) -> Self;
 
-    /// The events that make the module step; asked once, after [`init`](Module::init).
+    /// The events that make the module step; asked after [`init`](Module::init), and again
+    /// when a step calls [`Context::reschedule`].
     fn schedule(&self) -> Schedule;
 
     /// Prepares the module after config values and links are in place; an error stops it cleanly.
@@ -209,6 +210,7 @@ pub struct Context {
     pub(crate) cause: Cause,
     pub(crate) steps: u64,
     pub(crate) now: Instant,
+    pub(crate) reschedule: bool,
 }
 
 impl Context {
@@ -228,6 +230,7 @@ impl Context {
             cause: Cause(0),
             steps: 0,
             now: Instant::now(),
+            reschedule: false,
         }
     }
 
@@ -241,6 +244,12 @@ impl Context {
     /// Stop, start, restart, add and remove the agent's modules (for mission and context layers).
     pub fn modules(&self) -> &ModuleControl {
         &self.modules
+    }
+
+    /// Asks the runtime to apply [`Module::schedule`] again after this step, e.g. when the
+    /// module has started watching other properties (new watches are added; old ones stay).
+    pub fn reschedule(&mut self) {
+        self.reschedule = true;
     }
 
     /// Asks the agent to stop: `petrel run` then stops every module and exits with `code`

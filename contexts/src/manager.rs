@@ -158,8 +158,13 @@ impl Module for ContextManager {
     }
 
     fn schedule(&self) -> Schedule {
-        let tick = Duration::from_millis(self.tick_ms.value().max(1) as u64);
-        let schedule = Schedule::every(tick).on_change(&self.reload);
+        // Changes wake the manager; a period is added only when time alone can switch a context.
+        let timed = self.engine.as_ref().is_some_and(Engine::uses_time);
+        let schedule = match timed {
+            true => Schedule::every(Duration::from_millis(self.tick_ms.value().max(1) as u64)),
+            false => Schedule::new(),
+        };
+        let schedule = schedule.on_change(&self.reload);
         self.watched
             .iter()
             .fold(schedule, |s, (_, h, _)| s.on_change(h))
@@ -238,7 +243,7 @@ impl ContextManager {
     }
 
     /// Re-reads the rules; a broken file is rejected and the running rules stay.
-    async fn reload_rules(&mut self, ctx: &Context) {
+    async fn reload_rules(&mut self, ctx: &mut Context) {
         let previous = std::mem::take(&mut self.watched);
         let previous_handles = std::mem::take(&mut self.handles);
         match self.load(ctx).await {
@@ -252,6 +257,8 @@ impl ContextManager {
                 }
                 self.engine = Some(engine);
                 tracing::info!("context rules reloaded");
+                // The new rules may watch other properties, or depend on time.
+                ctx.reschedule();
             }
             Err(errors) => {
                 tracing::error!("context rules not reloaded; the running rules stay:\n{errors}");

@@ -136,3 +136,27 @@ async fn reloading_applies_the_difference_and_a_broken_file_changes_nothing() {
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn reloaded_rules_wake_on_the_properties_they_newly_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(&rules, LOST).unwrap();
+    let agent = start(&agent_with_rules(&rules)).await;
+    let bb = agent.blackboard().clone();
+    let far = r#"Contexts(contexts: [(name: "far", when: "odometry/out/value > 115.5", stop: ["recorder"])])"#;
+    std::fs::write(&rules, far).unwrap();
+    bb.set("contexts/params/reload", 1_i64).await.unwrap();
+    advance(300).await;
+    assert!(*bb.get::<f64>("odometry/out/value").await.unwrap() > 116.0);
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "far",
+        "woken by odometry, read only since the reload"
+    );
+    assert_eq!(
+        *bb.get::<String>("recorder/stats/status").await.unwrap(),
+        status::STOPPED
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

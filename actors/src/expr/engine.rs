@@ -257,6 +257,11 @@ impl ExprSet {
         self.exprs.iter().filter_map(|e| e.deadline).min()
     }
 
+    /// Whether some expression depends on time alone (`held`, `age`).
+    pub fn has_timed(&self) -> bool {
+        self.exprs.iter().any(|e| e.timed)
+    }
+
     /// How many expressions the set holds.
     pub fn len(&self) -> usize {
         self.exprs.len()

@@ -79,6 +79,8 @@ pub(crate) struct Running<M> {
     module: M,
     readers: Vec<Arc<ReaderEndpoint>>,
     watchdog: Option<Duration>,
+    /// The config's `watchdog_ms`, which overrides the module's own.
+    config_watchdog: Option<Duration>,
     fault_seen: u64,
     ctx: Context,
     builtins: Builtins,
@@ -139,6 +141,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             module,
             readers,
             watchdog: args.watchdog,
+            config_watchdog: args.watchdog,
             fault_seen,
             ctx,
             builtins,
@@ -187,29 +190,12 @@ impl<M: Module> Actor for ModuleActor<M> {
 impl<M: Module> Running<M> {
     /// Waits for events and steps until asked to stop; an error is the module's failure.
     async fn run(&mut self) -> anyhow::Result<()> {
-        let Schedule {
-            period,
-            timeout,
-            watchdog,
-            watches,
-        } = self.module.schedule();
-        self.watchdog = self.watchdog.or(watchdog);
-        for watch in &watches {
-            match &watch.0 {
-                WatchTarget::Value(ep) => ep.subscribe(&self.signal),
-                WatchTarget::Queue(reader) => reader.subscribe(&self.signal),
-            }
-        }
         self.builtins
             .enabled
             .ep
             .subscribe_with(&self.signal, cause::ENABLED);
         self.stop.attach(&self.signal);
-        let mut ticker = period.map(|p| {
-            let mut t = tokio::time::interval_at(Instant::now() + p, p);
-            t.set_missed_tick_behavior(MissedTickBehavior::Skip);
-            t
-        });
+        let (mut ticker, mut timeout) = self.arm();
         let mut enabled = self.builtins.enabled.value();
         self.publish(if enabled {
             status::RUNNING
@@ -227,6 +213,9 @@ impl<M: Module> Running<M> {
                 if let Some(causes) = pending.take() {
                     self.step(causes).await?;
                     last_step = self.ctx.now;
+                    if std::mem::take(&mut self.ctx.reschedule) {
+                        (ticker, timeout) = self.arm();
+                    }
                     continue;
                 }
             }
@@ -259,6 +248,30 @@ impl<M: Module> Running<M> {
                 pending = Some(pending.unwrap_or(0) | (causes & cause::STEPS));
             }
         }
+    }
+
+    /// Applies the module's schedule: subscribes its watches (again: subscribing is idempotent),
+    /// sets its watchdog, and returns its ticker and timeout.
+    fn arm(&mut self) -> (Option<tokio::time::Interval>, Option<Duration>) {
+        let Schedule {
+            period,
+            timeout,
+            watchdog,
+            watches,
+        } = self.module.schedule();
+        self.watchdog = self.config_watchdog.or(watchdog);
+        for watch in &watches {
+            match &watch.0 {
+                WatchTarget::Value(ep) => ep.subscribe(&self.signal),
+                WatchTarget::Queue(reader) => reader.subscribe(&self.signal),
+            }
+        }
+        let ticker = period.map(|p| {
+            let mut t = tokio::time::interval_at(Instant::now() + p, p);
+            t.set_missed_tick_behavior(MissedTickBehavior::Skip);
+            t
+        });
+        (ticker, timeout)
     }
 
     async fn step(&mut self, causes: u8) -> anyhow::Result<()> {

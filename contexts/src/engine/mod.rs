@@ -138,6 +138,12 @@ impl Engine {
         active.into_iter().map(|r| r.name.as_str()).collect()
     }
 
+    /// Whether time alone can switch a context (`held`, `age`, `min_dwell_ms`), so the engine
+    /// must be stepped periodically as well as on changes.
+    pub fn uses_time(&self) -> bool {
+        self.exprs.has_timed() || self.rules.iter().any(|r| !r.min_dwell.is_zero())
+    }
+
     /// Expression evaluations so far (evaluation is incremental).
     pub fn evaluations(&self) -> u64 {
         self.exprs.total_evaluations()
