@@ -23,6 +23,7 @@ impl Engine {
             targets: HashMap::new(),
             by_condition: HashMap::new(),
             waiting: BTreeSet::new(),
+            active: Vec::new(),
         };
         let mut names = Vec::new();
         for rule in &loaded.rules.contexts {

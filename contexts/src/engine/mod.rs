@@ -101,6 +101,9 @@ pub struct Engine {
     by_condition: HashMap<ExprId, usize>,
     /// Rules whose switch waits for their `min_dwell` to pass.
     waiting: BTreeSet<usize>,
+    /// Active rules, highest priority first, then declaration order: effects and the active
+    /// list cost what is active, not the number of rules.
+    active: Vec<usize>,
 }
 
 impl Engine {
@@ -133,9 +136,10 @@ impl Engine {
 
     /// The contexts that hold now, by descending priority.
     pub fn active(&self) -> Vec<&str> {
-        let mut active: Vec<&Rule> = self.rules.iter().filter(|r| r.active).collect();
-        active.sort_by_key(|r| std::cmp::Reverse(r.priority));
-        active.into_iter().map(|r| r.name.as_str()).collect()
+        self.active
+            .iter()
+            .map(|&i| self.rules[i].name.as_str())
+            .collect()
     }
 
     /// Whether time alone can switch a context (`held`, `age`, `min_dwell_ms`), so the engine
@@ -175,6 +179,10 @@ impl Engine {
             }
             rule.active = !rule.active;
             rule.since = Some(now);
+            match rule.active {
+                true => self.active.push(i),
+                false => self.active.retain(|&a| a != i),
+            }
             let name = rule.name.clone();
             actions.push(if rule.active {
                 Action::Activated(name)
@@ -182,6 +190,9 @@ impl Engine {
                 Action::Deactivated(name)
             });
         }
+        let rules = &self.rules;
+        self.active
+            .sort_by_key(|&i| (std::cmp::Reverse(rules[i].priority), i));
         // Effects change only when a context switched or a value expression (any expression
         // that is not a condition) changed; otherwise there is nothing to resolve.
         let values_changed = changed.iter().any(|id| !self.by_condition.contains_key(id));
@@ -193,8 +204,7 @@ impl Engine {
 
     /// Effects the active contexts want, the highest priority first, then declaration order.
     fn desired(&self) -> Effects {
-        let mut order: Vec<&Rule> = self.rules.iter().filter(|r| r.active).collect();
-        order.sort_by_key(|r| std::cmp::Reverse(r.priority));
+        let order = self.active.iter().map(|&i| &self.rules[i]);
         let (mut values, mut links, mut runs) = (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
         for rule in order {
             let applied = |value| Applied {
