@@ -51,6 +51,37 @@ impl<T: ?Sized> Deref for Sample<T> {
     }
 }
 
+/// The read methods every typed value handle has, over its endpoint `ep`.
+macro_rules! read_methods {
+    ($handle:ident) => {
+        impl<T: PropertyType> $handle<T> {
+            /// The current value (of the link target, if linked). Copies no data, only a pointer.
+            #[inline]
+            pub fn get(&self) -> Arc<T> {
+                downcast(self.ep.value())
+            }
+
+            /// The current value with its version and write time.
+            pub fn read(&self) -> Sample<T> {
+                sample(&self.ep)
+            }
+
+            /// The property's `module/path`.
+            pub fn key(&self) -> &str {
+                &self.ep.key
+            }
+        }
+
+        impl<T: PropertyType + Copy> $handle<T> {
+            /// The current value, copied out (for small `Copy` values such as `f64`).
+            #[inline]
+            pub fn value(&self) -> T {
+                *self.get()
+            }
+        }
+    };
+}
+
 /// Read access to an input (`in/...`) or parameter (`params/...`).
 pub struct Input<T> {
     pub(crate) ep: Arc<Endpoint>,
@@ -67,31 +98,9 @@ impl<T: PropertyType> Input<T> {
             _t: PhantomData,
         }
     }
-
-    /// The current value (of the link target, if linked). Copies no data, only a pointer.
-    #[inline]
-    pub fn get(&self) -> Arc<T> {
-        downcast(self.ep.value())
-    }
-
-    /// The current value with its version and write time.
-    pub fn read(&self) -> Sample<T> {
-        sample(&self.ep)
-    }
-
-    /// The property's `module/path`.
-    pub fn key(&self) -> &str {
-        &self.ep.key
-    }
 }
 
-impl<T: PropertyType + Copy> Input<T> {
-    /// The current value, copied out (for small `Copy` values such as `f64`).
-    #[inline]
-    pub fn value(&self) -> T {
-        *self.get()
-    }
-}
+read_methods!(Input);
 
 /// Read and write access to an output (`out/...`) or state (`state/...`).
 pub struct Output<T> {
@@ -122,31 +131,9 @@ impl<T: PropertyType> Output<T> {
         }
         self.ep.write(Arc::new(value))
     }
-
-    /// The current value.
-    #[inline]
-    pub fn get(&self) -> Arc<T> {
-        downcast(self.ep.value())
-    }
-
-    /// The current value with its version and write time.
-    pub fn read(&self) -> Sample<T> {
-        sample(&self.ep)
-    }
-
-    /// The property's `module/path`.
-    pub fn key(&self) -> &str {
-        &self.ep.key
-    }
 }
 
-impl<T: PropertyType + Copy> Output<T> {
-    /// The current value, copied out.
-    #[inline]
-    pub fn value(&self) -> T {
-        *self.get()
-    }
-}
+read_methods!(Output);
 
 /// A handle to any value property of a running agent, from outside its modules (tools, tests,
 /// benchmarks); see [`Blackboard::handle`](crate::Blackboard::handle).
@@ -167,17 +154,6 @@ impl<T: PropertyType> PropertyHandle<T> {
         }
     }
 
-    /// The current value (of the link target, if linked).
-    #[inline]
-    pub fn get(&self) -> Arc<T> {
-        downcast(self.ep.value())
-    }
-
-    /// The current value with its version and write time.
-    pub fn read(&self) -> Sample<T> {
-        sample(&self.ep)
-    }
-
     /// Writes a value (to the link target, if linked) and wakes its watchers.
     #[inline]
     pub fn set(&self, value: T) {
@@ -190,6 +166,8 @@ impl<T: PropertyType> PropertyHandle<T> {
         self.signal.wait().await;
     }
 }
+
+read_methods!(PropertyHandle);
 
 /// An untyped handle to a value property, for code that learns property types at run time
 /// (expression evaluation, context rules, plan bindings); see
