@@ -217,13 +217,7 @@ mod tests {
             ..LaserConfig::default()
         };
         let id = w
-            .add_robot(
-                RobotConfig {
-                    laser: Some(laser),
-                    ..RobotConfig::default()
-                },
-                Pose2::new(1.05, 2.05, 0.0),
-            )
+            .add_robot(RobotConfig::with_laser(laser), Pose2::new(1.05, 2.05, 0.0))
             .unwrap();
         let out = w.step(1e-3).unwrap()[id].clone();
         let params = MapperParams {

@@ -99,6 +99,14 @@ impl Default for RobotConfig {
 }
 
 impl RobotConfig {
+    /// The default robot, carrying `laser`.
+    pub fn with_laser(laser: LaserConfig) -> Self {
+        RobotConfig {
+            laser: Some(laser),
+            ..RobotConfig::default()
+        }
+    }
+
     /// Checks every parameter.
     pub fn validate(&self) -> Result<(), ParamError> {
         positive("radius", self.radius)?;

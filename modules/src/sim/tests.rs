@@ -112,13 +112,7 @@ fn laser_rate_limits_scans_in_simulated_time() {
         ..LaserConfig::default()
     };
     let id = w
-        .add_robot(
-            RobotConfig {
-                laser: Some(laser),
-                ..RobotConfig::default()
-            },
-            Pose2::new(2.0, 3.0, 0.0),
-        )
+        .add_robot(RobotConfig::with_laser(laser), Pose2::new(2.0, 3.0, 0.0))
         .unwrap();
     let scans = (0..100)
         .filter(|_| w.step(0.01).unwrap()[id].scan.is_some())
@@ -221,13 +215,7 @@ fn a_mounted_laser_measures_from_its_mounting_pose() {
         ..LaserConfig::default()
     };
     let id = w
-        .add_robot(
-            RobotConfig {
-                laser: Some(laser),
-                ..RobotConfig::default()
-            },
-            Pose2::new(2.0, 3.0, 0.0),
-        )
+        .add_robot(RobotConfig::with_laser(laser), Pose2::new(2.0, 3.0, 0.0))
         .unwrap();
     let scan = w.step(1e-3).unwrap()[id].scan.clone().unwrap();
     // Mounted 0.1 m forward, looking backward: the wall face at x = 0.1 is 2.0 m away.

@@ -116,13 +116,7 @@ fn chosen_arcs_keep_the_disc_off_every_laser_point_in_random_clutter() {
             ..LaserConfig::default()
         };
         let id = w
-            .add_robot(
-                RobotConfig {
-                    laser: Some(laser),
-                    ..RobotConfig::default()
-                },
-                Pose2::default(),
-            )
+            .add_robot(RobotConfig::with_laser(laser), Pose2::default())
             .unwrap();
         let scan = w.step(1e-6).unwrap()[id].scan.clone().unwrap();
         let target = Pose2::new(
