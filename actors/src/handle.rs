@@ -199,6 +199,12 @@ impl AnyHandle {
         }
     }
 
+    /// The version of the current value (writes so far), read without locking the value:
+    /// a cheap "did it change?" check before [`read`](Self::read).
+    pub fn version(&self) -> u64 {
+        self.ep.version()
+    }
+
     /// The current value, if it is a `T`.
     pub fn get<T: PropertyType>(&self) -> Option<Arc<T>> {
         self.ep.value().downcast::<T>().ok()

@@ -6,12 +6,14 @@
 //! modules, and restoring what it changed when a context ends. Every activation and
 //! deactivation is traced and pushed to `out/changes`; `out/active` lists the active contexts.
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{anyhow, Context as _};
-use petrel_actors::expr::{parse, properties};
+use petrel_actors::expr::{parse, properties, PropId};
 use petrel_actors::{
     status, AnyHandle, AnyValue, Context, Module, Output, Param, Ports, PropertyType, QueueWriter,
     Registry, Schedule, TypeInfo,
@@ -92,6 +94,14 @@ pub fn check_rules(path: &Path, registry: &Registry) -> Result<Vec<String>, Vec<
         .collect())
 }
 
+/// A property the rules read: its id in the engine, its handle, and the last version fed.
+struct Watched {
+    path: String,
+    prop: PropId,
+    handle: AnyHandle,
+    seen: u64,
+}
+
 /// `context.manager`: runs a context rules file in an agent.
 pub struct ContextManager {
     rules: Param<String>,
@@ -102,12 +112,14 @@ pub struct ContextManager {
     evaluations: Output<i64>,
     changes: QueueWriter<ContextChange>,
     engine: Option<Engine>,
-    /// Properties the rules read: handle and last version fed to the engine.
-    watched: Vec<(String, AnyHandle, u64)>,
-    handles: HashMap<String, AnyHandle>,
-    original_values: HashMap<String, AnyValue>,
-    original_links: HashMap<String, Option<String>>,
-    original_runs: HashMap<String, bool>,
+    /// Properties the rules read.
+    watched: Vec<Watched>,
+    /// Every property the rules mention, by address.
+    handles: HashMap<Arc<str>, AnyHandle>,
+    /// What the rules changed, as it was before: values, links, running states.
+    original_values: HashMap<Arc<str>, AnyValue>,
+    original_links: HashMap<Arc<str>, Option<String>>,
+    original_runs: HashMap<Arc<str>, bool>,
     reload_seen: u64,
     started: Option<Instant>,
 }
@@ -167,7 +179,7 @@ impl Module for ContextManager {
         let schedule = schedule.on_change(&self.reload);
         self.watched
             .iter()
-            .fold(schedule, |s, (_, h, _)| s.on_change(h))
+            .fold(schedule, |s, w| s.on_change(&w.handle))
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -190,17 +202,23 @@ impl Module for ContextManager {
         let Some(engine) = self.engine.as_mut() else {
             return Ok(());
         };
-        for (path, handle, seen) in &mut self.watched {
-            let sample = handle.read();
-            if sample.version != *seen || ctx.cause().first() {
-                *seen = sample.version;
-                engine.update(path, handle.type_info(), &sample.value, sample.written);
+        let first = ctx.cause().first();
+        for w in &mut self.watched {
+            if w.handle.version() != w.seen || first {
+                let sample = w.handle.read();
+                w.seen = sample.version;
+                engine.update_prop(w.prop, w.handle.type_info(), &sample.value, sample.written);
             }
         }
         let actions = engine.step(ctx.now());
         let evaluations = engine.evaluations() as i64;
-        for action in actions {
+        let mut switched = false;
+        for action in &actions {
+            switched |= matches!(action, Action::Activated(_) | Action::Deactivated(_));
             self.apply(ctx, action).await;
+        }
+        if switched {
+            self.publish_active();
         }
         self.evaluations.set(evaluations);
         Ok(())
@@ -227,14 +245,20 @@ impl ContextManager {
         for address in mentioned(&loaded) {
             if let Ok(handle) = ctx.blackboard().any_handle(&address).await {
                 table.insert(address.clone(), (handle.type_info(), handle.value()));
-                handles.insert(address, handle);
+                handles.insert(Arc::from(address), handle);
             }
         }
         let engine = Engine::build(&loaded, &Table(table)).map_err(show)?;
         self.watched = engine
             .properties()
-            .into_iter()
-            .filter_map(|p| handles.get(&p).map(|h| (p, h.clone(), u64::MAX)))
+            .filter_map(|(prop, path)| {
+                handles.get(path).map(|handle| Watched {
+                    path: path.to_string(),
+                    prop,
+                    handle: handle.clone(),
+                    seen: u64::MAX,
+                })
+            })
             .collect();
         self.handles = handles;
         self.errors.set(String::new());
@@ -256,6 +280,7 @@ impl ContextManager {
                     self.handles.entry(k).or_insert(h);
                 }
                 self.engine = Some(engine);
+                self.publish_active();
                 tracing::info!("context rules reloaded");
                 // The new rules may watch other properties, or depend on time.
                 ctx.reschedule();
@@ -269,23 +294,30 @@ impl ContextManager {
         }
     }
 
-    async fn apply(&mut self, ctx: &Context, action: Action) {
-        if let Err(e) = self.try_apply(ctx, action.clone()).await {
+    /// Publishes the active contexts in `out/active`.
+    fn publish_active(&mut self) {
+        let mut active = String::new();
+        for (k, name) in self.engine.iter().flat_map(Engine::active).enumerate() {
+            if k > 0 {
+                active.push_str(", ");
+            }
+            active.push_str(name);
+        }
+        self.active.set(active);
+    }
+
+    async fn apply(&mut self, ctx: &Context, action: &Action) {
+        if let Err(e) = self.try_apply(ctx, action).await {
             tracing::error!(?action, error = %e, "context effect failed");
             self.errors.set(format!("{e:#}"));
         }
     }
 
-    async fn try_apply(&mut self, ctx: &Context, action: Action) -> anyhow::Result<()> {
+    async fn try_apply(&mut self, ctx: &Context, action: &Action) -> anyhow::Result<()> {
         let bb = ctx.blackboard();
         match action {
             Action::Activated(context) | Action::Deactivated(context) => {
-                let active = self
-                    .engine
-                    .as_ref()
-                    .map(|e| e.active().join(", "))
-                    .unwrap_or_default();
-                let now_active = active.split(", ").any(|a| a == context);
+                let now_active = matches!(action, Action::Activated(_));
                 if tracing::enabled!(tracing::Level::INFO) {
                     let trigger = self.trigger_values();
                     let what = if now_active {
@@ -300,24 +332,26 @@ impl ContextManager {
                     .map_or(0.0, |t| ctx.now().duration_since(t).as_secs_f64());
                 self.changes.push(ContextChange {
                     time_s,
-                    context,
+                    context: context.to_string(),
                     active: now_active,
                 });
-                self.active.set(active);
             }
             Action::Set {
                 target,
                 value,
                 context,
             } => {
-                let handle = self.handle(&target)?.clone();
+                let handle = self.handle(target)?.clone();
                 let info = handle.type_info();
                 let old = handle.value();
-                let first = !self.original_values.contains_key(&target);
-                self.original_values
-                    .entry(target.clone())
-                    .or_insert_with(|| old.clone());
-                let new = to_property(&value, info).map_err(|e| anyhow!("{target}: {e}"))?;
+                let new = to_property(value, info).map_err(|e| anyhow!("{target}: {e}"))?;
+                let first = match self.original_values.entry(target.clone()) {
+                    Entry::Vacant(slot) => {
+                        slot.insert(old.clone());
+                        true
+                    }
+                    Entry::Occupied(_) => false,
+                };
                 // Continuous expressions update often: the first change is news, the rest detail.
                 // Values are formatted only when someone listens.
                 if first && tracing::enabled!(tracing::Level::INFO) {
@@ -330,61 +364,61 @@ impl ContextManager {
                 handle.set(new)?;
             }
             Action::Restore(target) => {
-                if let Some(original) = self.original_values.remove(&target) {
-                    let handle = self.handle(&target)?.clone();
+                if let Some(original) = self.original_values.remove(target) {
+                    let handle = self.handle(target)?;
                     tracing::info!(%target, value = %handle.type_info().short(&original), "context restores");
                     handle.set(original)?;
                 }
             }
             Action::Release(target) => {
-                self.original_values.remove(&target);
+                self.original_values.remove(target);
             }
             Action::Link {
                 input,
                 source,
                 context,
             } => {
-                if !self.original_links.contains_key(&input) {
+                if !self.original_links.contains_key(input) {
                     self.original_links
-                        .insert(input.clone(), bb.link_of(&input).await?);
+                        .insert(input.clone(), bb.link_of(input).await?);
                 }
                 tracing::info!(%context, %input, %source, "context relinks");
-                bb.link(&input, &source).await?;
+                bb.link(input, source).await?;
             }
-            Action::RestoreLink(input) => match self.original_links.remove(&input) {
+            Action::RestoreLink(input) => match self.original_links.remove(input) {
                 Some(Some(original)) => {
                     tracing::info!(%input, source = %original, "context restores link");
-                    bb.link(&input, &original).await?;
+                    bb.link(input, &original).await?;
                 }
                 Some(None) => {
                     tracing::info!(%input, "context removes its link");
-                    bb.unlink(&input).await?;
+                    bb.unlink(input).await?;
                 }
                 None => {}
             },
             Action::ReleaseLink(input) => {
-                self.original_links.remove(&input);
+                self.original_links.remove(input);
             }
             Action::Run {
                 module,
                 start,
                 context,
             } => {
-                if !self.original_runs.contains_key(&module) {
+                if !self.original_runs.contains_key(module) {
                     let status = bb.get::<String>(&format!("{module}/stats/status")).await?;
                     let running = !matches!(status.as_str(), status::STOPPED | status::FAILED);
                     self.original_runs.insert(module.clone(), running);
                 }
-                tracing::info!(%context, %module, start, "context {} module", if start { "starts" } else { "stops" });
-                run(ctx, &module, start).await;
+                tracing::info!(%context, %module, start, "context {} module", if *start { "starts" } else { "stops" });
+                run(ctx, module, *start).await;
             }
             Action::RestoreRun(module) => {
-                if let Some(running) = self.original_runs.remove(&module) {
-                    run(ctx, &module, running).await;
+                if let Some(running) = self.original_runs.remove(module) {
+                    run(ctx, module, running).await;
                 }
             }
             Action::ReleaseRun(module) => {
-                self.original_runs.remove(&module);
+                self.original_runs.remove(module);
             }
         }
         Ok(())
@@ -401,7 +435,10 @@ impl ContextManager {
         let shown: Vec<String> = self
             .watched
             .iter()
-            .map(|(p, h, _)| format!("{p}={}", h.type_info().short(&h.value())))
+            .map(|w| {
+                let value = w.handle.type_info().short(&w.handle.value());
+                format!("{}={value}", w.path)
+            })
             .collect();
         shown.join(" ")
     }

@@ -111,7 +111,7 @@ fn hysteresis_stops_flapping_around_a_threshold() {
             Action::Restore("cam/params/deblur".into())
         ]
     );
-    assert_eq!(e.active(), Vec::<&str>::new());
+    assert_eq!(e.active().count(), 0);
 }
 
 #[test]
@@ -177,7 +177,7 @@ fn priorities_resolve_shared_targets_and_the_original_comes_back_last() {
             set("rec/enabled", Value::Bool(false), "danger")
         ]
     );
-    assert_eq!(e.active(), ["danger", "rough"]);
+    assert_eq!(e.active().collect::<Vec<_>>(), ["danger", "rough"]);
     let back = at(&mut e, t0, 20, "loc/out/q", 0.9);
     assert_eq!(
         back[1..],
@@ -301,4 +301,36 @@ fn bad_rules_are_reported_with_positions() {
         "rules.ron:3:12: error: context `b` can never hold: its `when` is always false",
     ];
     assert_eq!(e, expected);
+}
+
+#[test]
+fn a_reload_keeps_what_stays_and_undoes_what_removed_rules_did() {
+    let mut old = engine(
+        r#"Contexts(contexts: [
+            (name: "fast", when: "speed/out/v > 1", set: {"cam/params/deblur": "true"}),
+            (name: "lost", when: "loc/out/q < 0.5", set: {"oa/params/maxSpeed": "0.2"}, relink: {"mapper/in/pose": "hw/out/pose"}),
+        ])"#,
+    );
+    let t0 = Instant::now();
+    at(&mut old, t0, 0, "speed/out/v", 2.0);
+    at(&mut old, t0, 0, "loc/out/q", 0.1);
+    assert_eq!(old.active().collect::<Vec<_>>(), ["fast", "lost"]);
+
+    // `fast` stays as it was; `lost` is gone.
+    let mut new = engine(
+        r#"Contexts(contexts: [(name: "fast", when: "speed/out/v > 1", set: {"cam/params/deblur": "true"})])"#,
+    );
+    new.adopt(old);
+    assert_eq!(new.active().collect::<Vec<_>>(), ["fast"]);
+    let actions = at(&mut new, t0, 10, "speed/out/v", 2.0);
+    assert_eq!(
+        actions,
+        [
+            Action::Deactivated("lost".into()),
+            Action::Restore("oa/params/maxSpeed".into()),
+            Action::RestoreLink("mapper/in/pose".into()),
+        ],
+        "no second activation of `fast`, and its deblur is left as applied"
+    );
+    assert_eq!(at(&mut new, t0, 20, "speed/out/v", 2.5), []);
 }

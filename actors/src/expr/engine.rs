@@ -201,6 +201,14 @@ impl ExprSet {
     /// Re-evaluates the expressions that need it at time `now`; returns those whose value changed.
     pub fn evaluate(&mut self, now: Instant) -> Vec<ExprId> {
         let mut changed = Vec::new();
+        self.evaluate_into(now, &mut changed);
+        changed
+    }
+
+    /// Like [`evaluate`](ExprSet::evaluate), into `changed` (cleared first), so a caller that
+    /// evaluates often can reuse one buffer.
+    pub fn evaluate_into(&mut self, now: Instant, changed: &mut Vec<ExprId>) {
+        changed.clear();
         let mut due = std::mem::take(&mut self.due);
         // Evaluate in insertion order, as a full scan would.
         due.sort_unstable();
@@ -225,7 +233,6 @@ impl ExprSet {
         // Time-dependent expressions stay due.
         due.retain(|&i| self.exprs[i].timed);
         self.due = due;
-        changed
     }
 
     /// The last value of `id` (`None` before its first evaluation; `Some(Err)` if a property

@@ -1,13 +1,13 @@
 //! Building an engine from a rules file: every check `petrel check` reports.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeMap, HashMap};
 use std::time::Duration;
 
 use petrel_actors::expr::{parse, properties, ExprId, ExprSet, Ty, TypeEnv};
 use petrel_actors::TypeInfo;
 use tokio::time::Instant;
 
-use super::{Engine, Rule, Schema};
+use super::{Effect, Effects, Engine, Rule, Schema};
 use crate::rules::{LoadedRules, RuleError};
 
 impl Engine {
@@ -17,13 +17,17 @@ impl Engine {
         let mut engine = Engine {
             exprs: ExprSet::new(),
             rules: Vec::new(),
-            values: BTreeMap::new(),
-            links: BTreeMap::new(),
-            runs: BTreeMap::new(),
+            values: Effects::new(Vec::new()).0,
+            links: Effects::new(Vec::new()).0,
+            runs: Effects::new(Vec::new()).0,
             targets: HashMap::new(),
-            by_condition: HashMap::new(),
-            waiting: BTreeSet::new(),
+            condition_of: Vec::new(),
+            waiting: Vec::new(),
             active: Vec::new(),
+            pending: Vec::new(),
+            resolve: false,
+            changed: Vec::new(),
+            candidates: Vec::new(),
         };
         let mut names = Vec::new();
         for rule in &loaded.rules.contexts {
@@ -80,7 +84,7 @@ impl Engine {
                 };
                 engine.targets.insert(target.clone(), info);
                 if let Some(id) = add(&src, &want, &mut errors) {
-                    sets.push((target, id));
+                    sets.push(effect(&target, id));
                 }
             }
             for (input, source) in &rule.relink {
@@ -95,13 +99,13 @@ impl Engine {
                     (_, None) => errors.push(err(Some(source), None, format!("context `{}`: unknown property `{source}`", rule.name))),
                 }
             }
-            let runs: Vec<(String, bool)> = rule
+            let runs: Vec<Effect<bool>> = rule
                 .start
                 .iter()
-                .map(|m| (m.clone(), true))
-                .chain(rule.stop.iter().map(|m| (m.clone(), false)))
+                .map(|m| effect(m, true))
+                .chain(rule.stop.iter().map(|m| effect(m, false)))
                 .collect();
-            for (module, _) in &runs {
+            for module in runs.iter().map(|e| &e.target) {
                 if schema.property(&format!("{module}/enabled")).is_none() {
                     errors.push(err(
                         Some(module),
@@ -115,7 +119,7 @@ impl Engine {
                 continue;
             };
             engine.rules.push(Rule {
-                name: rule.name.clone(),
+                name: rule.name.as_str().into(),
                 when,
                 until: (until.0 != usize::MAX).then_some(until),
                 min_dwell: Duration::from_millis(rule.min_dwell_ms),
@@ -124,7 +128,7 @@ impl Engine {
                 relinks: rule
                     .relink
                     .iter()
-                    .map(|(a, b)| (a.clone(), b.clone()))
+                    .map(|(input, source)| effect(input, source.as_str().into()))
                     .collect(),
                 runs,
                 sticky: rule.sticky,
@@ -133,11 +137,14 @@ impl Engine {
             });
         }
         for (i, rule) in engine.rules.iter().enumerate() {
-            engine.by_condition.insert(rule.when, i);
-            if let Some(until) = rule.until {
-                engine.by_condition.insert(until, i);
+            for id in std::iter::once(rule.when).chain(rule.until) {
+                if engine.condition_of.len() <= id.0 {
+                    engine.condition_of.resize(id.0 + 1, None);
+                }
+                engine.condition_of[id.0] = Some(i);
             }
         }
+        engine.number_targets();
         // Every rule is looked at once, on the first step.
         engine.waiting = (0..engine.rules.len()).collect();
         errors.extend(engine.conflicts(loaded));
@@ -148,6 +155,22 @@ impl Engine {
         }
     }
 
+    /// Numbers the targets of each effect kind (in name order) and creates their tables.
+    fn number_targets(&mut self) {
+        fn table<X, V: Clone + PartialEq>(effects: Vec<&mut Effect<X>>) -> Effects<V> {
+            let names = effects.iter().map(|e| e.target.clone()).collect();
+            let (table, numbers) = Effects::new(names);
+            for e in effects {
+                e.number = numbers[&e.target];
+            }
+            table
+        }
+        let rules = &mut self.rules;
+        self.values = table(rules.iter_mut().flat_map(|r| &mut r.sets).collect());
+        self.links = table(rules.iter_mut().flat_map(|r| &mut r.relinks).collect());
+        self.runs = table(rules.iter_mut().flat_map(|r| &mut r.runs).collect());
+    }
+
     /// Equal priorities on a shared target cannot be resolved deterministically.
     fn conflicts(&self, loaded: &LoadedRules) -> Vec<RuleError> {
         let mut errors = Vec::new();
@@ -156,12 +179,12 @@ impl Engine {
             let targets = rule
                 .sets
                 .iter()
-                .map(|(t, _)| t.clone())
-                .chain(rule.relinks.iter().map(|(i, _)| format!("link of {i}")))
+                .map(|e| e.target.to_string())
+                .chain(rule.relinks.iter().map(|e| format!("link of {}", e.target)))
                 .chain(
                     rule.runs
                         .iter()
-                        .map(|(m, _)| format!("running state of {m}")),
+                        .map(|e| format!("running state of {}", e.target)),
                 );
             for target in targets {
                 if let Some(other) = owners.insert((target.clone(), rule.priority), &rule.name) {
@@ -193,6 +216,15 @@ impl Engine {
                 )
             })
             .collect()
+    }
+}
+
+/// An effect on `target`, numbered later by [`Engine::number_targets`].
+fn effect<X>(target: &str, what: X) -> Effect<X> {
+    Effect {
+        target: target.into(),
+        number: usize::MAX,
+        what,
     }
 }
 

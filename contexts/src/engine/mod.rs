@@ -2,14 +2,18 @@
 //! should be (resolved by priority), and the actions that take the blackboard from what is
 //! applied to what is desired. No I/O and no clock of its own: values and times are passed in.
 
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::HashMap;
+use std::sync::Arc;
 use std::time::Duration;
 
-use petrel_actors::expr::{ExprId, ExprSet, Value};
+use petrel_actors::expr::{ExprId, ExprSet, PropId, Value};
 use petrel_actors::{AnyValue, TypeInfo};
 use tokio::time::Instant;
 
 mod build;
+mod effects;
+
+use effects::{Actions, Effects};
 
 /// What the engine needs to know about the agent's properties to check rules.
 pub trait Schema {
@@ -19,100 +23,128 @@ pub trait Schema {
 
 /// One step of the engine's output, in the order to carry out. Fields are named by what they
 /// hold: the property or module changed, the new value or source, the context responsible.
+/// Names are shared with the engine (`Arc<str>`): producing an action does not copy them.
 #[derive(Debug, Clone, PartialEq)]
 #[allow(missing_docs)]
 pub enum Action {
     /// A context started to hold.
-    Activated(String),
+    Activated(Arc<str>),
     /// A context stopped holding.
-    Deactivated(String),
+    Deactivated(Arc<str>),
     /// Write `value` to `target` (save the original first, if not saved yet).
     Set {
-        target: String,
+        target: Arc<str>,
         value: Value,
-        context: String,
+        context: Arc<str>,
     },
     /// Put `target` back to its saved original.
-    Restore(String),
+    Restore(Arc<str>),
     /// Forget `target`'s saved original and leave its value (a sticky context ended).
-    Release(String),
+    Release(Arc<str>),
     /// Link `input` to `source` (save the original link first, if not saved yet).
     Link {
-        input: String,
-        source: String,
-        context: String,
+        input: Arc<str>,
+        source: Arc<str>,
+        context: Arc<str>,
     },
     /// Put `input`'s original link back.
-    RestoreLink(String),
+    RestoreLink(Arc<str>),
     /// Forget `input`'s original link (sticky).
-    ReleaseLink(String),
+    ReleaseLink(Arc<str>),
     /// Start (`true`) or stop (`false`) a module instance (save whether it ran, if not saved).
     Run {
-        module: String,
+        module: Arc<str>,
         start: bool,
-        context: String,
+        context: Arc<str>,
     },
     /// Put a module back in the running state it had.
-    RestoreRun(String),
+    RestoreRun(Arc<str>),
     /// Forget a module's original running state (sticky).
-    ReleaseRun(String),
+    ReleaseRun(Arc<str>),
 }
 
 struct Rule {
-    name: String,
+    name: Arc<str>,
     when: ExprId,
     until: Option<ExprId>,
     min_dwell: Duration,
     priority: i64,
-    sets: Vec<(String, ExprId)>,
-    relinks: Vec<(String, String)>,
-    runs: Vec<(String, bool)>,
+    sets: Vec<Effect<ExprId>>,
+    relinks: Vec<Effect<Arc<str>>>,
+    runs: Vec<Effect<bool>>,
     sticky: bool,
     active: bool,
     since: Option<Instant>,
 }
 
-/// Effects by target: values, links, running states.
-type Effects = (
-    BTreeMap<String, Applied<Value>>,
-    BTreeMap<String, Applied<String>>,
-    BTreeMap<String, Applied<bool>>,
-);
-
-/// An effect currently applied: who applied it, what, and whether it outlives its context.
-#[derive(Debug, Clone, PartialEq)]
-struct Applied<V> {
-    context: String,
-    value: V,
-    sticky: bool,
+/// One effect of a rule: its target (by name and by number in its [`Effects`] table) and what
+/// the rule puts there (an expression, a link source, a running state).
+struct Effect<X> {
+    target: Arc<str>,
+    number: usize,
+    what: X,
 }
+
+/// What setting a value, relinking and starting or stopping a module turn into.
+const SET: Actions<Value> = Actions {
+    apply: |target, a| Action::Set {
+        target,
+        value: a.value.clone(),
+        context: a.context.clone(),
+    },
+    restore: Action::Restore,
+    release: Action::Release,
+};
+const LINK: Actions<Arc<str>> = Actions {
+    apply: |input, a| Action::Link {
+        input,
+        source: a.value.clone(),
+        context: a.context.clone(),
+    },
+    restore: Action::RestoreLink,
+    release: Action::ReleaseLink,
+};
+const RUN: Actions<bool> = Actions {
+    apply: |module, a| Action::Run {
+        module,
+        start: a.value,
+        context: a.context.clone(),
+    },
+    restore: Action::RestoreRun,
+    release: Action::ReleaseRun,
+};
 
 /// Context rules running over a set of expressions.
 pub struct Engine {
     exprs: ExprSet,
     rules: Vec<Rule>,
-    values: BTreeMap<String, Applied<Value>>,
-    links: BTreeMap<String, Applied<String>>,
-    runs: BTreeMap<String, Applied<bool>>,
+    values: Effects<Value>,
+    links: Effects<Arc<str>>,
+    runs: Effects<bool>,
     /// The expected type of each `set` target, to convert values.
     targets: HashMap<String, TypeInfo>,
-    /// The rule whose `when` or `until` each condition is, so a step looks only at rules whose
-    /// conditions changed.
-    by_condition: HashMap<ExprId, usize>,
+    /// The rule whose `when` or `until` each expression is (by expression number), so a step
+    /// looks only at rules whose conditions changed.
+    condition_of: Vec<Option<usize>>,
     /// Rules whose switch waits for their `min_dwell` to pass.
-    waiting: BTreeSet<usize>,
+    waiting: Vec<usize>,
     /// Active rules, highest priority first, then declaration order: effects and the active
     /// list cost what is active, not the number of rules.
     active: Vec<usize>,
+    /// Actions owed before the next step's own (contexts a reload removed).
+    pending: Vec<Action>,
+    /// Effects must be resolved at the next step even if nothing switches (after a reload).
+    resolve: bool,
+    /// Scratch buffers, kept to avoid allocating in every step.
+    changed: Vec<ExprId>,
+    candidates: Vec<usize>,
 }
 
 impl Engine {
-    /// The properties the rules read (feed their values with [`update`](Engine::update)).
-    pub fn properties(&self) -> Vec<String> {
-        self.exprs
-            .properties()
-            .map(|(_, p)| p.to_string())
-            .collect()
+    /// The properties the rules read (feed their values with [`update`](Engine::update) or
+    /// [`update_prop`](Engine::update_prop)).
+    pub fn properties(&self) -> impl Iterator<Item = (PropId, &str)> {
+        self.exprs.properties()
     }
 
     /// The type of a `set` target.
@@ -127,19 +159,39 @@ impl Engine {
         }
     }
 
-    /// Takes over what `old` had applied, so a reload only changes the difference.
+    /// Like [`update`](Engine::update), for a property known by its id in
+    /// [`properties`](Engine::properties).
+    pub fn update_prop(&mut self, id: PropId, info: TypeInfo, value: &AnyValue, written: Instant) {
+        self.exprs.update(id, info, value, written);
+    }
+
+    /// Takes over from `old` (a reload), so that only the difference is applied: contexts kept
+    /// by name stay active (no second activation), contexts no longer in the rules are
+    /// reported deactivated, and what `old` applied is resolved against the new rules at the
+    /// next step (restoring what removed rules changed).
     pub fn adopt(&mut self, old: Engine) {
-        self.values = old.values;
-        self.links = old.links;
-        self.runs = old.runs;
+        for was in old.rules.iter().filter(|r| r.active) {
+            match self.rules.iter_mut().find(|r| r.name == was.name) {
+                Some(rule) => {
+                    rule.active = true;
+                    rule.since = was.since;
+                }
+                None => self.pending.push(Action::Deactivated(was.name.clone())),
+            }
+        }
+        self.active = (0..self.rules.len())
+            .filter(|&i| self.rules[i].active)
+            .collect();
+        self.sort_active();
+        self.values.adopt(old.values);
+        self.links.adopt(old.links);
+        self.runs.adopt(old.runs);
+        self.resolve = true;
     }
 
     /// The contexts that hold now, by descending priority.
-    pub fn active(&self) -> Vec<&str> {
-        self.active
-            .iter()
-            .map(|&i| self.rules[i].name.as_str())
-            .collect()
+    pub fn active(&self) -> impl ExactSizeIterator<Item = &str> {
+        self.active.iter().map(|&i| &*self.rules[i].name)
     }
 
     /// Whether time alone can switch a context (`held`, `age`, `min_dwell_ms`), so the engine
@@ -153,13 +205,29 @@ impl Engine {
         self.exprs.total_evaluations()
     }
 
+    fn condition(&self, id: ExprId) -> Option<usize> {
+        self.condition_of.get(id.0).copied().flatten()
+    }
+
+    fn sort_active(&mut self) {
+        let rules = &self.rules;
+        self.active
+            .sort_by_key(|&i| (std::cmp::Reverse(rules[i].priority), i));
+    }
+
     /// Evaluates what changed at `now`, switches contexts, and returns the actions to apply.
     pub fn step(&mut self, now: Instant) -> Vec<Action> {
-        let changed = self.exprs.evaluate(now);
-        let mut candidates = std::mem::take(&mut self.waiting);
-        candidates.extend(changed.iter().filter_map(|id| self.by_condition.get(id)));
-        let mut actions = Vec::new();
-        for i in candidates {
+        let mut changed = std::mem::take(&mut self.changed);
+        self.exprs.evaluate_into(now, &mut changed);
+        let mut candidates = std::mem::take(&mut self.candidates);
+        candidates.clear();
+        candidates.append(&mut self.waiting);
+        candidates.extend(changed.iter().filter_map(|&id| self.condition(id)));
+        candidates.sort_unstable();
+        candidates.dedup();
+        let mut actions = std::mem::take(&mut self.pending);
+        let mut switched = false;
+        for &i in &candidates {
             let rule = &mut self.rules[i];
             let holds = self.exprs.bool(rule.when) == Some(true);
             let ends = match rule.until {
@@ -174,143 +242,63 @@ impl Engine {
                 .since
                 .is_some_and(|t| now.duration_since(t) < rule.min_dwell)
             {
-                self.waiting.insert(i);
+                self.waiting.push(i);
                 continue;
             }
             rule.active = !rule.active;
             rule.since = Some(now);
-            match rule.active {
-                true => self.active.push(i),
-                false => self.active.retain(|&a| a != i),
-            }
             let name = rule.name.clone();
-            actions.push(if rule.active {
-                Action::Activated(name)
+            if rule.active {
+                self.active.push(i);
+                actions.push(Action::Activated(name));
             } else {
-                Action::Deactivated(name)
-            });
+                self.active.retain(|&a| a != i);
+                actions.push(Action::Deactivated(name));
+            }
+            switched = true;
         }
-        let rules = &self.rules;
-        self.active
-            .sort_by_key(|&i| (std::cmp::Reverse(rules[i].priority), i));
+        if switched {
+            self.sort_active();
+        }
         // Effects change only when a context switched or a value expression (any expression
         // that is not a condition) changed; otherwise there is nothing to resolve.
-        let values_changed = changed.iter().any(|id| !self.by_condition.contains_key(id));
-        if !actions.is_empty() || values_changed {
-            self.diff(&mut actions);
+        let values_changed = changed.iter().any(|&id| self.condition(id).is_none());
+        if switched || values_changed || std::mem::take(&mut self.resolve) {
+            self.resolve_effects(&mut actions);
         }
+        self.changed = changed;
+        self.candidates = candidates;
         actions
     }
 
-    /// Effects the active contexts want, the highest priority first, then declaration order.
-    fn desired(&self) -> Effects {
-        let order = self.active.iter().map(|&i| &self.rules[i]);
-        let (mut values, mut links, mut runs) = (BTreeMap::new(), BTreeMap::new(), BTreeMap::new());
-        for rule in order {
-            let applied = |value| Applied {
-                context: rule.name.clone(),
-                value,
-                sticky: rule.sticky,
-            };
-            for (target, id) in &rule.sets {
-                if let Some(Ok(v)) = self.exprs.value(*id) {
-                    values
-                        .entry(target.clone())
-                        .or_insert_with(|| applied(v.clone()));
+    /// Offers the active contexts' effects, highest priority first, and pushes the actions
+    /// that bring the applied effects in line.
+    fn resolve_effects(&mut self, actions: &mut Vec<Action>) {
+        self.values.clear_wanted();
+        self.links.clear_wanted();
+        self.runs.clear_wanted();
+        for &i in &self.active {
+            let rule = &self.rules[i];
+            for e in &rule.sets {
+                if let Some(Ok(v)) = self.exprs.value(e.what) {
+                    self.values.want(e.number, &rule.name, v, rule.sticky);
                 }
             }
-            for (input, source) in &rule.relinks {
-                links.entry(input.clone()).or_insert_with(|| Applied {
-                    context: rule.name.clone(),
-                    value: source.clone(),
-                    sticky: rule.sticky,
-                });
+            for e in &rule.relinks {
+                self.links.want(e.number, &rule.name, &e.what, rule.sticky);
             }
-            for (module, start) in &rule.runs {
-                runs.entry(module.clone()).or_insert_with(|| Applied {
-                    context: rule.name.clone(),
-                    value: *start,
-                    sticky: rule.sticky,
-                });
+            for e in &rule.runs {
+                self.runs.want(e.number, &rule.name, &e.what, rule.sticky);
             }
         }
-        (values, links, runs)
-    }
-
-    fn diff(&mut self, actions: &mut Vec<Action>) {
-        let (values, links, runs) = self.desired();
-        reconcile(
-            &mut self.values,
-            values,
-            actions,
-            |target, a| Action::Set {
-                target,
-                value: a.value.clone(),
-                context: a.context.clone(),
-            },
-            Action::Restore,
-            Action::Release,
-        );
-        reconcile(
-            &mut self.links,
-            links,
-            actions,
-            |input, a| Action::Link {
-                input,
-                source: a.value.clone(),
-                context: a.context.clone(),
-            },
-            Action::RestoreLink,
-            Action::ReleaseLink,
-        );
-        reconcile(
-            &mut self.runs,
-            runs,
-            actions,
-            |module, a| Action::Run {
-                module,
-                start: a.value,
-                context: a.context.clone(),
-            },
-            Action::RestoreRun,
-            Action::ReleaseRun,
-        );
-    }
-}
-
-/// Turns `applied` into `desired`, pushing the actions that do it.
-fn reconcile<V: PartialEq + Clone>(
-    applied: &mut BTreeMap<String, Applied<V>>,
-    desired: BTreeMap<String, Applied<V>>,
-    actions: &mut Vec<Action>,
-    apply: impl Fn(String, &Applied<V>) -> Action,
-    restore: impl Fn(String) -> Action,
-    release: impl Fn(String) -> Action,
-) {
-    let gone: Vec<String> = applied
-        .keys()
-        .filter(|k| !desired.contains_key(*k))
-        .cloned()
-        .collect();
-    for key in gone {
-        let was = applied.remove(&key).expect("listed above");
-        actions.push(if was.sticky {
-            release(key)
-        } else {
-            restore(key)
-        });
-    }
-    for (key, want) in desired {
-        if applied.get(&key) != Some(&want) {
-            actions.push(apply(key.clone(), &want));
-            applied.insert(key, want);
-        }
+        self.values.reconcile(actions, &SET);
+        self.links.reconcile(actions, &LINK);
+        self.runs.reconcile(actions, &RUN);
     }
 }
 
 /// Converts an expression value into a value of property type `info`.
 pub fn to_property(value: &Value, info: TypeInfo) -> Result<AnyValue, String> {
-    use std::sync::Arc;
     match value {
         Value::Bool(b) if info.is::<bool>() => Ok(Arc::new(*b)),
         Value::Num(n) if info.is::<f64>() => Ok(Arc::new(*n)),
