@@ -209,3 +209,86 @@ fn check_validates_context_rules_with_the_config() {
         "a number cannot set a bool: {err}"
     );
 }
+
+/// Runs `petrel run` in the background, reading its log line by line.
+#[cfg(unix)]
+struct Running {
+    child: std::process::Child,
+    log: std::io::Lines<std::io::BufReader<std::process::ChildStderr>>,
+}
+
+#[cfg(unix)]
+impl Running {
+    fn start(config: &std::path::Path) -> Self {
+        use std::io::BufRead;
+        let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", config.to_str().unwrap(), "--for", "120s"])
+            .env("RUST_LOG", "info")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("petrel runs");
+        let log = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        Running { child, log }
+    }
+
+    /// Reads the log up to the first line containing `needle` and returns it.
+    fn wait_for(&mut self, needle: &str) -> String {
+        for line in self.log.by_ref() {
+            let line = line.expect("the log is text");
+            if line.contains(needle) {
+                return line;
+            }
+        }
+        panic!("petrel's log ended without `{needle}`");
+    }
+
+    fn signal(&self, name: &str) {
+        let sent = Command::new("kill")
+            .args([&format!("-{name}"), &self.child.id().to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(sent.success());
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("agent.ron");
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", contexts: "rules.ron", modules: [(name: "s", type: "demo.signal"), (name: "c", type: "demo.camera")])"#,
+    )
+    .unwrap();
+    let fast = |threshold: &str| {
+        format!(
+            "Contexts(contexts: [\n  (name: \"fast\", when: \"s/out/value > {threshold}\", set: {{\"c/params/deblur\": \"true\"}}),\n])"
+        )
+    };
+    std::fs::write(&rules, fast("0.5")).unwrap();
+    let mut petrel = Running::start(&config);
+    petrel.wait_for("context rules loaded");
+
+    std::fs::write(&rules, fast("")).unwrap();
+    petrel.signal("HUP");
+    petrel.wait_for("context rules not reloaded; the running rules stay");
+    let error = petrel.wait_for("error:");
+    assert!(
+        error.contains(&format!(
+            "{}:2:39: error: context `fast`: in `s/out/value > `: expected a value",
+            rules.display()
+        )),
+        "{error}"
+    );
+
+    std::fs::write(&rules, fast("0.9")).unwrap();
+    petrel.signal("HUP");
+    petrel.wait_for("context rules reloaded");
+
+    petrel.signal("INT");
+    petrel.wait_for("stopping: interrupted");
+    assert!(petrel.child.wait().unwrap().success());
+}

@@ -96,7 +96,6 @@ pub fn check_rules(path: &Path, registry: &Registry) -> Result<Vec<String>, Vec<
 
 /// A property the rules read: its id in the engine, its handle, and the last version fed.
 struct Watched {
-    path: String,
     prop: PropId,
     handle: AnyHandle,
     seen: u64,
@@ -253,7 +252,6 @@ impl ContextManager {
             .properties()
             .filter_map(|(prop, path)| {
                 handles.get(path).map(|handle| Watched {
-                    path: path.to_string(),
                     prop,
                     handle: handle.clone(),
                     seen: u64::MAX,
@@ -319,7 +317,7 @@ impl ContextManager {
             Action::Activated(context) | Action::Deactivated(context) => {
                 let now_active = matches!(action, Action::Activated(_));
                 if tracing::enabled!(tracing::Level::INFO) {
-                    let trigger = self.trigger_values();
+                    let trigger = self.trigger_values(context);
                     let what = if now_active {
                         "activated"
                     } else {
@@ -430,14 +428,18 @@ impl ContextManager {
             .with_context(|| format!("`{address}` is not in the blackboard"))
     }
 
-    /// The current values of the properties the rules read, for traces.
-    fn trigger_values(&self) -> String {
-        let shown: Vec<String> = self
-            .watched
-            .iter()
-            .map(|w| {
+    /// The current values of the properties `context`'s conditions read, for traces.
+    fn trigger_values(&self, context: &str) -> String {
+        let Some(engine) = &self.engine else {
+            return String::new();
+        };
+        let shown: Vec<String> = engine
+            .condition_reads(context)
+            .into_iter()
+            .filter_map(|(prop, path)| {
+                let w = self.watched.iter().find(|w| w.prop == prop)?;
                 let value = w.handle.type_info().short(&w.handle.value());
-                format!("{}={value}", w.path)
+                Some(format!("{path}={value}"))
             })
             .collect();
         shown.join(" ")

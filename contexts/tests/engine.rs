@@ -334,3 +334,22 @@ fn a_reload_keeps_what_stays_and_undoes_what_removed_rules_did() {
     );
     assert_eq!(at(&mut new, t0, 20, "speed/out/v", 2.5), []);
 }
+
+#[test]
+fn a_switch_is_explained_by_what_its_conditions_read() {
+    let e = engine(
+        r#"Contexts(contexts: [
+            (name: "fast", when: "speed/out/v > 1", until: "speed/out/v < 0.5 or loc/out/q < 0.1"),
+            (name: "lost", when: "loc/out/q < 0.5", set: {"oa/params/maxSpeed": "speed/out/v * 0.5"}),
+        ])"#,
+    );
+    let names = |c| {
+        e.condition_reads(c)
+            .into_iter()
+            .map(|(_, p)| p)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(names("fast"), ["speed/out/v", "loc/out/q"]);
+    assert_eq!(names("lost"), ["loc/out/q"], "not what its effects read");
+    assert!(names("nope").is_empty());
+}

@@ -26,6 +26,9 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         }
     };
     runtime.block_on(async move {
+        // Listen before the agent starts, so a SIGHUP sent as soon as the rules are loaded is
+        // a reload, not the default "terminate".
+        let hangups = Hangups::listen();
         let agent = match Agent::start(&file, registry).await {
             Ok(agent) => agent,
             Err(StartError::Config(errors)) => return bad_input(&errors),
@@ -38,7 +41,7 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         let (why, mut code) = tokio::select! {
             exit = agent.finished() => (exit.reason, ExitCode::from(exit.code)),
             _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), ExitCode::SUCCESS),
-            _ = reload_on_hangup(&agent) => unreachable!("reloading never ends"),
+            _ = reload_on_hangup(hangups, &agent) => unreachable!("reloading never ends"),
             _ = async {
                 match args.duration {
                     Some(d) => tokio::time::sleep(d).await,
@@ -75,12 +78,32 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
     })
 }
 
+/// SIGHUPs received (on Unix; elsewhere, none ever arrive).
+struct Hangups {
+    #[cfg(unix)]
+    signals: Option<tokio::signal::unix::Signal>,
+}
+
+impl Hangups {
+    fn listen() -> Self {
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{signal, SignalKind};
+            let signals = signal(SignalKind::hangup())
+                .inspect_err(|e| tracing::warn!(error = %e, "cannot listen for SIGHUP; reload context rules through params/reload"))
+                .ok();
+            Hangups { signals }
+        }
+        #[cfg(not(unix))]
+        Hangups {}
+    }
+}
+
 /// On every SIGHUP, asks each `context.manager` to re-read its rules (its `params/reload`).
-async fn reload_on_hangup(agent: &Agent) {
+async fn reload_on_hangup(hangups: Hangups, agent: &Agent) {
     #[cfg(unix)]
     {
-        use tokio::signal::unix::{signal, SignalKind};
-        if let Ok(mut hangups) = signal(SignalKind::hangup()) {
+        if let Some(mut hangups) = hangups.signals {
             while hangups.recv().await.is_some() {
                 let summary = agent.summary().await;
                 for m in summary
@@ -106,5 +129,7 @@ async fn reload_on_hangup(agent: &Agent) {
             }
         }
     }
+    #[cfg(not(unix))]
+    let _ = (hangups, agent);
     std::future::pending::<()>().await
 }

@@ -26,6 +26,8 @@ struct Entry {
     /// Uses `held` or `age`: its value may change with time alone.
     timed: bool,
     dirty: bool,
+    /// The properties it reads.
+    reads: Vec<usize>,
     value: Option<Result<Value, String>>,
     deadline: Option<Instant>,
     evaluations: u64,
@@ -152,7 +154,7 @@ impl ExprSet {
         }
         self.held.resize(held, None);
         let id = self.exprs.len();
-        for d in deps {
+        for &d in &deps {
             self.readers[d].push(id);
         }
         let timed = timed || uses_age(&node);
@@ -162,6 +164,7 @@ impl ExprSet {
             ty,
             timed,
             dirty: true,
+            reads: deps,
             value: None,
             deadline: None,
             evaluations: 0,
@@ -175,6 +178,14 @@ impl ExprSet {
             .iter()
             .enumerate()
             .map(|(i, p)| (PropId(i), p.as_str()))
+    }
+
+    /// The properties expression `id` reads, in order of first use.
+    pub fn reads(&self, id: ExprId) -> impl Iterator<Item = (PropId, &str)> {
+        self.exprs[id.0]
+            .reads
+            .iter()
+            .map(|&i| (PropId(i), self.paths[i].as_str()))
     }
 
     /// The id of property `path`, if an expression reads it.

@@ -194,6 +194,22 @@ impl Engine {
         self.active.iter().map(|&i| &*self.rules[i].name)
     }
 
+    /// The properties context `name`'s conditions (`when`, `until`) read, without repeats:
+    /// what to show as the trigger of a switch.
+    pub fn condition_reads(&self, name: &str) -> Vec<(PropId, &str)> {
+        let mut reads = Vec::new();
+        if let Some(rule) = self.rules.iter().find(|r| &*r.name == name) {
+            for id in std::iter::once(rule.when).chain(rule.until) {
+                for read in self.exprs.reads(id) {
+                    if !reads.contains(&read) {
+                        reads.push(read);
+                    }
+                }
+            }
+        }
+        reads
+    }
+
     /// Whether time alone can switch a context (`held`, `age`, `min_dwell_ms`), so the engine
     /// must be stepped periodically as well as on changes.
     pub fn uses_time(&self) -> bool {
