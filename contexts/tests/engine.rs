@@ -288,6 +288,7 @@ fn bad_rules_are_reported_with_positions() {
     (name: "c", when: "speed/out/v > 0.5", priority: 2, set: {"oa/params/maxSpeed": "0.3"}),
     (name: "d", when: "speed/out/v > 0.7", priority: 2, set: {"oa/params/maxSpeed": "0.2"}, relink: {"mapper/in/pose": "speed/out/v"}),
     (name: "e", when: "speed/out/v >", enable: ["ghost"]),
+    (name: "f", when: "loc/out/q < 0.2 and speed/out/v > 1 and loc/out/q > 0.5"),
 ])"#,
     );
     let expected = [
@@ -299,6 +300,7 @@ fn bad_rules_are_reported_with_positions() {
         "rules.ron:6:50: error: context `e`: unknown property `ghost/enabled`",
         "rules.ron:5:12: error: contexts `c` and `d` both change the oa/params/maxSpeed with priority 2: give them different priorities",
         "rules.ron:3:12: error: context `b` can never hold: its `when` is always false",
+        "rules.ron:7:24: error: context `f` can never hold: `loc/out/q < 0.2` and `loc/out/q > 0.5` cannot both be true",
     ];
     assert_eq!(e, expected);
 }

@@ -28,6 +28,7 @@ mod check;
 mod engine;
 mod eval;
 mod lexer;
+mod never;
 mod parse;
 #[cfg(test)]
 mod tests;
@@ -37,6 +38,7 @@ mod value;
 use std::fmt;
 
 pub use engine::{ExprId, ExprSet, PropId};
+pub use never::never_true;
 pub use parse::{parse, Ast, AstKind, BinOp, Func};
 pub use types::{Ty, TypeEnv};
 pub use value::Value;

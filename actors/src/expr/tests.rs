@@ -356,3 +356,46 @@ fn unread_properties_and_failed_adds_leave_no_trace() {
     assert!(matches!(set.value(id), Some(Err(m)) if m.contains("not read yet")));
     assert_eq!(set.bool(id), None);
 }
+
+#[test]
+fn contradicting_comparisons_can_never_be_true() {
+    let never =
+        |src: &str| super::never_true(src, &parse(src).unwrap()).map(|e| (e.column, e.message));
+    assert_eq!(
+        never("a/out/v > 5 and a/out/v < 3"),
+        Some((
+            1,
+            "`a/out/v > 5` and `a/out/v < 3` cannot both be true".into()
+        ))
+    );
+    assert_eq!(
+        never("b/out/m == 1 && x/out/y > 0 && 2 == b/out/m"),
+        Some((
+            1,
+            "`b/out/m == 1` and `2 == b/out/m` cannot both be true".into()
+        ))
+    );
+    assert_eq!(
+        never("held(p/out/pose.x >= 2, 1s) and p/out/pose.x < 2").map(|(c, _)| c),
+        Some(6),
+        "held(c) needs c; fields are operands"
+    );
+    assert!(
+        never("not (a/out/v <= 5 or a/out/v >= 3)").is_some(),
+        "v > 5 and v < 3"
+    );
+    assert!(never("(a/out/v > 5 and a/out/v < 3) or (a/out/v > 9 and a/out/v < -1)").is_some());
+    // What may hold is never reported.
+    for ok in [
+        "a/out/v > 5 and a/out/v < 6",
+        "a/out/v >= 3 and a/out/v <= 3",
+        "a/out/v > 5 or a/out/v < 3",
+        "a/out/v > 5 and b/out/v < 3",
+        "a/out/v != 3 and a/out/v == 3 or true",
+        "not (a/out/v > 5 and a/out/v < 3)",
+        "a/out/v > -1 and -a/out/v > 3",
+        "abs(a/out/v) > 5 and abs(a/out/v) < 3",
+    ] {
+        assert_eq!(never(ok), None, "{ok}");
+    }
+}

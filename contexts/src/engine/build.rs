@@ -3,7 +3,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::time::Duration;
 
-use petrel_actors::expr::{parse, properties, ExprId, ExprSet, Ty, TypeEnv};
+use petrel_actors::expr::{never_true, parse, properties, ExprId, ExprSet, Ty, TypeEnv};
 use petrel_actors::TypeInfo;
 use tokio::time::Instant;
 
@@ -198,24 +198,36 @@ impl Engine {
         errors
     }
 
-    /// A `when` that reads no property and is false can never hold.
+    /// Contexts that can never hold: a `when` that reads no property and is false, or one
+    /// whose comparisons contradict each other (`v > 5 and v < 3`).
     fn never_hold(&mut self, loaded: &LoadedRules) -> Vec<RuleError> {
         self.exprs.evaluate(Instant::now());
-        self.rules
-            .iter()
-            .filter(|r| self.exprs.bool(r.when) == Some(false))
-            .map(|r| {
-                loaded.error(
-                    &r.name,
-                    None,
-                    None,
-                    format!(
-                        "context `{}` can never hold: its `when` is always false",
-                        r.name
-                    ),
-                )
-            })
-            .collect()
+        let mut errors = Vec::new();
+        for rule in &self.rules {
+            let name = &rule.name;
+            if self.exprs.bool(rule.when) == Some(false) {
+                let message =
+                    format!("context `{name}` can never hold: its `when` is always false");
+                errors.push(loaded.error(name, None, None, message));
+                continue;
+            }
+            // Rules that failed to build are not in `self.rules`: find this one by name.
+            let Some(when) = loaded
+                .rules
+                .contexts
+                .iter()
+                .find(|c| *c.name == **name)
+                .map(|c| &c.when)
+            else {
+                continue;
+            };
+            let contradiction = parse(when).ok().and_then(|ast| never_true(when, &ast));
+            if let Some(e) = contradiction {
+                let message = format!("context `{name}` can never hold: {}", e.message);
+                errors.push(loaded.error(name, Some(when), Some((e.line, e.column)), message));
+            }
+        }
+        errors
     }
 }
 
