@@ -292,3 +292,49 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
     petrel.wait_for("stopping: interrupted");
     assert!(petrel.child.wait().unwrap().success());
 }
+
+#[test]
+fn check_binds_missions_and_locates_bad_bindings_in_the_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("m.plan");
+    std::fs::write(&plan, "go_3; report").unwrap();
+    let config = dir.path().join("agent.ron");
+    let write = |actions: &str| {
+        std::fs::write(
+            &config,
+            format!(
+                "Agent(name: \"r1\", modules: [\n  (name: \"count\", type: \"demo.counter\"),\n  (name: \"m\", type: \"mission.pnp\", values: {{\"params/plan\": {:?},\n    \"params/actions\": {{{actions}}}}}),\n])",
+                plan.display().to_string()
+            ),
+        )
+        .unwrap()
+    };
+    write(
+        r#""go": (enable: ["count"], finished: "count/out/value >= $1"), "report": (restore: true)"#,
+    );
+    let ok = petrel(&["check", config.to_str().unwrap()]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+
+    write(r#""go": (enable: ["cnt"], finished: "count/out/valu >= $1")"#);
+    let out = petrel(&["check", config.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    let at = |line_col: &str, what: &str| {
+        assert!(
+            err.contains(&format!("{}:{line_col}: error: {what}", config.display())),
+            "{line_col} {what}:\n{err}"
+        )
+    };
+    at(
+        "4:40",
+        "m/params/actions[\"go\"].enable (action `go_3`): no module `cnt`",
+    );
+    at(
+        "4:24",
+        "m/params/actions[\"go\"].finished: 1:1: unknown property `count/out/valu`",
+    );
+    at(
+        "4:5",
+        "m/params/actions: no binding for action `report` (bound: go)",
+    );
+}

@@ -402,8 +402,9 @@ impl ConfigFile {
     }
 
     /// An error located at the first quoted `needle` after module `module`'s name, in the
-    /// last source that has it (overlays win), else at the module's name.
-    fn error(&self, module: &str, needle: Option<&str>, message: String) -> ConfigError {
+    /// last source that has it (overlays win), else at the module's name: for checks made
+    /// outside [`build`](Self::build), such as a mission's bindings or a module's own files.
+    pub fn error(&self, module: &str, needle: Option<&str>, message: String) -> ConfigError {
         self.error_at(module, 0, needle, message)
     }
 

@@ -11,7 +11,9 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry, Registry};
+use petrel_actors::{
+    ConfigError, ConfigErrors, ConfigFile, Module, ModuleConfig, ModuleRegistry, Registry,
+};
 
 /// Exit code for bad input (config errors, unknown names).
 const EXIT_BAD_INPUT: u8 = 2;
@@ -165,10 +167,56 @@ pub(crate) fn check_all(
             errors.extend(rule_errors);
         }
     }
+    errors.extend(check_missions(file, registry));
     match errors.is_empty() {
         true => Ok(built),
         false => Err(ConfigErrors(errors)),
     }
+}
+
+/// Loads each mission's plan and binds it as its init would, against a blackboard holding the
+/// config's values (nothing runs), so bad bindings are found before the robot moves.
+fn check_missions(file: &ConfigFile, registry: &ModuleRegistry) -> Vec<ConfigError> {
+    let missions: Vec<&str> = file
+        .config
+        .modules
+        .iter()
+        .filter(|m| m.type_name == petrel_plans::mission::Mission::TYPE)
+        .map(|m| m.name.as_str())
+        .collect();
+    if missions.is_empty() {
+        return Vec::new();
+    }
+    let Ok(built) = file.build(registry) else {
+        return Vec::new(); // already reported
+    };
+    let runtime = match tokio::runtime::Builder::new_current_thread().build() {
+        Ok(rt) => rt,
+        Err(e) => {
+            let message = format!("cannot check missions: no async runtime: {e}");
+            return vec![ConfigError::in_file(file.path(), message)];
+        }
+    };
+    runtime.block_on(async {
+        let (bb, _join) = match petrel_actors::Blackboard::spawn(built).await {
+            Ok(bb) => bb,
+            Err(e) => {
+                let message = format!("cannot check missions: {e}");
+                return vec![ConfigError::in_file(file.path(), message)];
+            }
+        };
+        let mut errors = Vec::new();
+        for module in missions {
+            if let Err(problems) = petrel_plans::mission::check_mission(&bb, module).await {
+                errors.extend(
+                    problems
+                        .into_iter()
+                        .map(|p| file.error(module, Some(&p.needle), p.message)),
+                );
+            }
+        }
+        errors
+    })
 }
 
 fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[PathBuf]) -> ExitCode {

@@ -56,6 +56,16 @@ pub(crate) fn plan_names(plan: &Plan) -> (BTreeSet<String>, BTreeSet<String>) {
     (actions, conds)
 }
 
+/// A binding that cannot be resolved: what is wrong, and the text of the config it is about
+/// (an action or condition key, a module or property name), to locate it in the config file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BindingProblem {
+    /// Config text the problem is about, as written between quotes.
+    pub needle: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
 /// What `bind` reads from the mission's parameters.
 pub(crate) struct Params<'a> {
     pub module: &'a str,
@@ -69,10 +79,17 @@ struct Binder<'a> {
     module: &'a str,
     handles: HashMap<String, Option<AnyHandle>>,
     exprs: ExprSet,
-    errors: Vec<String>,
+    errors: Vec<BindingProblem>,
 }
 
 impl Binder<'_> {
+    fn problem(&mut self, needle: &str, message: String) {
+        self.errors.push(BindingProblem {
+            needle: needle.to_string(),
+            message,
+        });
+    }
+
     async fn handle(&mut self, path: &str) -> Result<AnyHandle, String> {
         if !self.handles.contains_key(path) {
             let h = self.bb.any_handle(path).await.ok();
@@ -83,12 +100,13 @@ impl Binder<'_> {
             .ok_or_else(|| format!("unknown property `{path}`"))
     }
 
-    /// Checks boolean expression `src`, reporting errors as `what: line:col: message`.
-    async fn expr(&mut self, src: &str, what: &str) -> Option<ExprId> {
+    /// Checks boolean expression `src`, reporting errors as `what: line:col: message`, located
+    /// at `needle`.
+    async fn expr(&mut self, src: &str, what: &str, needle: &str) -> Option<ExprId> {
         let ast = match parse(src) {
             Ok(a) => a,
             Err(e) => {
-                self.errors.push(format!("{what}: {e} (in `{src}`)"));
+                self.problem(needle, format!("{what}: {e} (in `{src}`)"));
                 return None;
             }
         };
@@ -102,7 +120,7 @@ impl Binder<'_> {
         match self.exprs.add(src, &env, Some(&Ty::Bool)) {
             Ok(id) => Some(id),
             Err(e) => {
-                self.errors.push(format!("{what}: {e} (in `{src}`)"));
+                self.problem(needle, format!("{what}: {e} (in `{src}`)"));
                 None
             }
         }
@@ -130,49 +148,56 @@ impl Binder<'_> {
         for m in &b.enable {
             match self.handle(&format!("{m}/enabled")).await {
                 Ok(h) => a.enable.push(h),
-                Err(_) => self.errors.push(format!(
-                    "{what}.enable (action `{full}`): no module `{m}` in this agent"
-                )),
+                Err(_) => self.problem(
+                    m,
+                    format!("{what}.enable (action `{full}`): no module `{m}` in this agent"),
+                ),
             }
         }
         for (path, value) in &b.set {
             let h = match self.handle(path).await {
                 Ok(h) if !path.contains("/stats/") => h,
                 Ok(_) => {
-                    self.errors.push(format!(
-                        "{what}.set: `{path}` is runtime-owned (stats) and cannot be set"
-                    ));
+                    let message =
+                        format!("{what}.set: `{path}` is runtime-owned (stats) and cannot be set");
+                    self.problem(path, message);
                     continue;
                 }
                 Err(e) => {
-                    self.errors
-                        .push(format!("{what}.set (action `{full}`): {e}"));
+                    self.problem(path, format!("{what}.set (action `{full}`): {e}"));
                     continue;
                 }
             };
             match h.type_info().from_ron(substitute_value(value, &params)) {
                 Ok(v) => a.set.push((h, v)),
-                Err(e) => self.errors.push(format!(
-                    "{what}.set[\"{path}\"] (action `{full}`): expected {}: {e}",
-                    h.type_info().name()
-                )),
+                Err(e) => {
+                    let expected = h.type_info().name();
+                    let message = format!(
+                        "{what}.set[\"{path}\"] (action `{full}`): expected {expected}: {e}"
+                    );
+                    self.problem(path, message);
+                }
             }
         }
         a.restore = b.restore;
         if !b.finished.trim().is_empty() {
             let src = substitute(&b.finished, &params);
-            a.finished = self.expr(&src, &format!("{what}.finished")).await;
+            a.finished = self.expr(&src, &format!("{what}.finished"), key).await;
         }
         if !b.failed.trim().is_empty() {
             let src = substitute(&b.failed, &params);
-            a.failed = self.expr(&src, &format!("{what}.failed")).await;
+            a.failed = self.expr(&src, &format!("{what}.failed"), key).await;
         }
         Some(a)
     }
 }
 
 /// Binds every action and condition of `plan`; all problems at once in the error.
-pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Result<Bound, String> {
+pub(crate) async fn bind(
+    bb: &Blackboard,
+    plan: &Plan,
+    p: Params<'_>,
+) -> Result<Bound, Vec<BindingProblem>> {
     let (action_names, cond_names) = plan_names(plan);
     let mut b = Binder {
         bb,
@@ -193,13 +218,14 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Result<
     }
     if !unbound.is_empty() {
         let keys: Vec<&str> = p.actions.0.keys().map(|k| k.as_str()).collect();
-        b.errors.push(format!(
+        let message = format!(
             "{}/params/actions: no binding for action{} {} (bound: {}); bind them, or set params/allow_unbound to let them finish at once",
             p.module,
             if unbound.len() == 1 { "" } else { "s" },
             unbound.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", "),
             if keys.is_empty() { "none".to_string() } else { keys.join(", ") }
-        ));
+        );
+        b.problem("params/actions", message);
     }
     let mut conditions = HashMap::new();
     let mut defaults = Vec::new();
@@ -207,7 +233,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Result<
         match p.conditions.0.get(atom) {
             Some(src) => {
                 let what = format!("{}/params/conditions[\"{atom}\"]", p.module);
-                if let Some(id) = b.expr(src, &what).await {
+                if let Some(id) = b.expr(src, &what, atom).await {
                     conditions.insert(atom.clone(), id);
                 }
             }
@@ -218,7 +244,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Result<
         tracing::warn!(condition = %extra, "params/conditions binds a condition the plan does not use");
     }
     if !b.errors.is_empty() {
-        return Err(b.errors.join("\n"));
+        return Err(b.errors);
     }
     let watched = b
         .exprs

@@ -27,7 +27,9 @@
 //! Bindings are resolved and type-checked once, at init: an unknown module or property, a
 //! value of the wrong type, an expression error (with line and column) or a plan action with
 //! no binding stops the module with every problem listed (`params/allow_unbound: true` lets
-//! unbound actions finish at once instead). Changing bindings or the plan later has no effect.
+//! unbound actions finish at once instead). `petrel check` (and `petrel run`, before starting
+//! anything) makes the same check with [`check_mission`] and reports each problem at its place
+//! in the config. Changing bindings or the plan later has no effect.
 //!
 //! Event-driven: the module steps the plan when a property read by a binding changes, when
 //! `in/conditions` changes, or a `held`/`age` deadline passes; within one module step, plan
@@ -42,10 +44,11 @@ mod config;
 mod env;
 mod module;
 
+pub use bind::BindingProblem;
 pub use config::{
     match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
 };
-pub use module::Mission;
+pub use module::{check_mission, Mission};
 
 use petrel_actors::ModuleRegistry;
 

@@ -5,11 +5,13 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use petrel_actors::{Context, Input, Module, Output, Param, Ports, Schedule, State};
+use petrel_actors::{
+    Blackboard, BlackboardError, Context, Input, Module, Output, Param, Ports, Schedule, State,
+};
 use tokio::sync::watch;
 use tokio::time::Instant;
 
-use super::bind::{bind, Bound, Params};
+use super::bind::{bind, BindingProblem, Bound, Params};
 use super::config::{ActionBindings, ConditionBindings, Flags};
 use super::env::MissionEnv;
 use crate::exec::{step, PlanState, PlanStatus};
@@ -195,26 +197,16 @@ impl Run {
 impl Mission {
     /// Loads the plan and binds it (the body of `init`).
     async fn start(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let path = self.plan_path.get();
-        anyhow::ensure!(
-            !path.is_empty(),
-            "{}/params/plan is empty; expected a plan file",
-            ctx.module()
-        );
-        let rules = self.rules.get();
-        let rules = (!rules.is_empty()).then(|| Path::new(rules.as_str()));
-        let loaded = load_plan(Path::new(path.as_str()), rules)
-            .with_context(|| format!("{}/params/plan", ctx.module()))?;
-        let plan = loaded.plan;
-        let params = Params {
-            module: ctx.module(),
-            actions: &self.actions.get(),
-            conditions: &self.conditions.get(),
+        let setup = Setup {
+            plan: self.plan_path.get(),
+            rules: self.rules.get(),
+            actions: self.actions.get(),
+            conditions: self.conditions.get(),
             allow_unbound: self.allow_unbound.value(),
         };
-        let bound = bind(ctx.blackboard(), &plan, params)
+        let (plan, bound) = prepare(ctx.blackboard(), ctx.module(), &setup)
             .await
-            .map_err(|e| anyhow::anyhow!("plan {}: bad bindings:\n{e}", path))?;
+            .map_err(|problems| anyhow::anyhow!("{}", Problems(&problems, &setup.plan)))?;
         if !bound.defaults.is_empty() {
             tracing::info!(atoms = ?bound.defaults, "conditions read from in/conditions");
         }
@@ -241,6 +233,87 @@ impl Mission {
         });
         Ok(())
     }
+}
+
+/// A mission's parameters, as its init reads them (or `petrel check`, from the config).
+struct Setup {
+    plan: Arc<String>,
+    rules: Arc<String>,
+    actions: Arc<ActionBindings>,
+    conditions: Arc<ConditionBindings>,
+    allow_unbound: bool,
+}
+
+/// Loads the plan and binds its actions and conditions; every problem at once.
+async fn prepare(
+    bb: &Blackboard,
+    module: &str,
+    setup: &Setup,
+) -> Result<(Arc<Plan>, Bound), Vec<BindingProblem>> {
+    let plan_problem = |message| {
+        vec![BindingProblem {
+            needle: "params/plan".into(),
+            message,
+        }]
+    };
+    if setup.plan.is_empty() {
+        return Err(plan_problem(format!(
+            "{module}/params/plan is empty; expected a plan file"
+        )));
+    }
+    let rules = (!setup.rules.is_empty()).then(|| Path::new(setup.rules.as_str()));
+    let loaded = load_plan(Path::new(setup.plan.as_str()), rules)
+        .with_context(|| format!("{module}/params/plan"))
+        .map_err(|e| plan_problem(format!("{e:#}")))?;
+    let params = Params {
+        module,
+        actions: &setup.actions,
+        conditions: &setup.conditions,
+        allow_unbound: setup.allow_unbound,
+    };
+    let bound = bind(bb, &loaded.plan, params).await?;
+    Ok((loaded.plan, bound))
+}
+
+/// Problems of [`prepare`] as the module's init error.
+struct Problems<'a>(&'a [BindingProblem], &'a str);
+
+impl std::fmt::Display for Problems<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Problems(problems, plan) = self;
+        if let [only] = problems {
+            if only.needle == "params/plan" {
+                return write!(f, "{}", only.message);
+            }
+        }
+        write!(f, "plan {plan}: bad bindings:")?;
+        problems
+            .iter()
+            .try_for_each(|p| write!(f, "\n{}", p.message))
+    }
+}
+
+/// Checks mission module `module` as its init would, without running anything: loads the plan
+/// its parameters name and binds every action and condition against `bb`, an agent's
+/// blackboard holding the config's values. What `petrel check` runs for each mission.
+pub async fn check_mission(bb: &Blackboard, module: &str) -> Result<(), Vec<BindingProblem>> {
+    let param = |name: &str| format!("{module}/params/{name}");
+    let read = async {
+        Ok::<_, BlackboardError>(Setup {
+            plan: bb.get::<String>(&param("plan")).await?,
+            rules: bb.get::<String>(&param("rules")).await?,
+            actions: bb.get::<ActionBindings>(&param("actions")).await?,
+            conditions: bb.get::<ConditionBindings>(&param("conditions")).await?,
+            allow_unbound: *bb.get::<bool>(&param("allow_unbound")).await?,
+        })
+    };
+    let setup = read.await.map_err(|e| {
+        vec![BindingProblem {
+            needle: module.to_string(),
+            message: format!("module `{module}` is not a mission.pnp: {e}"),
+        }]
+    })?;
+    prepare(bb, module, &setup).await.map(|_| ())
 }
 
 fn publish(out: &Output<String>, v: String) {
