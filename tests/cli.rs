@@ -338,3 +338,18 @@ fn check_binds_missions_and_locates_bad_bindings_in_the_config() {
         "m/params/actions: no binding for action `report` (bound: go)",
     );
 }
+
+#[test]
+fn configs_work_from_any_directory() {
+    let elsewhere = tempfile::tempdir().unwrap();
+    let root = std::env::current_dir().unwrap();
+    for config in ["mission-demo.ron", "contexts-demo.ron", "navigate.ron"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["check", root.join("configs").join(config).to_str().unwrap()])
+            .current_dir(elsewhere.path())
+            .env("RUST_LOG", "warn")
+            .output()
+            .expect("petrel runs");
+        assert!(out.status.success(), "{config}: {}", text(&out.stderr));
+    }
+}

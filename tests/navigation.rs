@@ -158,7 +158,8 @@ async fn a_missing_world_file_fails_init_naming_the_file() {
     let error = report.last_error.clone().unwrap_or_default();
     assert_eq!(report.status, status::FAILED);
     assert!(
-        error.contains("init failed: configs/worlds/nowhere.txt: cannot read"),
+        error.contains("init failed: ")
+            && error.contains("/configs/worlds/nowhere.txt: cannot read"),
         "{error}"
     );
 }

@@ -15,7 +15,7 @@
 //! and `petrel run` cannot disagree; every problem found is reported, one per line, with the
 //! file, line and column it comes from.
 
-use std::collections::{BTreeMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -166,6 +166,9 @@ pub struct ConfigFile {
     pub config: AgentConfig,
     /// Files merged into it, base first, with their text.
     sources: Vec<(PathBuf, String)>,
+    /// Which source gave each (module, value key) that an overlay set; the base otherwise.
+    /// Relative file paths are resolved against their own file's directory.
+    value_sources: HashMap<(String, String), usize>,
 }
 
 impl ConfigFile {
@@ -185,12 +188,20 @@ impl ConfigFile {
         Ok(ConfigFile {
             config,
             sources: vec![(path.into(), text.to_string())],
+            value_sources: HashMap::new(),
         })
     }
 
     /// Applies `overlay` (e.g. a snapshot) on top: modules match by name; its values, links and
     /// capacities replace this config's; modules only it has are appended.
     pub fn overlay(&mut self, overlay: ConfigFile) {
+        let source = self.sources.len();
+        for m in &overlay.config.modules {
+            for key in m.values.keys() {
+                self.value_sources
+                    .insert((m.name.clone(), key.clone()), source);
+            }
+        }
         for m in overlay.config.modules {
             match self.config.modules.iter_mut().find(|b| b.name == m.name) {
                 Some(base) => {
@@ -203,6 +214,18 @@ impl ConfigFile {
             }
         }
         self.sources.extend(overlay.sources);
+    }
+
+    /// The directory relative file paths of `module`'s value `key` are taken from: that of the
+    /// file that gave the value.
+    fn base_dir(&self, module: &str, key: &str) -> PathBuf {
+        let source = self
+            .value_sources
+            .get(&(module.to_string(), key.to_string()))
+            .copied()
+            .unwrap_or(0);
+        let file = &self.sources[source].0;
+        file.parent().unwrap_or(Path::new(".")).to_path_buf()
     }
 
     /// The file the config was loaded from (the base, for overlays).
@@ -277,7 +300,7 @@ impl ConfigFile {
         for &m in &declared {
             failed.extend(
                 registry
-                    .apply_values(m)
+                    .apply_values(m, &|key| self.base_dir(&m.name, key))
                     .into_iter()
                     .map(|(path, e)| (m, path, e)),
             );

@@ -41,6 +41,6 @@ pub use queue::DEFAULT_CAPACITY;
 pub use summary::{ModuleReport, RunSummary};
 pub use supervision::SupervisorEvent;
 pub use supervisor::EXIT_GAVE_UP;
-pub use types::{Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};
+pub use types::{FilePath, Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};
 pub use url::PropertyUrl;
 pub use value::{AnyValue, TypeInfo};

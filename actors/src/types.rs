@@ -6,6 +6,7 @@
 //! the value to modify one field does not copy the payload either.
 
 use std::fmt::Debug;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use nalgebra::{Isometry2, Point2 as NaPoint2, Vector2};
@@ -49,6 +50,47 @@ property_types! {
     Image => "Image",
     OccupancyGrid => "OccupancyGrid",
     Path2 => "Path2",
+    FilePath => "path",
+}
+
+/// A file a module reads or writes, written in configs as a plain string. A relative path in a
+/// config file is taken relative to the directory of that file (made absolute when the config
+/// is built), so `petrel run` behaves the same from any working directory.
+#[derive(Clone, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct FilePath(pub PathBuf);
+
+impl FilePath {
+    /// The path.
+    pub fn as_path(&self) -> &Path {
+        &self.0
+    }
+
+    /// Whether no path is given.
+    pub fn is_empty(&self) -> bool {
+        self.0.as_os_str().is_empty()
+    }
+
+    /// The path, made absolute against `dir` if it is relative; an empty path stays empty.
+    pub fn resolved_against(&self, dir: &Path) -> FilePath {
+        if self.is_empty() || self.0.is_absolute() {
+            return self.clone();
+        }
+        let joined = dir.join(&self.0);
+        FilePath(std::path::absolute(&joined).unwrap_or(joined))
+    }
+}
+
+impl std::fmt::Display for FilePath {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0.display())
+    }
+}
+
+impl From<&str> for FilePath {
+    fn from(s: &str) -> Self {
+        FilePath(s.into())
+    }
 }
 
 /// A planar pose (position and heading), an [`Isometry2`] written as `(x: 1.0, y: 2.0, theta: 0.5)`.

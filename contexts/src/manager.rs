@@ -15,8 +15,8 @@ use std::time::Duration;
 use anyhow::{anyhow, Context as _};
 use petrel_actors::expr::{parse, properties, PropId};
 use petrel_actors::{
-    status, AnyHandle, AnyValue, Context, Module, Output, Param, Ports, PropertyType, QueueWriter,
-    Registry, Schedule, TypeInfo,
+    status, AnyHandle, AnyValue, Context, FilePath, Module, Output, Param, Ports, PropertyType,
+    QueueWriter, Registry, Schedule, TypeInfo,
 };
 use serde::{Deserialize, Serialize};
 use tokio::time::Instant;
@@ -103,7 +103,7 @@ struct Watched {
 
 /// `context.manager`: runs a context rules file in an agent.
 pub struct ContextManager {
-    rules: Param<String>,
+    rules: Param<FilePath>,
     tick_ms: Param<i64>,
     reload: Param<i64>,
     active: Output<String>,
@@ -132,8 +132,8 @@ impl Module for ContextManager {
         ContextManager {
             rules: ports.param(
                 "params/rules",
-                String::new(),
-                "the context rules file (RON)",
+                FilePath::default(),
+                "the context rules file (RON), relative to the config file",
             ),
             tick_ms: ports.param(
                 "params/tick_ms",
@@ -238,7 +238,7 @@ impl ContextManager {
         if path.is_empty() {
             return Err("params/rules is empty; expected the path of a context rules file".into());
         }
-        let loaded = LoadedRules::load(Path::new(path.as_str())).map_err(show)?;
+        let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
         let mut table = HashMap::new();
         let mut handles = HashMap::new();
         for address in mentioned(&loaded) {

@@ -6,13 +6,13 @@ mod plan;
 mod run;
 
 use std::ffi::OsString;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use petrel_actors::{
-    ConfigError, ConfigErrors, ConfigFile, Module, ModuleConfig, ModuleRegistry, Registry,
+    ConfigError, ConfigErrors, ConfigFile, FilePath, Module, ModuleConfig, ModuleRegistry, Registry,
 };
 
 /// Exit code for bad input (config errors, unknown names).
@@ -124,9 +124,8 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
     for overlay in overlays {
         file.overlay(ConfigFile::load(overlay)?);
     }
-    if let Some(rules) = &file.config.contexts {
-        let folder = config.parent().unwrap_or(Path::new("."));
-        let rules = folder.join(rules).display().to_string();
+    if let Some(rules) = file.config.contexts.clone() {
+        // Relative to the config file, like every file path in it (resolved when built).
         let exists = file
             .config
             .modules
@@ -160,10 +159,13 @@ pub(crate) fn check_all(
         .iter()
         .filter(|m| m.type_name == "context.manager")
     {
-        let Some(ron::Value::String(rules)) = m.values.get("params/rules") else {
+        let Ok(rules) = built.get(&format!("{}/params/rules", m.name)) else {
             continue;
         };
-        if let Err(rule_errors) = petrel_contexts::check_rules(Path::new(rules), &built) {
+        let Some(rules) = rules.1.downcast_ref::<FilePath>() else {
+            continue;
+        };
+        if let Err(rule_errors) = petrel_contexts::check_rules(rules.as_path(), &built) {
             errors.extend(rule_errors);
         }
     }

@@ -1,6 +1,8 @@
 //! Every config error is found before anything starts, located, and says what was expected.
 
-use petrel::actors::ConfigFile;
+use std::path::Path;
+
+use petrel::actors::{ConfigFile, FilePath};
 
 use crate::support::registry;
 
@@ -185,5 +187,52 @@ fn supervision_settings_are_checked() {
         strategy[0].starts_with("bad.ron:1:43: error: Unexpected variant named `one_for_none`"),
         "{}",
         strategy[0]
+    );
+}
+
+#[test]
+fn file_paths_are_relative_to_the_config_file_that_names_them() {
+    let mut file = ConfigFile::parse(
+        "robots/base.ron",
+        r#"Agent(name: "r1", modules: [(name: "m", type: "mission.pnp",
+            values: {"params/plan": "plans/go.plan", "params/rules": "/etc/abs.er"})])"#,
+    )
+    .unwrap();
+    let overlay = ConfigFile::parse(
+        "tuning/over.ron",
+        r#"Agent(name: "r1", modules: [(name: "m", type: "mission.pnp",
+            values: {"params/rules": "go.er"})])"#,
+    )
+    .unwrap();
+    let built = file.build(&registry()).unwrap();
+    let path = |r: &petrel::actors::Registry, p: &str| {
+        let (_, value) = r.get(p).unwrap();
+        value
+            .downcast_ref::<FilePath>()
+            .unwrap()
+            .as_path()
+            .to_path_buf()
+    };
+    let cwd = std::env::current_dir().unwrap();
+    assert_eq!(
+        path(&built, "m/params/plan"),
+        cwd.join("robots/plans/go.plan")
+    );
+    assert_eq!(
+        path(&built, "m/params/rules"),
+        Path::new("/etc/abs.er"),
+        "absolute stays"
+    );
+
+    file.overlay(overlay);
+    let built = file.build(&registry()).unwrap();
+    assert_eq!(
+        path(&built, "m/params/plan"),
+        cwd.join("robots/plans/go.plan")
+    );
+    assert_eq!(
+        path(&built, "m/params/rules"),
+        cwd.join("tuning/go.er"),
+        "an overlay's paths are relative to the overlay"
     );
 }

@@ -1,12 +1,12 @@
 //! `sim.world`: the simulator as a module, standing where a real robot's driver would.
 
-use std::path::Path;
 use std::time::Duration;
 
 use anyhow::{bail, Context as _};
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    Context, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter, Schedule, Twist2,
+    Context, FilePath, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter, Schedule,
+    Twist2,
 };
 use tokio::time::Instant;
 
@@ -24,7 +24,7 @@ const MAX_CATCH_UP_STEPS: u32 = 10;
 /// One robot per instance: a second robot is a second `sim.world` instance (they do not see
 /// each other; the pure [`World`] supports that, the module does not yet).
 pub struct SimWorld {
-    world_file: Input<String>,
+    world_file: Input<FilePath>,
     start: Input<Vec<f64>>,
     seed: Input<i64>,
     dt: Input<f64>,
@@ -76,7 +76,7 @@ impl Module for SimWorld {
 
     fn declare(ports: &mut Ports) -> Self {
         SimWorld {
-            world_file: ports.param("params/world", String::new(), "world file: `.txt` ASCII grid or `.yaml` map_server map (relative to the working directory)"),
+            world_file: ports.param("params/world", FilePath::default(), "world file: `.txt` ASCII grid or `.yaml` map_server map (relative to the config file)"),
             start: ports.param("params/start", Vec::new(), "start pose `[x, y, heading_deg]`; empty = the world file's `R` marker"),
             seed: ports.param("params/seed", 1, "seed of every noise source"),
             dt: ports.param("params/dt", 0.01, "simulated seconds per step"),
@@ -120,7 +120,7 @@ impl Module for SimWorld {
         if file.is_empty() {
             bail!("params/world is empty; expected the path of a world file (`.txt` or `.yaml`)");
         }
-        let map = load_world(Path::new(file.as_str()))?;
+        let map = load_world(file.as_path())?;
         let start = match self.start.get().as_slice() {
             [] => *map.starts.first().with_context(|| {
                 format!("{file} has no `R` start marker; set params/start to `[x, y, heading_deg]`")

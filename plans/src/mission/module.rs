@@ -1,12 +1,12 @@
 //! The `mission.pnp` module: declare, bind at init, step the plan on events.
 
-use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
 use petrel_actors::{
-    Blackboard, BlackboardError, Context, Input, Module, Output, Param, Ports, Schedule, State,
+    Blackboard, BlackboardError, Context, FilePath, Input, Module, Output, Param, Ports, Schedule,
+    State,
 };
 use tokio::sync::watch;
 use tokio::time::Instant;
@@ -20,8 +20,8 @@ use crate::model::Plan;
 
 /// `mission.pnp`: see the [module docs](super).
 pub struct Mission {
-    plan_path: Param<String>,
-    rules: Param<String>,
+    plan_path: Param<FilePath>,
+    rules: Param<FilePath>,
     is_mission: Param<bool>,
     tick_ms: Param<i64>,
     allow_unbound: Param<bool>,
@@ -53,8 +53,8 @@ impl Module for Mission {
 
     fn declare(ports: &mut Ports) -> Self {
         Mission {
-            plan_path: ports.param("params/plan", String::new(), "plan file (.pnml or text plan), relative to the working directory"),
-            rules: ports.param("params/rules", String::new(), "execution rules file for a text plan (empty = none)"),
+            plan_path: ports.param("params/plan", FilePath::default(), "plan file (.pnml or text plan), relative to the config file"),
+            rules: ports.param("params/rules", FilePath::default(), "execution rules file for a text plan (empty = none), relative to the config file"),
             is_mission: ports.param("params/is_mission", false, "goal stops the agent with exit code 0, fail with 1"),
             tick_ms: ports.param("params/tick_ms", 0, "also step every this many ms (0 = only on events)"),
             allow_unbound: ports.param("params/allow_unbound", false, "let actions without a binding finish at once instead of refusing to start"),
@@ -237,8 +237,8 @@ impl Mission {
 
 /// A mission's parameters, as its init reads them (or `petrel check`, from the config).
 struct Setup {
-    plan: Arc<String>,
-    rules: Arc<String>,
+    plan: Arc<FilePath>,
+    rules: Arc<FilePath>,
     actions: Arc<ActionBindings>,
     conditions: Arc<ConditionBindings>,
     allow_unbound: bool,
@@ -261,8 +261,8 @@ async fn prepare(
             "{module}/params/plan is empty; expected a plan file"
         )));
     }
-    let rules = (!setup.rules.is_empty()).then(|| Path::new(setup.rules.as_str()));
-    let loaded = load_plan(Path::new(setup.plan.as_str()), rules)
+    let rules = (!setup.rules.is_empty()).then(|| setup.rules.as_path());
+    let loaded = load_plan(setup.plan.as_path(), rules)
         .with_context(|| format!("{module}/params/plan"))
         .map_err(|e| plan_problem(format!("{e:#}")))?;
     let params = Params {
@@ -276,7 +276,7 @@ async fn prepare(
 }
 
 /// Problems of [`prepare`] as the module's init error.
-struct Problems<'a>(&'a [BindingProblem], &'a str);
+struct Problems<'a>(&'a [BindingProblem], &'a FilePath);
 
 impl std::fmt::Display for Problems<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -300,8 +300,8 @@ pub async fn check_mission(bb: &Blackboard, module: &str) -> Result<(), Vec<Bind
     let param = |name: &str| format!("{module}/params/{name}");
     let read = async {
         Ok::<_, BlackboardError>(Setup {
-            plan: bb.get::<String>(&param("plan")).await?,
-            rules: bb.get::<String>(&param("rules")).await?,
+            plan: bb.get::<FilePath>(&param("plan")).await?,
+            rules: bb.get::<FilePath>(&param("rules")).await?,
             actions: bb.get::<ActionBindings>(&param("actions")).await?,
             conditions: bb.get::<ConditionBindings>(&param("conditions")).await?,
             allow_unbound: *bb.get::<bool>(&param("allow_unbound")).await?,

@@ -1,6 +1,7 @@
 //! Module instances added and removed while the agent runs, configured values and links, and
 //! the runtime's own `_supervisor/events` queue.
 
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use super::{BlackboardError, Entry, ModuleEntry, Registry, EVENTS_CAPACITY};
@@ -8,17 +9,30 @@ use crate::config::{describe, ModuleConfig};
 use crate::module_types::ModuleType;
 use crate::ports::{Handle, PropertyDecl, PropertyKind};
 use crate::queue::QueueCore;
+use crate::types::FilePath;
 use crate::value::TypeInfo;
 
 impl Registry {
     /// Sets the values and queue capacities `m` configures; returns what failed, by config key.
+    /// File paths (properties of type [`FilePath`]) that are relative are resolved against
+    /// `base_dir(key)`, the directory of the config file that gives the value.
     pub(crate) fn apply_values<'a>(
         &mut self,
         m: &'a ModuleConfig,
+        base_dir: &dyn Fn(&str) -> PathBuf,
     ) -> Vec<(&'a str, BlackboardError)> {
         let mut failed = Vec::new();
         for (path, value) in &m.values {
-            if let Err(e) = self.set_from_ron(&format!("{}/{path}", m.name), value.clone()) {
+            let address = format!("{}/{path}", m.name);
+            let declared = self.get(&address).ok().map(|(ti, _)| ti);
+            let value = match (declared, value) {
+                (Some(ti), ron::Value::String(s)) if ti.is::<FilePath>() => {
+                    let resolved = FilePath::from(s.as_str()).resolved_against(&base_dir(path));
+                    ron::Value::String(resolved.to_string())
+                }
+                _ => value.clone(),
+            };
+            if let Err(e) = self.set_from_ron(&address, value) {
                 failed.push((path.as_str(), e));
             }
         }
@@ -59,7 +73,8 @@ impl Registry {
         }
         self.declare(&m.name, module_type.name(), module_type.declare(&m.name))
             .map_err(|e| e.to_string())?;
-        let mut failed = self.apply_values(m);
+        // No config file here: relative file paths are taken from the working directory.
+        let mut failed = self.apply_values(m, &|_| PathBuf::from("."));
         failed.extend(self.apply_links(m));
         if failed.is_empty() {
             return Ok(());
