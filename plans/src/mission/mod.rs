@@ -3,10 +3,9 @@
 //!
 //! ```ron
 //! (name: "mission", type: "mission.pnp", values: {
-//!     // Paths are relative to the working directory of `petrel run` (a module cannot know
-//!     // the config file's location); `.pnml`, or a text plan with optional rules.
-//!     "params/plan": "configs/plans/demo.plan",
-//!     "params/rules": "configs/plans/demo.er",
+//!     // Paths are relative to the config file; `.pnml`, or a text plan with optional rules.
+//!     "params/plan": "plans/demo.plan",
+//!     "params/rules": "plans/demo.er",
 //!     "params/is_mission": true,            // goal ends the run with 0, fail with 1
 //!     "params/actions": {
 //!         // `count` and every `count_P1_P2...` action ($1, $2... = P1, P2...).
