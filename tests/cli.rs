@@ -353,3 +353,23 @@ fn configs_work_from_any_directory() {
         assert!(out.status.success(), "{config}: {}", text(&out.stderr));
     }
 }
+
+#[test]
+fn check_reports_a_missing_file_where_the_config_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("agent.ron");
+    std::fs::write(
+        &config,
+        "Agent(name: \"r1\", modules: [\n  (name: \"robot\", type: \"sim.world\", values: {\"params/world\": \"maps/nowhere.txt\"}),\n])",
+    )
+    .unwrap();
+    let out = petrel(&["check", config.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    let expected = format!(
+        "{}:2:47: error: module `robot`: `params/world` names {}, which does not exist",
+        config.display(),
+        dir.path().join("maps/nowhere.txt").display()
+    );
+    assert!(err.contains(&expected), "{err}");
+}

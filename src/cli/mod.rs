@@ -1,5 +1,6 @@
 //! The `petrel` command line: `run`, `check`, `modules`.
 
+mod check;
 mod logging;
 mod modules;
 mod plan;
@@ -11,9 +12,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use petrel_actors::{
-    ConfigError, ConfigErrors, ConfigFile, FilePath, Module, ModuleConfig, ModuleRegistry, Registry,
-};
+use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry};
 
 /// Exit code for bad input (config errors, unknown names).
 const EXIT_BAD_INPUT: u8 = 2;
@@ -109,7 +108,7 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
     };
     match cli.command {
         Command::Run(args) => run::run(&registry, args),
-        Command::Check { config, overlay } => check(&registry, &config, &overlay),
+        Command::Check { config, overlay } => check::check(&registry, &config, &overlay),
         Command::Modules { command: None } => modules::list(&registry),
         Command::Modules {
             command: Some(ModulesCommand::Describe { type_name }),
@@ -145,104 +144,6 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
 
 /// The name of the context manager that an agent's `contexts:` field adds.
 const CONTEXTS_MODULE: &str = "contexts";
-
-/// Builds the agent's registry and checks the context rules of every `context.manager`.
-pub(crate) fn check_all(
-    file: &ConfigFile,
-    registry: &ModuleRegistry,
-) -> Result<Registry, ConfigErrors> {
-    let built = file.build(registry)?;
-    let mut errors = Vec::new();
-    for m in file
-        .config
-        .modules
-        .iter()
-        .filter(|m| m.type_name == "context.manager")
-    {
-        let Ok(rules) = built.get(&format!("{}/params/rules", m.name)) else {
-            continue;
-        };
-        let Some(rules) = rules.1.downcast_ref::<FilePath>() else {
-            continue;
-        };
-        if let Err(rule_errors) = petrel_contexts::check_rules(rules.as_path(), &built) {
-            errors.extend(rule_errors);
-        }
-    }
-    errors.extend(check_missions(file, registry));
-    match errors.is_empty() {
-        true => Ok(built),
-        false => Err(ConfigErrors(errors)),
-    }
-}
-
-/// Loads each mission's plan and binds it as its init would, against a blackboard holding the
-/// config's values (nothing runs), so bad bindings are found before the robot moves.
-fn check_missions(file: &ConfigFile, registry: &ModuleRegistry) -> Vec<ConfigError> {
-    let missions: Vec<&str> = file
-        .config
-        .modules
-        .iter()
-        .filter(|m| m.type_name == petrel_plans::mission::Mission::TYPE)
-        .map(|m| m.name.as_str())
-        .collect();
-    if missions.is_empty() {
-        return Vec::new();
-    }
-    let Ok(built) = file.build(registry) else {
-        return Vec::new(); // already reported
-    };
-    let runtime = match tokio::runtime::Builder::new_current_thread().build() {
-        Ok(rt) => rt,
-        Err(e) => {
-            let message = format!("cannot check missions: no async runtime: {e}");
-            return vec![ConfigError::in_file(file.path(), message)];
-        }
-    };
-    runtime.block_on(async {
-        let (bb, _join) = match petrel_actors::Blackboard::spawn(built).await {
-            Ok(bb) => bb,
-            Err(e) => {
-                let message = format!("cannot check missions: {e}");
-                return vec![ConfigError::in_file(file.path(), message)];
-            }
-        };
-        let mut errors = Vec::new();
-        for module in missions {
-            if let Err(problems) = petrel_plans::mission::check_mission(&bb, module).await {
-                errors.extend(
-                    problems
-                        .into_iter()
-                        .map(|p| file.error(module, Some(&p.needle), p.message)),
-                );
-            }
-        }
-        errors
-    })
-}
-
-fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[PathBuf]) -> ExitCode {
-    let result =
-        load(config, overlays).and_then(|file| check_all(&file, registry).map(|reg| (file, reg)));
-    match result {
-        Ok((file, reg)) => {
-            let links = file
-                .config
-                .modules
-                .iter()
-                .map(|m| m.links.len())
-                .sum::<usize>();
-            println!(
-                "{}: ok: agent `{}`, {} modules, {links} links",
-                config.display(),
-                reg.agent(),
-                reg.modules().len()
-            );
-            ExitCode::SUCCESS
-        }
-        Err(errors) => bad_input(&errors),
-    }
-}
 
 /// Prints config errors, one per line, and returns the bad-input exit code.
 pub(crate) fn bad_input(errors: &ConfigErrors) -> ExitCode {

@@ -4,7 +4,8 @@ use std::process::ExitCode;
 
 use petrel_actors::{status, Agent, ModuleRegistry, StartError};
 
-use super::{bad_input, check_all, load, logging, RunArgs};
+use super::check::check_all;
+use super::{bad_input, load, logging, RunArgs};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
     logging::init(args.log_format);
