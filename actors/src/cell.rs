@@ -94,16 +94,23 @@ impl Cell {
         self.slot.read().value.clone()
     }
 
+    /// Calls `f` on the value under the read lock, without taking a reference to it: no
+    /// reference count changes hands between the writer's and the readers' cores.
+    #[inline]
+    pub fn with_value<R>(&self, f: impl FnOnce(&AnyValue) -> R) -> R {
+        f(&self.slot.read().value)
+    }
+
     pub fn version(&self) -> u64 {
         self.version.load(Ordering::Acquire)
     }
 
-    pub fn write(&self, value: AnyValue) {
+    pub fn write(&self, value: AnyValue, written: Instant) {
         let old = {
             let mut slot = self.slot.write();
             slot.version += 1;
             self.version.store(slot.version, Ordering::Release);
-            slot.written = Instant::now();
+            slot.written = written;
             std::mem::replace(&mut slot.value, value)
         };
         // The previous value (maybe a large image) is freed outside the lock.
@@ -170,9 +177,21 @@ impl Endpoint {
         self.resolved.load().value()
     }
 
+    /// See [`Cell::with_value`].
+    #[inline]
+    pub fn with_value<R>(&self, f: impl FnOnce(&AnyValue) -> R) -> R {
+        self.resolved.load().with_value(f)
+    }
+
     #[inline]
     pub fn write(&self, value: AnyValue) {
-        self.resolved.load().write(value)
+        self.write_at(value, Instant::now())
+    }
+
+    /// Writes a value stamped `written` (a module's step time).
+    #[inline]
+    pub fn write_at(&self, value: AnyValue, written: Instant) {
+        self.resolved.load().write(value, written)
     }
 
     /// The version of the value seen through this endpoint, without locking it.
@@ -254,7 +273,7 @@ mod tests {
             "reader sees a new value after relink"
         );
         assert_eq!(read_f64(&input), 5.0);
-        input.own.write(Arc::new(9.0));
+        input.own.write(Arc::new(9.0), Instant::now());
         assert_eq!(s.take(), 0, "the input's own cell is no longer watched");
         source.write(Arc::new(6.0));
         assert_eq!(s.take(), cause::CHANGE);

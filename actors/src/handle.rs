@@ -12,6 +12,7 @@ use tokio::time::Instant;
 
 use crate::cell::{Endpoint, Signal};
 use crate::queue::{QueueCore, QueueItem, ReaderEndpoint};
+use crate::step_clock::StepClock;
 use crate::types::PropertyType;
 use crate::value::AnyValue;
 
@@ -76,7 +77,10 @@ macro_rules! read_methods {
             /// The current value, copied out (for small `Copy` values such as `f64`).
             #[inline]
             pub fn value(&self) -> T {
-                *self.get()
+                self.ep.with_value(|v| match v.downcast_ref::<T>() {
+                    Some(v) => *v,
+                    None => unreachable!("property holds a {}", T::TYPE_NAME),
+                })
             }
         }
     };
@@ -105,6 +109,7 @@ read_methods!(Input);
 /// Read and write access to an output (`out/...`) or state (`state/...`).
 pub struct Output<T> {
     pub(crate) ep: Arc<Endpoint>,
+    clock: Arc<StepClock>,
     _t: PhantomData<fn() -> T>,
 }
 
@@ -112,14 +117,17 @@ pub struct Output<T> {
 pub type State<T> = Output<T>;
 
 impl<T: PropertyType> Output<T> {
-    pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
+    pub(crate) fn new(ep: Arc<Endpoint>, clock: Arc<StepClock>) -> Self {
         Output {
             ep,
+            clock,
             _t: PhantomData,
         }
     }
 
-    /// Publishes a new value and wakes every module watching it.
+    /// Publishes a new value and wakes every module watching it. The value is stamped with the
+    /// module's step time ([`Context::now`](crate::Context::now)) during a step, else with the
+    /// current time.
     #[inline]
     pub fn set(&self, value: T) {
         if tracing::enabled!(tracing::Level::TRACE) {
@@ -129,7 +137,7 @@ impl<T: PropertyType> Output<T> {
                 .short(&(Arc::new(value.clone()) as AnyValue));
             tracing::trace!(property = %self.ep.key, value = %shown, "write");
         }
-        self.ep.write(Arc::new(value))
+        self.ep.write_at(Arc::new(value), self.clock.now())
     }
 }
 
@@ -250,18 +258,21 @@ impl<T> Deref for Item<T> {
 /// The producing side of an `out/...` queue.
 pub struct QueueWriter<T> {
     pub(crate) core: Arc<QueueCore>,
+    clock: Arc<StepClock>,
     _t: PhantomData<fn(T)>,
 }
 
 impl<T: PropertyType> QueueWriter<T> {
-    pub(crate) fn new(core: Arc<QueueCore>) -> Self {
+    pub(crate) fn new(core: Arc<QueueCore>, clock: Arc<StepClock>) -> Self {
         QueueWriter {
             core,
+            clock,
             _t: PhantomData,
         }
     }
 
-    /// Appends an item and wakes every subscribed reader.
+    /// Appends an item and wakes every subscribed reader. Like a value, the item is stamped
+    /// with the module's step time during a step, else with the current time.
     #[inline]
     pub fn push(&self, value: T) {
         self.push_shared(Arc::new(value))
@@ -269,7 +280,7 @@ impl<T: PropertyType> QueueWriter<T> {
 
     /// Appends an already shared item without copying it.
     pub fn push_shared(&self, value: Arc<T>) {
-        self.core.push(value)
+        self.core.push(value, self.clock.now())
     }
 
     /// Items held for readers that have not consumed them yet.

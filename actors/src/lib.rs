@@ -20,6 +20,7 @@ mod module_types;
 mod ports;
 mod queue;
 mod snapshot;
+mod step_clock;
 mod summary;
 pub mod supervision;
 mod supervisor;

@@ -19,6 +19,7 @@ use crate::cell::{cause, Endpoint};
 use crate::handle::{AnyHandle, Input, Output, QueueReader};
 use crate::ports::Ports;
 use crate::queue::ReaderEndpoint;
+use crate::step_clock::StepClock;
 use crate::types::PropertyType;
 
 /// A functional module. Each instance runs as a supervised actor of its agent.
@@ -209,7 +210,8 @@ pub struct Context {
     pub(crate) module: Arc<str>,
     pub(crate) cause: Cause,
     pub(crate) steps: u64,
-    pub(crate) now: Instant,
+    /// The step time, shared with the module's output handles.
+    pub(crate) clock: Arc<StepClock>,
     pub(crate) reschedule: bool,
 }
 
@@ -220,6 +222,7 @@ impl Context {
         modules: ModuleControl,
         blackboard: Blackboard,
         control: AgentControl,
+        clock: Arc<StepClock>,
     ) -> Self {
         Context {
             modules,
@@ -229,7 +232,7 @@ impl Context {
             module: module.into(),
             cause: Cause(0),
             steps: 0,
-            now: Instant::now(),
+            clock,
             reschedule: false,
         }
     }
@@ -278,8 +281,10 @@ impl Context {
         self.steps
     }
 
-    /// When this step started (tokio time: follows a paused test clock).
+    /// The step's time (tokio time: follows a paused test clock): read from the clock once per
+    /// step, when first needed, and the same for everything the step writes (values and queue
+    /// items are stamped with it). Outside a step (in `init`, `cleanup`) it is the current time.
     pub fn now(&self) -> Instant {
-        self.now
+        self.clock.now()
     }
 }

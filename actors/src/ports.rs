@@ -14,6 +14,7 @@ use std::sync::Arc;
 use crate::cell::Endpoint;
 use crate::handle::{Input, Output, QueueReader, QueueWriter};
 use crate::queue::{QueueCore, ReaderEndpoint, DEFAULT_CAPACITY};
+use crate::step_clock::StepClock;
 use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
 
@@ -143,6 +144,8 @@ static NEXT_READER: AtomicU64 = AtomicU64::new(1);
 /// The declaration context handed to [`Module::declare`](crate::Module::declare).
 pub struct Ports {
     module: String,
+    /// The module's step time, shared by the handles that write.
+    pub(crate) clock: Arc<StepClock>,
     bound: Option<HashMap<String, Handle>>,
     pub(crate) decls: Vec<PropertyDecl>,
     pub(crate) handles: Vec<Handle>,
@@ -154,6 +157,7 @@ impl Ports {
     pub(crate) fn fresh(module: &str) -> Self {
         Ports {
             module: module.to_string(),
+            clock: Arc::default(),
             bound: None,
             decls: Vec::new(),
             handles: Vec::new(),
@@ -186,12 +190,18 @@ impl Ports {
 
     /// Declares an output `out/...` with its initial value.
     pub fn output<T: PropertyType>(&mut self, path: &str, initial: T, doc: &str) -> Output<T> {
-        Output::new(self.value(PropertyKind::Output, path, initial, doc))
+        Output::new(
+            self.value(PropertyKind::Output, path, initial, doc),
+            self.clock.clone(),
+        )
     }
 
     /// Declares a state property `state/...` with its initial value.
     pub fn state<T: PropertyType>(&mut self, path: &str, initial: T, doc: &str) -> Output<T> {
-        Output::new(self.value(PropertyKind::State, path, initial, doc))
+        Output::new(
+            self.value(PropertyKind::State, path, initial, doc),
+            self.clock.clone(),
+        )
     }
 
     /// Declares an output queue `out/...` holding at most `capacity` unread items
@@ -209,7 +219,7 @@ impl Ports {
             _ => QueueCore::new(&self.key(path), ti, capacity),
         };
         self.handles.push(Handle::QueueOut(core.clone()));
-        QueueWriter::new(core)
+        QueueWriter::new(core, self.clock.clone())
     }
 
     /// Declares an input queue `in/...`: link it to an output queue to receive its items.
@@ -242,7 +252,7 @@ impl Ports {
         default: T,
         doc: &str,
     ) -> Output<T> {
-        Output::new(self.value(kind, path, default, doc))
+        Output::new(self.value(kind, path, default, doc), self.clock.clone())
     }
 
     fn value<T: PropertyType>(

@@ -102,8 +102,7 @@ impl QueueCore {
         self.inner.lock().items.len()
     }
 
-    pub fn push(&self, value: AnyValue) {
-        let stamp = Instant::now();
+    pub fn push(&self, value: AnyValue, stamp: Instant) {
         let mut lagging = Vec::new();
         {
             let mut inner = self.inner.lock();
@@ -317,7 +316,7 @@ mod tests {
         let q = QueueCore::new("p/out/q", TypeInfo::of::<i64>(), 16);
         let (a, b) = (reader(1, &q), reader(2, &q));
         for i in 0..5 {
-            q.push(Arc::new(i as i64));
+            q.push(Arc::new(i as i64), Instant::now());
         }
         assert_eq!(seqs(&a), vec![0, 1, 2, 3, 4]);
         assert_eq!(seqs(&a), Vec::<i64>::new());
@@ -331,11 +330,11 @@ mod tests {
         let q = QueueCore::new("p/out/q", TypeInfo::of::<i64>(), 16);
         let r = reader(1, &q);
         for i in 0..4 {
-            q.push(Arc::new(i as i64));
+            q.push(Arc::new(i as i64), Instant::now());
         }
         assert_eq!(seqs(&r), vec![0, 1, 2, 3]);
-        q.push(Arc::new(4_i64));
-        q.push(Arc::new(5_i64));
+        q.push(Arc::new(4_i64), Instant::now());
+        q.push(Arc::new(5_i64), Instant::now());
         let mut taken = Vec::new();
         r.take(usize::MAX, &mut taken);
         assert_eq!(
@@ -354,7 +353,7 @@ mod tests {
         let q = QueueCore::new("p/out/q", TypeInfo::of::<i64>(), 3);
         let r = reader(1, &q);
         for i in 0..10 {
-            q.push(Arc::new(i as i64));
+            q.push(Arc::new(i as i64), Instant::now());
         }
         assert_eq!(seqs(&r), vec![7, 8, 9]);
         assert_eq!(*r.dropped.value().downcast_ref::<i64>().unwrap(), 7);
@@ -367,12 +366,12 @@ mod tests {
         let r = reader(1, &q1);
         let s = Arc::new(Signal::default());
         r.subscribe(&s);
-        q2.push(Arc::new(100_i64));
-        q1.push(Arc::new(1_i64));
+        q2.push(Arc::new(100_i64), Instant::now());
+        q1.push(Arc::new(1_i64), Instant::now());
         assert_eq!(s.take(), cause::ITEMS);
         r.retarget(q2.clone());
         assert_eq!(q1.len(), 0, "detaching frees what only this reader held");
-        q2.push(Arc::new(101_i64));
+        q2.push(Arc::new(101_i64), Instant::now());
         assert_eq!(s.take(), cause::ITEMS);
         assert_eq!(seqs(&r), vec![101]);
     }

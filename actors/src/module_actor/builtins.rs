@@ -1,15 +1,8 @@
 //! What the runtime keeps about every module: its `enabled`, `control/fault` and `stats/...`
-//! properties, the status values, and the step figures behind the stats.
-
-use std::time::Duration;
-
-use tokio::time::Instant;
+//! properties and the status values.
 
 use crate::handle::Output;
 use crate::ports::{Ports, PropertyKind};
-
-/// Stats are published at most this often (and at every status change), to keep steps cheap.
-const STATS_INTERVAL: Duration = Duration::from_millis(100);
 
 /// Module status values, as published in `stats/status`.
 pub mod status {
@@ -86,45 +79,5 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
             0.0,
             "mean time between step starts, ms",
         ),
-    }
-}
-
-/// Running step-time and interval figures, kept locally and published now and then.
-#[derive(Default)]
-pub(crate) struct StepStats {
-    count: u64,
-    total: Duration,
-    pub last: Duration,
-    first_start: Option<Instant>,
-    last_start: Option<Instant>,
-    pub published: Option<Instant>,
-}
-
-impl StepStats {
-    /// Records a step; true when the stats are due for publishing.
-    pub fn record(&mut self, started: Instant, took: Duration) -> bool {
-        self.count += 1;
-        self.total += took;
-        self.last = took;
-        self.first_start.get_or_insert(started);
-        self.last_start = Some(started);
-        self.published
-            .is_none_or(|p| started.duration_since(p) >= STATS_INTERVAL)
-    }
-
-    pub fn mean_step_us(&self) -> f64 {
-        if self.count == 0 {
-            return 0.0;
-        }
-        self.total.as_secs_f64() * 1e6 / self.count as f64
-    }
-
-    pub fn mean_interval_ms(&self) -> f64 {
-        match (self.first_start, self.last_start) {
-            (Some(a), Some(b)) if self.count > 1 => {
-                b.duration_since(a).as_secs_f64() * 1e3 / (self.count - 1) as f64
-            }
-            _ => 0.0,
-        }
     }
 }

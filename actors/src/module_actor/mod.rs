@@ -22,9 +22,11 @@ use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
 
 mod builtins;
+mod stats;
 
 pub use builtins::status;
-pub(crate) use builtins::{declare_builtins, Builtins, StepStats};
+pub(crate) use builtins::{declare_builtins, Builtins};
+use stats::StepStats;
 
 /// A request to stop one module instance, shared by its supervisor and its actor. Stopping
 /// raises the module's signal, so the request is seen at once, even by a waiting module.
@@ -130,6 +132,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             args.modules,
             args.blackboard,
             args.control,
+            ports.clock.clone(),
         );
         if let Err(e) = module.init(&mut ctx).instrument(span.clone()).await {
             builtins.status.set(status::FAILED.into());
@@ -212,7 +215,9 @@ impl<M: Module> Running<M> {
             if enabled {
                 if let Some(causes) = pending.take() {
                     self.step(causes).await?;
-                    last_step = self.ctx.now;
+                    if timeout.is_some() {
+                        last_step = Instant::now();
+                    }
                     if std::mem::take(&mut self.ctx.reschedule) {
                         (ticker, timeout) = self.arm();
                     }
@@ -275,9 +280,35 @@ impl<M: Module> Running<M> {
     }
 
     async fn step(&mut self, causes: u8) -> anyhow::Result<()> {
-        let started = Instant::now();
         self.ctx.cause = Cause(causes);
-        self.ctx.now = started;
+        // The step's time is read once, here if the step is timed, else when first needed.
+        let started = self.stats.wants_timing().then(Instant::now);
+        match started {
+            Some(t) => self.ctx.clock.begin_at(t),
+            None => self.ctx.clock.begin(),
+        }
+        let result = self.run_step().await;
+        if result.is_ok() {
+            // The step is done with what it took from its queues.
+            for reader in &self.readers {
+                reader.ack();
+            }
+            self.ctx.steps += 1;
+            if let Some(started) = started {
+                if self
+                    .stats
+                    .record(self.ctx.steps, started, started.elapsed())
+                {
+                    self.publish_stats();
+                }
+            }
+        }
+        self.ctx.clock.end();
+        result
+    }
+
+    /// Runs the module's step (or the fault injected), under its watchdog if it has one.
+    async fn run_step(&mut self) -> anyhow::Result<()> {
         let fault = self.take_fault();
         let step = async {
             match fault.as_deref() {
@@ -289,21 +320,11 @@ impl<M: Module> Running<M> {
         };
         match self.watchdog {
             Some(deadline) => match tokio::time::timeout(deadline, step).await {
-                Ok(result) => result?,
+                Ok(result) => result,
                 Err(_) => anyhow::bail!("hang: a step ran longer than its {deadline:?} watchdog"),
             },
-            None => step.await?,
+            None => step.await,
         }
-        // The step is done with what it took from its queues.
-        for reader in &self.readers {
-            reader.ack();
-        }
-        self.ctx.steps += 1;
-        let took = started.elapsed();
-        if self.stats.record(started, took) {
-            self.publish_stats();
-        }
-        Ok(())
     }
 
     /// A fault injected through `control/fault` since the last step, if any.

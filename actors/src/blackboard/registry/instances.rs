@@ -151,13 +151,16 @@ impl Registry {
             .get(&format!("{EVENTS_MODULE}/{EVENTS_PATH}"))
             .map(|e| &e.handle)
         {
-            Some(Handle::QueueOut(core)) => crate::QueueWriter::new(core.clone()),
+            Some(Handle::QueueOut(core)) => crate::QueueWriter::new(core.clone(), Arc::default()),
             // Only reachable if `declare_events` was not called: events then go nowhere.
-            _ => crate::QueueWriter::new(QueueCore::new(
-                "_supervisor/events",
-                TypeInfo::of::<crate::supervision::SupervisorEvent>(),
-                1,
-            )),
+            _ => crate::QueueWriter::new(
+                QueueCore::new(
+                    "_supervisor/events",
+                    TypeInfo::of::<crate::supervision::SupervisorEvent>(),
+                    1,
+                ),
+                Arc::default(),
+            ),
         }
     }
 }
