@@ -4,7 +4,7 @@
 //! move through these cells without any actor round trip. A write replaces the cell's value
 //! under a short lock and raises the [`Signal`] of every module watching the cell.
 
-use std::sync::atomic::{AtomicU64, AtomicU8, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicU8, Ordering};
 use std::sync::Arc;
 
 use arc_swap::ArcSwap;
@@ -35,12 +35,24 @@ pub(crate) mod cause {
 pub(crate) struct Signal {
     notify: Notify,
     causes: AtomicU8,
+    /// Step causes are recorded without waking the module (it is disabled): a write then
+    /// wakes only the modules that will step, and the recorded causes make the module step
+    /// when it is enabled again.
+    quiet: AtomicBool,
 }
 
 impl Signal {
     pub fn raise(&self, cause: u8) {
         self.causes.fetch_or(cause, Ordering::Release);
+        if cause & !cause::STEPS == 0 && self.quiet.load(Ordering::Acquire) {
+            return;
+        }
         self.notify.notify_one();
+    }
+
+    /// Whether step causes should wait, recorded, instead of waking the module.
+    pub fn set_quiet(&self, quiet: bool) {
+        self.quiet.store(quiet, Ordering::Release);
     }
 
     /// Waits for the next raise and returns the causes gathered since the last call.

@@ -24,6 +24,37 @@ async fn periodic_steps_fall_on_a_fixed_grid_even_when_steps_take_time() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn changes_while_disabled_make_one_step_when_enabled() {
+    let agent = start(r#"Agent(name: "r1", modules: [(name: "e", type: "test.echo")])"#).await;
+    let bb = agent.blackboard().clone();
+    advance(1).await;
+    bb.set("e/enabled", false).await.unwrap();
+    for v in [1.0, 2.0, 3.0] {
+        bb.set("e/in/value", v).await.unwrap();
+        advance(1).await;
+    }
+    assert_eq!(
+        *bb.get::<f64>("e/out/value").await.unwrap(),
+        0.0,
+        "no step while disabled"
+    );
+    assert_eq!(*bb.get::<i64>("e/state/steps").await.unwrap(), 0);
+    bb.set("e/enabled", true).await.unwrap();
+    advance(1).await;
+    assert_eq!(
+        *bb.get::<f64>("e/out/value").await.unwrap(),
+        3.0,
+        "the latest value"
+    );
+    assert_eq!(
+        *bb.get::<i64>("e/state/steps").await.unwrap(),
+        1,
+        "one step for all of them"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
 async fn a_disabled_module_does_not_step_until_enabled_again() {
     let agent = start(
         r#"Agent(name: "r1", modules: [

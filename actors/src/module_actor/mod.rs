@@ -200,6 +200,7 @@ impl<M: Module> Running<M> {
         self.stop.attach(&self.signal);
         let (mut ticker, mut timeout) = self.arm();
         let mut enabled = self.builtins.enabled.value();
+        self.signal.set_quiet(!enabled);
         self.publish(if enabled {
             status::RUNNING
         } else {
@@ -240,6 +241,9 @@ impl<M: Module> Running<M> {
                 let now_enabled = self.builtins.enabled.value();
                 if now_enabled != enabled {
                     enabled = now_enabled;
+                    // Data events while disabled are recorded in the signal and picked up by
+                    // the next wait; they need not wake this module until it is enabled.
+                    self.signal.set_quiet(!enabled);
                     self.span
                         .in_scope(|| tracing::info!(enabled, "enabled changed"));
                     self.publish(if enabled {

@@ -119,7 +119,7 @@ impl Module for Mission {
                 break;
             }
         }
-        let _ = run.timer.send(run.bound.exprs.next_deadline());
+        set_deadline(&run.timer, run.bound.exprs.next_deadline());
         if fired > 0 {
             publish(&self.marking, marking(&run.plan, &run.state));
             publish(
@@ -146,7 +146,7 @@ impl Module for Mission {
 
     async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(run) = self.run.as_mut() {
-            let _ = run.timer.send(None);
+            set_deadline(&run.timer, None);
         }
         Ok(())
     }
@@ -343,6 +343,17 @@ fn marking(plan: &Plan, state: &PlanState) -> String {
 }
 
 /// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
+/// Tells the timer task about a new deadline. Only a change wakes it: a wake-up per mission step
+/// would put a second task on the run queue at every reaction, and tokio then brings in another
+/// worker thread to steal it, which costs more than the reaction itself.
+fn set_deadline(timer: &watch::Sender<Option<Instant>>, deadline: Option<Instant>) {
+    timer.send_if_modified(|d| {
+        let changed = *d != deadline;
+        *d = deadline;
+        changed
+    });
+}
+
 async fn deadline_timer(mut rx: watch::Receiver<Option<Instant>>, wake: petrel_actors::AnyHandle) {
     loop {
         let deadline = *rx.borrow_and_update();
