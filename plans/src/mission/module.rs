@@ -4,6 +4,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
+use petrel_actors::expr::ExprId;
 use petrel_actors::{
     Blackboard, BlackboardError, Context, FilePath, Input, Module, Output, Param, Ports, Schedule,
     State,
@@ -44,6 +45,8 @@ struct Run {
     /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
     timer: watch::Sender<Option<Instant>>,
     done: bool,
+    /// Scratch for the expressions a round changed, kept to avoid allocating per round.
+    changed: Vec<ExprId>,
 }
 
 impl Module for Mission {
@@ -159,15 +162,18 @@ impl Run {
     /// One plan step: bring expressions up to date with changed properties, then step.
     fn round(&mut self, now: Instant, flags: &Flags) -> crate::exec::StepReport {
         for (id, h, seen) in &mut self.bound.watched {
-            let s = h.read();
-            if *seen != Some(s.version) {
-                *seen = Some(s.version);
-                self.bound
-                    .exprs
-                    .update(*id, h.type_info(), &s.value, s.written);
+            // A lock-free version check first: most rounds change few properties.
+            if *seen == Some(h.version()) {
+                continue;
             }
+            let s = h.read();
+            *seen = Some(s.version);
+            self.bound
+                .exprs
+                .update(*id, h.type_info(), &s.value, s.written);
         }
-        for id in self.bound.exprs.evaluate(now) {
+        self.bound.exprs.evaluate_into(now, &mut self.changed);
+        for &id in &self.changed {
             if let Some(Err(e)) = self.bound.exprs.value(id) {
                 // Types were checked at init, so this is a value of unexpected shape: say so.
                 tracing::warn!(error = %e, "a binding expression could not be evaluated; it counts as false");
@@ -230,6 +236,7 @@ impl Mission {
             bound,
             timer,
             done: false,
+            changed: Vec::new(),
         });
         Ok(())
     }
