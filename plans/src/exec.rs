@@ -97,6 +97,15 @@ pub struct PlanState {
     marked: BTreeSet<u32>,
     subs: Vec<Option<Box<PlanState>>>,
     reported: HashSet<String>,
+    scratch: Scratch,
+}
+
+/// Buffers a step fills and empties, kept so that a step does not allocate.
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    running: Vec<usize>,
+    candidates: Vec<u32>,
+    enabled: Vec<usize>,
 }
 
 impl PlanState {
@@ -119,6 +128,7 @@ impl PlanState {
             marked,
             subs,
             reported: HashSet::new(),
+            scratch: Scratch::default(),
         }
     }
 
@@ -180,17 +190,24 @@ impl PlanState {
 
     /// Executables with a marked execution place, each once, in index order.
     fn running(&self, plan: &Plan) -> Vec<usize> {
+        let mut ex = Vec::new();
+        self.running_into(plan, &mut ex);
+        ex
+    }
+
+    /// Like [`running`](Self::running), into `ex` (cleared first).
+    fn running_into(&self, plan: &Plan, ex: &mut Vec<usize>) {
         let pe = &plan.hot().place_exec;
-        let mut ex: Vec<usize> = self
-            .marked
-            .iter()
-            .map(|&p| pe[p as usize])
-            .filter(|&e| e != Hot::NO_EXEC)
-            .map(|e| e as usize)
-            .collect();
+        ex.clear();
+        ex.extend(
+            self.marked
+                .iter()
+                .map(|&p| pe[p as usize])
+                .filter(|&e| e != Hot::NO_EXEC)
+                .map(|e| e as usize),
+        );
         ex.sort_unstable();
         ex.dedup();
-        ex
     }
 }
 
@@ -211,23 +228,32 @@ fn step_into(
     if state.status(plan) != PlanStatus::Running {
         return;
     }
-    for e in state.running(plan) {
+    // The step's buffers, taken out of the state while it is borrowed, and put back after.
+    let Scratch {
+        mut running,
+        mut candidates,
+        mut enabled,
+    } = std::mem::take(&mut state.scratch);
+    state.running_into(plan, &mut running);
+    for &e in &running {
         let exe = &plan.executables()[e];
         match (&exe.subplan, state.subs[e].as_deref_mut()) {
             (Some(sp), Some(sub)) => step_into(sp, sub, env, report, false),
             _ => env.step_action(&exe.name),
         }
     }
-    let mut candidates: Vec<u32> = state
-        .marked
-        .iter()
-        .flat_map(|&p| plan.output_transitions(p as usize).iter().copied())
-        .collect();
+    candidates.clear();
+    candidates.extend(
+        state
+            .marked
+            .iter()
+            .flat_map(|&p| plan.output_transitions(p as usize).iter().copied()),
+    );
     candidates.sort_unstable();
     candidates.dedup();
     let hot = plan.hot();
-    let mut enabled = Vec::with_capacity(candidates.len());
-    for ti in candidates {
+    enabled.clear();
+    for &ti in &candidates {
         let h = hot.trans[ti as usize];
         if has_tokens(state, h.inputs(&hot.arcs))
             && (h.plain || guard(plan, state, env, report, ti as usize))
@@ -235,7 +261,7 @@ fn step_into(
             enabled.push(ti as usize);
         }
     }
-    for ti in enabled {
+    for &ti in &enabled {
         let h = hot.trans[ti];
         if !has_tokens(state, h.inputs(&hot.arcs)) {
             continue; // an earlier firing of this step took the tokens
@@ -255,6 +281,11 @@ fn step_into(
             }
         }
     }
+    state.scratch = Scratch {
+        running,
+        candidates,
+        enabled,
+    };
 }
 
 fn has_tokens(state: &PlanState, inputs: &[crate::model::Edge]) -> bool {
