@@ -373,3 +373,12 @@ fn check_reports_a_missing_file_where_the_config_names_it() {
     );
     assert!(err.contains(&expected), "{err}");
 }
+
+#[test]
+fn a_mission_runs_to_its_goal_on_one_worker_thread() {
+    let out = petrel(&["run", "configs/mission-demo.ron", "--workers", "1"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let refused = petrel(&["run", "configs/mission-demo.ron", "--workers", "0"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(text(&refused.stderr).contains("'--workers <WORKERS>'"));
+}

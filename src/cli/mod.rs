@@ -82,6 +82,10 @@ pub(crate) struct RunArgs {
     /// Log format on standard error (filter with RUST_LOG, default `info`).
     #[arg(long, value_enum, default_value_t = LogFormat::Pretty)]
     log_format: LogFormat,
+    /// Worker threads the modules run on (default: one per core). One keeps a serial chain of
+    /// modules on one core, where a hand-over between modules costs no thread wake-up.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    workers: Option<u16>,
 }
 
 /// How logs are written.

@@ -16,10 +16,11 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
     if let Err(errors) = check_all(&file, registry) {
         return bad_input(&errors);
     }
-    let runtime = match tokio::runtime::Builder::new_multi_thread()
-        .enable_all()
-        .build()
-    {
+    let mut builder = tokio::runtime::Builder::new_multi_thread();
+    if let Some(workers) = args.workers {
+        builder.worker_threads(workers.into());
+    }
+    let runtime = match builder.enable_all().build() {
         Ok(rt) => rt,
         Err(e) => {
             eprintln!("error: cannot start the async runtime: {e}");
