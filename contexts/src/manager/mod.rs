@@ -6,23 +6,24 @@
 //! modules, and restoring what it changed when a context ends. Every activation and
 //! deactivation is traced and pushed to `out/changes`; `out/active` lists the active contexts.
 
-use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
 
-use anyhow::{anyhow, Context as _};
+use anyhow::anyhow;
 use petrel_actors::expr::{parse, properties, PropId};
 use petrel_actors::{
-    status, AnyHandle, AnyValue, Context, FilePath, Module, Output, Param, Ports, PropertyType,
+    AnyHandle, AnyValue, Context, FilePath, Module, Output, Param, Ports, PropertyType,
     QueueWriter, Registry, Schedule, TypeInfo,
 };
 use serde::{Deserialize, Serialize};
 use tokio::time::Instant;
 
-use crate::engine::{to_property, Action, Engine, Schema};
+use crate::engine::{Action, Engine, Schema};
 use crate::rules::{LoadedRules, RuleError};
+
+mod apply;
 
 /// One context activation or deactivation, as pushed to `out/changes`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -302,158 +303,5 @@ impl ContextManager {
             active.push_str(name);
         }
         self.active.set(active);
-    }
-
-    async fn apply(&mut self, ctx: &Context, action: &Action) {
-        if let Err(e) = self.try_apply(ctx, action).await {
-            tracing::error!(?action, error = %e, "context effect failed");
-            self.errors.set(format!("{e:#}"));
-        }
-    }
-
-    async fn try_apply(&mut self, ctx: &Context, action: &Action) -> anyhow::Result<()> {
-        let bb = ctx.blackboard();
-        match action {
-            Action::Activated(context) | Action::Deactivated(context) => {
-                let now_active = matches!(action, Action::Activated(_));
-                if tracing::enabled!(tracing::Level::INFO) {
-                    let trigger = self.trigger_values(context);
-                    let what = if now_active {
-                        "activated"
-                    } else {
-                        "deactivated"
-                    };
-                    tracing::info!(%context, active = now_active, %trigger, "context {what}");
-                }
-                let time_s = self
-                    .started
-                    .map_or(0.0, |t| ctx.now().duration_since(t).as_secs_f64());
-                self.changes.push(ContextChange {
-                    time_s,
-                    context: context.to_string(),
-                    active: now_active,
-                });
-            }
-            Action::Set {
-                target,
-                value,
-                context,
-            } => {
-                let handle = self.handle(target)?.clone();
-                let info = handle.type_info();
-                let old = handle.value();
-                let new = to_property(value, info).map_err(|e| anyhow!("{target}: {e}"))?;
-                let first = match self.original_values.entry(target.clone()) {
-                    Entry::Vacant(slot) => {
-                        slot.insert(old.clone());
-                        true
-                    }
-                    Entry::Occupied(_) => false,
-                };
-                // Continuous expressions update often: the first change is news, the rest detail.
-                // Values are formatted only when someone listens.
-                if first && tracing::enabled!(tracing::Level::INFO) {
-                    let (old, new) = (info.short(&old), info.short(&new));
-                    tracing::info!(%context, %target, %old, %new, "context sets");
-                } else if tracing::enabled!(tracing::Level::DEBUG) {
-                    let (old, new) = (info.short(&old), info.short(&new));
-                    tracing::debug!(%context, %target, %old, %new, "context updates");
-                }
-                handle.set(new)?;
-            }
-            Action::Restore(target) => {
-                if let Some(original) = self.original_values.remove(target) {
-                    let handle = self.handle(target)?;
-                    tracing::info!(%target, value = %handle.type_info().short(&original), "context restores");
-                    handle.set(original)?;
-                }
-            }
-            Action::Release(target) => {
-                self.original_values.remove(target);
-            }
-            Action::Link {
-                input,
-                source,
-                context,
-            } => {
-                if !self.original_links.contains_key(input) {
-                    self.original_links
-                        .insert(input.clone(), bb.link_of(input).await?);
-                }
-                tracing::info!(%context, %input, %source, "context relinks");
-                bb.link(input, source).await?;
-            }
-            Action::RestoreLink(input) => match self.original_links.remove(input) {
-                Some(Some(original)) => {
-                    tracing::info!(%input, source = %original, "context restores link");
-                    bb.link(input, &original).await?;
-                }
-                Some(None) => {
-                    tracing::info!(%input, "context removes its link");
-                    bb.unlink(input).await?;
-                }
-                None => {}
-            },
-            Action::ReleaseLink(input) => {
-                self.original_links.remove(input);
-            }
-            Action::Run {
-                module,
-                start,
-                context,
-            } => {
-                if !self.original_runs.contains_key(module) {
-                    let status = bb.get::<String>(&format!("{module}/stats/status")).await?;
-                    let running = !matches!(status.as_str(), status::STOPPED | status::FAILED);
-                    self.original_runs.insert(module.clone(), running);
-                }
-                tracing::info!(%context, %module, start, "context {} module", if *start { "starts" } else { "stops" });
-                run(ctx, module, *start).await;
-            }
-            Action::RestoreRun(module) => {
-                if let Some(running) = self.original_runs.remove(module) {
-                    run(ctx, module, running).await;
-                }
-            }
-            Action::ReleaseRun(module) => {
-                self.original_runs.remove(module);
-            }
-        }
-        Ok(())
-    }
-
-    fn handle(&self, address: &str) -> anyhow::Result<&AnyHandle> {
-        self.handles
-            .get(address)
-            .with_context(|| format!("`{address}` is not in the blackboard"))
-    }
-
-    /// The current values of the properties `context`'s conditions read, for traces.
-    fn trigger_values(&self, context: &str) -> String {
-        let Some(engine) = &self.engine else {
-            return String::new();
-        };
-        let shown: Vec<String> = engine
-            .condition_reads(context)
-            .into_iter()
-            .filter_map(|(prop, path)| {
-                let w = self.watched.iter().find(|w| w.prop == prop)?;
-                let value = w.handle.type_info().short(&w.handle.value());
-                Some(format!("{path}={value}"))
-            })
-            .collect();
-        shown.join(" ")
-    }
-}
-
-/// Starts or stops a module; one already in that state is left as it is.
-async fn run(ctx: &Context, module: &str, start: bool) {
-    let result = if start {
-        ctx.modules().start(module).await
-    } else {
-        ctx.modules().stop(module).await
-    };
-    if let Err(e) = result {
-        tracing::debug!(%module, start, error = %e, "module left as it was");
     }
 }
