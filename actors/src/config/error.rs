@@ -1,0 +1,113 @@
+//! Config errors located in their files, and reading and parsing RON files as petrel writes
+//! them (shared by agent configs and context rules).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A problem in a config file, located in it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// 1-based column (0 when unknown).
+    pub column: usize,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl ConfigError {
+    /// An error at byte `offset` of `text`, the contents of `file`.
+    pub fn at(file: &Path, text: &str, offset: usize, message: String) -> Self {
+        let (line, column) = line_column(text, offset);
+        ConfigError {
+            file: file.into(),
+            line,
+            column,
+            message,
+        }
+    }
+
+    /// An error about `file` as a whole.
+    pub fn in_file(file: &Path, message: String) -> Self {
+        ConfigError {
+            file: file.into(),
+            line: 0,
+            column: 0,
+            message,
+        }
+    }
+
+    /// A RON syntax error in `file`; `what` names the kind of file for the reader.
+    pub fn from_ron(file: &Path, error: &ron::error::SpannedError, what: &str) -> Self {
+        let message = format!("{} (RON syntax of {what})", error.code);
+        ConfigError {
+            file: file.into(),
+            line: error.span.start.line,
+            column: error.span.start.col,
+            message,
+        }
+    }
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            0 => write!(f, "{}: error: {}", self.file.display(), self.message),
+            _ => write!(
+                f,
+                "{}:{}:{}: error: {}",
+                self.file.display(),
+                self.line,
+                self.column,
+                self.message
+            ),
+        }
+    }
+}
+
+/// Every problem found in a config, one per line when displayed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigErrors(pub Vec<ConfigError>);
+
+impl fmt::Display for ConfigErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{e}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ConfigErrors {}
+
+/// Reads a text file; `what` names it in the error ("config", "context rules").
+pub fn read_text(path: &Path, what: &str) -> Result<String, ConfigError> {
+    std::fs::read_to_string(path)
+        .map_err(|e| ConfigError::in_file(path, format!("cannot read {what}: {e}")))
+}
+
+/// Parses RON text as petrel writes its files: optional fields are written plainly
+/// (`group: "nav"`, not `group: Some("nav")`). `what` names the kind of file in errors.
+pub fn parse_ron<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    text: &str,
+    what: &str,
+) -> Result<T, ConfigError> {
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    options
+        .from_str::<T>(text)
+        .map_err(|e| ConfigError::from_ron(path, &e, what))
+}
+
+/// 1-based line and column of byte offset `at` in `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let line = text[..at].matches('\n').count() + 1;
+    let column = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, column)
+}
