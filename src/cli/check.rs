@@ -13,10 +13,10 @@ use super::{bad_input, load};
 
 /// `petrel check CONFIG [--overlay ...]`.
 pub(crate) fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[PathBuf]) -> ExitCode {
-    let result =
-        load(config, overlays).and_then(|file| check_all(&file, registry).map(|reg| (file, reg)));
+    let result = load(config, overlays)
+        .and_then(|file| check_all(&file, registry).map(|agent| (file, agent)));
     match result {
-        Ok((file, reg)) => {
+        Ok((file, agent)) => {
             let links = file
                 .config
                 .modules
@@ -26,8 +26,8 @@ pub(crate) fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[Pat
             println!(
                 "{}: ok: agent `{}`, {} modules, {links} links",
                 config.display(),
-                reg.agent(),
-                reg.modules().len()
+                agent.name,
+                agent.modules
             );
             ExitCode::SUCCESS
         }
@@ -35,12 +35,18 @@ pub(crate) fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[Pat
     }
 }
 
+/// What a config that checks describes.
+pub(crate) struct CheckedAgent {
+    pub name: String,
+    pub modules: usize,
+}
+
 /// Builds the agent's registry and checks what a module would find wrong only at init: the files
 /// the config names, the rules of every `context.manager`, the bindings of every mission.
 pub(crate) fn check_all(
     file: &ConfigFile,
     registry: &ModuleRegistry,
-) -> Result<Registry, ConfigErrors> {
+) -> Result<CheckedAgent, ConfigErrors> {
     let built = file.build(registry)?;
     let (mut errors, missing) = check_files(file, &built);
     let without_missing_files = |module: &str| !missing.iter().any(|m| m == module);
@@ -66,9 +72,13 @@ pub(crate) fn check_all(
         .map(|m| m.name.as_str())
         .filter(|m| without_missing_files(m))
         .collect();
-    errors.extend(check_missions(file, registry, &missions));
+    let agent = CheckedAgent {
+        name: built.agent().to_string(),
+        modules: built.modules().len(),
+    };
+    errors.extend(check_missions(file, built, &missions));
     match errors.is_empty() {
-        true => Ok(built),
+        true => Ok(agent),
         false => Err(ConfigErrors(errors)),
     }
 }
@@ -111,18 +121,11 @@ fn check_files(file: &ConfigFile, built: &Registry) -> (Vec<ConfigError>, Vec<St
 }
 
 /// Loads each mission's plan and binds it as its init would, against a blackboard holding the
-/// config's values (nothing runs), so bad bindings are found before the robot moves.
-fn check_missions(
-    file: &ConfigFile,
-    registry: &ModuleRegistry,
-    missions: &[&str],
-) -> Vec<ConfigError> {
+/// config's values (`built`; nothing runs), so bad bindings are found before the robot moves.
+fn check_missions(file: &ConfigFile, built: Registry, missions: &[&str]) -> Vec<ConfigError> {
     if missions.is_empty() {
         return Vec::new();
     }
-    let Ok(built) = file.build(registry) else {
-        return Vec::new(); // already reported
-    };
     let runtime = match tokio::runtime::Builder::new_current_thread().build() {
         Ok(rt) => rt,
         Err(e) => {
