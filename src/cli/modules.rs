@@ -30,7 +30,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
             format!("; did you mean {}?", near.join(", "))
         };
         eprintln!("error: unknown module type `{type_name}`{hint} (`petrel modules` lists them)");
-        return ExitCode::from(2);
+        return ExitCode::from(super::EXIT_BAD_INPUT);
     };
     say!("{}: {}\n", t.name(), t.description());
     // The module's own properties first, then those the runtime adds to every module.

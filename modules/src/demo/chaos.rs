@@ -1,5 +1,4 @@
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::{bail, Context as _};
 use petrel_actors::{AnyHandle, Context, Module, Output, Param, Ports, Schedule};
@@ -64,8 +63,9 @@ impl Module for Chaos {
     }
 
     fn schedule(&self) -> Schedule {
-        let draw = (self.mean_interval_ms.value() / DRAWS_PER_INTERVAL).max(1);
-        Schedule::every(Duration::from_millis(draw as u64))
+        Schedule::every(super::period(
+            self.mean_interval_ms.value() / DRAWS_PER_INTERVAL,
+        ))
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {

@@ -7,8 +7,9 @@ use petrel_actors::{
     QueueReader, Schedule,
 };
 
-use super::param_error;
+use super::{check_params, param_error};
 use crate::nav::{Mapper, MapperParams};
+use crate::sim::error::positive;
 
 /// Scans kept waiting for a matching pose; beyond this the pose source is presumed silent and
 /// the oldest scan is mapped with the latest pose.
@@ -76,11 +77,7 @@ impl Module for MapperModule {
             self.size.value(),
             self.origin.value(),
         );
-        if !(res.is_finite() && res > 0.0) {
-            anyhow::bail!(
-                "invalid parameter `params/resolution`: expected a finite value > 0, got {res}"
-            );
-        }
+        check_params(positive, &[("resolution", res)])?;
         let cells = |m: f64| (m / res).ceil();
         let (w, h) = (cells(size.0.x), cells(size.0.y));
         if !(w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {

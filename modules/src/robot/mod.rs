@@ -55,6 +55,18 @@ fn param_error(e: ParamError, renames: &[(&str, &str)]) -> anyhow::Error {
     anyhow::anyhow!("invalid parameter `params/{name}`: {}", e.message)
 }
 
+/// Checks module parameters `(name, value)` with a core check ([`positive`](crate::sim::error::positive),
+/// [`non_negative`](crate::sim::error::non_negative)); the first failure names its property.
+fn check_params(
+    check: fn(&str, f64) -> Result<(), ParamError>,
+    params: &[(&str, f64)],
+) -> anyhow::Result<()> {
+    for &(name, value) in params {
+        check(name, value).map_err(|e| param_error(e, &[]))?;
+    }
+    Ok(())
+}
+
 /// An `i64` parameter as a count, or an error naming it when it is negative.
 fn count(name: &str, value: i64) -> anyhow::Result<usize> {
     usize::try_from(value).map_err(|_| {

@@ -7,7 +7,9 @@ use petrel_actors::types::Path2;
 use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Schedule};
 use tokio::time::Instant;
 
+use super::check_params;
 use crate::nav::GoalSequencer;
+use crate::sim::error::positive;
 
 /// Exit code of `petrel run` when the mission fails (timeout, or no path for too long).
 pub const MISSION_FAILED: u8 = 1;
@@ -77,15 +79,12 @@ impl Module for GoalSequencerModule {
         if goals.points().is_empty() {
             bail!("params/goals is empty; expected at least one goal, `[(x: 1.0, y: 2.0), ...]`");
         }
-        for (name, v) in [
+        let durations = [
             ("tolerance", self.tolerance.value()),
             ("timeout_s", self.timeout_s.value()),
             ("give_up_s", self.give_up_s.value()),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                bail!("invalid parameter `params/{name}`: expected a finite value > 0, got {v}");
-            }
-        }
+        ];
+        check_params(positive, &durations)?;
         let poses = goals
             .points()
             .iter()

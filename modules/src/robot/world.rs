@@ -10,7 +10,8 @@ use petrel_actors::{
 };
 use tokio::time::Instant;
 
-use super::{count, param_error};
+use super::{check_params, count, param_error};
+use crate::sim::error::{non_negative, positive};
 use crate::sim::{
     load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
 };
@@ -130,15 +131,9 @@ impl Module for SimWorld {
         };
         let dt = self.dt.value();
         let scale = self.time_scale.value();
-        for (name, v) in [("dt", dt), ("time_scale", scale)] {
-            if !(v.is_finite() && v > 0.0) {
-                bail!("invalid parameter `params/{name}`: expected a finite value > 0, got {v}");
-            }
-        }
+        check_params(positive, &[("dt", dt), ("time_scale", scale)])?;
         let timeout = self.command_timeout.value();
-        if !(timeout.is_finite() && timeout >= 0.0) {
-            bail!("invalid parameter `params/command_timeout_s`: expected a finite value >= 0, got {timeout}");
-        }
+        check_params(non_negative, &[("command_timeout_s", timeout)])?;
         let config = self.robot_config()?;
         let seed = self.seed.value() as u64;
         let mut world = World::new(map.grid, seed);
