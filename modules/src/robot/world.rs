@@ -16,6 +16,18 @@ use crate::sim::{
     load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
 };
 
+/// Core names of the robot's parameters that `sim.world` exposes under other property paths;
+/// `World::add_robot` checks the config and names the core parameter.
+const ROBOT_PARAMS: &[(&str, &str)] = &[
+    ("rays", "laser/rays"),
+    ("range_max", "laser/range_max"),
+    ("range_noise_std", "laser/noise_std"),
+    ("rate_hz", "laser/rate_hz"),
+    ("trans_std", "odom_noise[0]"),
+    ("rot_std", "odom_noise[1]"),
+    ("rot_per_trans_std", "odom_noise[2]"),
+];
+
 /// Simulation steps run at most per wake-up in real-time mode: a host that falls further
 /// behind slows simulated time down instead of freezing in a catch-up burst.
 const MAX_CATCH_UP_STEPS: u32 = 10;
@@ -139,7 +151,7 @@ impl Module for SimWorld {
         let mut world = World::new(map.grid, seed);
         let id = world
             .add_robot(config, start)
-            .map_err(|e| param_error(e, &[("start", "start")]))?;
+            .map_err(|e| param_error(e, ROBOT_PARAMS))?;
         self.world_goals.set(
             map.goals
                 .iter()
@@ -218,22 +230,18 @@ impl SimWorld {
         if !(fov_deg > 0.0 && fov_deg <= 360.0) {
             bail!("invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {fov_deg}");
         }
-        let laser = self.laser_enabled.value().then(|| LaserConfig {
-            mount: self.laser_mount.value(),
-            rays: 0,
-            fov: fov_deg.to_radians(),
-            range_max: self.laser_range_max.value(),
-            range_noise_std: self.laser_noise.value(),
-            rate_hz: (rate != 0.0).then_some(rate),
-        });
-        let laser = match laser {
-            Some(l) => Some(LaserConfig {
+        let laser = match self.laser_enabled.value() {
+            true => Some(LaserConfig {
+                mount: self.laser_mount.value(),
                 rays: count("laser/rays", self.laser_rays.value())?,
-                ..l
+                fov: fov_deg.to_radians(),
+                range_max: self.laser_range_max.value(),
+                range_noise_std: self.laser_noise.value(),
+                rate_hz: (rate != 0.0).then_some(rate),
             }),
-            None => None,
+            false => None,
         };
-        let config = RobotConfig {
+        Ok(RobotConfig {
             radius: self.radius.value(),
             drive,
             limits: Limits {
@@ -245,21 +253,6 @@ impl SimWorld {
             },
             odom_noise,
             laser,
-        };
-        config.validate().map_err(|e| {
-            param_error(
-                e,
-                &[
-                    ("rays", "laser/rays"),
-                    ("range_max", "laser/range_max"),
-                    ("range_noise_std", "laser/noise_std"),
-                    ("rate_hz", "laser/rate_hz"),
-                    ("trans_std", "odom_noise[0]"),
-                    ("rot_std", "odom_noise[1]"),
-                    ("rot_per_trans_std", "odom_noise[2]"),
-                ],
-            )
-        })?;
-        Ok(config)
+        })
     }
 }
