@@ -275,7 +275,11 @@ impl ExprSet {
     /// The earliest time at which a time-dependent expression may change value by time
     /// alone (a `held` window closing, an `age` crossing a compared constant); evaluate again then.
     pub fn next_deadline(&self) -> Option<Instant> {
-        self.exprs.iter().filter_map(|e| e.deadline).min()
+        // Only time-dependent expressions have deadlines, and they always stay due.
+        self.due
+            .iter()
+            .filter_map(|&i| self.exprs[i].deadline)
+            .min()
     }
 
     /// Whether some expression depends on time alone (`held`, `age`).

@@ -1,6 +1,6 @@
 //! Building an engine from a rules file: every check `petrel check` reports.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::time::Duration;
 
 use petrel_actors::expr::{never_true, parse, properties, ExprId, ExprSet, Ty, TypeEnv};
@@ -20,7 +20,6 @@ impl Engine {
             values: Effects::new(Vec::new()).0,
             links: Effects::new(Vec::new()).0,
             runs: Effects::new(Vec::new()).0,
-            targets: HashMap::new(),
             condition_of: Vec::new(),
             waiting: Vec::new(),
             active: Vec::new(),
@@ -82,7 +81,6 @@ impl Engine {
                     errors.push(err(Some(&needle), None, message));
                     continue;
                 };
-                engine.targets.insert(target.clone(), info);
                 if let Some(id) = add(&src, &want, &mut errors) {
                     sets.push(effect(&target, id));
                 }
@@ -114,14 +112,15 @@ impl Engine {
                     ));
                 }
             }
-            let (Some(when), Some(until)) = (when, until.unwrap_or(Some(ExprId(usize::MAX))))
+            // `until` is optional; a given one that failed to check skips the rule like `when`.
+            let (Some(when), Some(until)) = (when, until.map_or(Some(None), |u| u.map(Some)))
             else {
                 continue;
             };
             engine.rules.push(Rule {
                 name: rule.name.as_str().into(),
                 when,
-                until: (until.0 != usize::MAX).then_some(until),
+                until,
                 min_dwell: Duration::from_millis(rule.min_dwell_ms),
                 priority: rule.priority,
                 sets,

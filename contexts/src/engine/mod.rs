@@ -2,7 +2,6 @@
 //! should be (resolved by priority), and the actions that take the blackboard from what is
 //! applied to what is desired. No I/O and no clock of its own: values and times are passed in.
 
-use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -121,8 +120,6 @@ pub struct Engine {
     values: Effects<Value>,
     links: Effects<Arc<str>>,
     runs: Effects<bool>,
-    /// The expected type of each `set` target, to convert values.
-    targets: HashMap<String, TypeInfo>,
     /// The rule whose `when` or `until` each expression is (by expression number), so a step
     /// looks only at rules whose conditions changed.
     condition_of: Vec<Option<usize>>,
@@ -145,11 +142,6 @@ impl Engine {
     /// [`update_prop`](Engine::update_prop)).
     pub fn properties(&self) -> impl Iterator<Item = (PropId, &str)> {
         self.exprs.properties()
-    }
-
-    /// The type of a `set` target.
-    pub fn target_type(&self, target: &str) -> Option<TypeInfo> {
-        self.targets.get(target).copied()
     }
 
     /// A property the rules read has a new value.

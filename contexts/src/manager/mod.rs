@@ -40,12 +40,10 @@ impl PropertyType for ContextChange {
     const TYPE_NAME: &'static str = "ContextChange";
 }
 
-/// Property types and samples, looked up beforehand.
-struct Table(HashMap<String, (TypeInfo, AnyValue)>);
-
-impl Schema for Table {
+/// The handles looked up for a rules file, as the engine's schema.
+impl Schema for HashMap<Arc<str>, AnyHandle> {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
-        self.0.get(path).cloned()
+        self.get(path).map(|h| (h.type_info(), h.value()))
     }
 }
 
@@ -240,15 +238,13 @@ impl ContextManager {
             return Err("params/rules is empty; expected the path of a context rules file".into());
         }
         let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
-        let mut table = HashMap::new();
         let mut handles = HashMap::new();
         for address in mentioned(&loaded) {
             if let Ok(handle) = ctx.blackboard().any_handle(&address).await {
-                table.insert(address.clone(), (handle.type_info(), handle.value()));
                 handles.insert(Arc::from(address), handle);
             }
         }
-        let engine = Engine::build(&loaded, &Table(table)).map_err(show)?;
+        let engine = Engine::build(&loaded, &handles).map_err(show)?;
         self.watched = engine
             .properties()
             .filter_map(|(prop, path)| {
