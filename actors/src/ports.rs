@@ -286,12 +286,7 @@ impl Ports {
         doc: &str,
         capacity: Option<usize>,
     ) {
-        let well_formed = !path.is_empty()
-            && path.split('/').all(|s| {
-                !s.is_empty()
-                    && s.chars()
-                        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-            });
+        let well_formed = path.split('/').all(crate::url::valid_segment);
         let prefixed = match kind {
             PropertyKind::Enabled => path == "enabled",
             _ => path.starts_with(kind.prefix()) && path.len() > kind.prefix().len(),

@@ -44,11 +44,7 @@ impl PropertyUrl {
         let (module, path) = rest
             .split_once('/')
             .ok_or_else(|| err("missing property path"))?;
-        let valid = |s: &str| {
-            !s.is_empty()
-                && s.chars()
-                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
-        };
+        let valid = valid_segment;
         if let Some(agent) = agent {
             if !valid(agent) {
                 return Err(err("bad agent name"));
@@ -117,6 +113,14 @@ impl std::str::FromStr for PropertyUrl {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         Self::parse(s)
     }
+}
+
+/// Whether `s` is a valid name or path segment: non-empty, ASCII letters and digits, `_`, `-`,
+/// `.` (agent and module names, and each `/`-separated part of a property path).
+pub(crate) fn valid_segment(s: &str) -> bool {
+    !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
 
 #[cfg(test)]

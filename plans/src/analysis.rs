@@ -12,6 +12,7 @@
 use std::collections::{HashSet, VecDeque};
 use std::fmt;
 
+use crate::exec::{status_of, PlanStatus};
 use crate::model::{Atom, Plan};
 
 /// Markings explored at most.
@@ -196,18 +197,17 @@ fn explore(plan: &Plan, r: &mut CheckReport) {
     let mut max_tokens = vec![0u32; n];
     let (mut goal_reached, mut unbounded, mut complete) = (false, false, true);
     let mut deadlock: Option<Vec<u32>> = None;
-    let exact =
-        |m: &[u32], ps: &[(usize, u32)]| !ps.is_empty() && ps.iter().all(|&(p, k)| m[p] == k);
     while let Some(m) = queue.pop_front() {
         for (mx, &k) in max_tokens.iter_mut().zip(&m) {
             *mx = (*mx).max(k);
         }
-        if exact(&m, plan.goal_places()) {
-            goal_reached = true;
-            continue;
-        }
-        if exact(&m, plan.fail_places()) {
-            continue;
+        match status_of(plan, &m) {
+            PlanStatus::Goal => {
+                goal_reached = true;
+                continue;
+            }
+            PlanStatus::Fail => continue,
+            PlanStatus::Running => {}
         }
         if m.iter().any(|&k| k > MAX_TOKENS) {
             unbounded = true;

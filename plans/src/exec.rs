@@ -165,15 +165,7 @@ impl PlanState {
 
     /// Goal, fail or running, from the current marking.
     pub fn status(&self, plan: &Plan) -> PlanStatus {
-        let exact =
-            |ps: &[(usize, u32)]| !ps.is_empty() && ps.iter().all(|&(p, n)| self.tokens[p] == n);
-        if exact(plan.goal_places()) {
-            PlanStatus::Goal
-        } else if exact(plan.fail_places()) {
-            PlanStatus::Fail
-        } else {
-            PlanStatus::Running
-        }
+        status_of(plan, &self.tokens)
     }
 
     fn add(&mut self, place: usize, n: u32) {
@@ -208,6 +200,19 @@ impl PlanState {
         );
         ex.sort_unstable();
         ex.dedup();
+    }
+}
+
+/// Goal, fail or running for marking `tokens` of `plan`: goal when every goal place holds exactly
+/// its goal marking (checked first), fail likewise.
+pub(crate) fn status_of(plan: &Plan, tokens: &[u32]) -> PlanStatus {
+    let exact = |ps: &[(usize, u32)]| !ps.is_empty() && ps.iter().all(|&(p, n)| tokens[p] == n);
+    if exact(plan.goal_places()) {
+        PlanStatus::Goal
+    } else if exact(plan.fail_places()) {
+        PlanStatus::Fail
+    } else {
+        PlanStatus::Running
     }
 }
 
