@@ -480,6 +480,11 @@ async fn module_instances_can_be_added_and_removed_while_running() {
         .get::<i64>("late/out/received")
         .await
         .is_err());
+    assert_eq!(
+        modules.start("late").await.unwrap_err(),
+        "no module `late` in agent `r1`",
+        "a removed module cannot be started again"
+    );
     let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
     assert_eq!(
         summary

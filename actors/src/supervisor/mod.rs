@@ -249,7 +249,7 @@ impl SupervisorState {
     fn find(&self, name: &str) -> Result<usize, String> {
         self.slots
             .iter()
-            .position(|s| s.spec.name == name)
+            .position(|s| s.spec.name == name && s.state != SlotState::Removed)
             .ok_or_else(|| format!("no module `{name}` in agent `{}`", self.agent))
     }
 

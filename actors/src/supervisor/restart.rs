@@ -110,6 +110,9 @@ impl SupervisorState {
         let mut due = Vec::with_capacity(restart.len());
         for j in restart {
             let slot = &mut self.slots[j];
+            if slot.state == SlotState::Removed {
+                continue; // its slot stays (indices stay valid), the module never comes back
+            }
             slot.generation += 1;
             slot.state = SlotState::Waiting;
             due.push((j, slot.generation));
