@@ -33,6 +33,7 @@ pub use petrel_actors as actors;
 pub use petrel_contexts as contexts;
 pub use petrel_modules as modules;
 pub use petrel_plans as plans;
+pub use petrel_team as team;
 
 use petrel_actors::{Module, ModuleRegistry};
 

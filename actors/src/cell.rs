@@ -229,6 +229,18 @@ impl Endpoint {
         }
     }
 
+    /// Stops waking `signal` for `cause` (what [`subscribe_with`](Self::subscribe_with) started).
+    pub fn unsubscribe(&self, signal: &Arc<Signal>, cause: u8) {
+        let mut subs = self.subscribers.lock();
+        if let Some(i) = subs
+            .iter()
+            .position(|(s, c)| Arc::ptr_eq(s, signal) && *c == cause)
+        {
+            subs.swap_remove(i);
+            self.resolved.load().remove_watcher(signal, cause);
+        }
+    }
+
     /// Points the endpoint at another cell; subscribers follow, and are woken if the value they see changed.
     pub fn retarget(&self, target: Arc<Cell>) {
         let subs = self.subscribers.lock();

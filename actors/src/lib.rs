@@ -24,6 +24,7 @@ mod step_clock;
 mod summary;
 pub mod supervision;
 mod supervisor;
+pub mod team;
 pub mod types;
 pub mod url;
 mod value;

@@ -34,6 +34,10 @@ pub(crate) fn write(registry: &Registry) -> String {
         let mut capacities = Vec::new();
         for (key, entry) in registry.entries().filter(|(k, _)| k.starts_with(&prefix)) {
             let path = &key[prefix.len()..];
+            if let Some(remote) = &entry.remote {
+                links.push(format!("{path:?}: {}", remote.to_ron()));
+                continue;
+            }
             if let Some(target) = &entry.link {
                 links.push(format!("{path:?}: {target:?}"));
                 continue;

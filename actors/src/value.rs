@@ -19,6 +19,8 @@ pub struct TypeInfo {
     to_ron: fn(&AnyValue) -> Result<String, String>,
     short: fn(&AnyValue) -> String,
     to_dynamic: fn(&AnyValue) -> Result<ron::Value, String>,
+    to_json: fn(&AnyValue) -> Result<Vec<u8>, String>,
+    from_json: fn(&[u8]) -> Result<AnyValue, String>,
 }
 
 /// Longest value text shown in traces and summaries.
@@ -49,6 +51,15 @@ impl TypeInfo {
                 let t = v.downcast_ref::<T>().ok_or("value has another type")?;
                 let text = ron::to_string(t).map_err(|e| e.to_string())?;
                 ron::from_str::<ron::Value>(&text).map_err(|e| e.to_string())
+            },
+            to_json: |v| {
+                let t = v.downcast_ref::<T>().ok_or("value has another type")?;
+                serde_json::to_vec(t).map_err(|e| e.to_string())
+            },
+            from_json: |bytes| {
+                serde_json::from_slice::<T>(bytes)
+                    .map(|t| Arc::new(t) as AnyValue)
+                    .map_err(|e| e.to_string())
             },
         }
     }
@@ -82,6 +93,16 @@ impl TypeInfo {
     /// inspects values of types it does not know, such as expression field access.
     pub fn to_dynamic(&self, value: &AnyValue) -> Result<ron::Value, String> {
         (self.to_dynamic)(value)
+    }
+
+    /// A value of this type as JSON (the team wire format: any zenoh client can read it).
+    pub fn to_json(&self, value: &AnyValue) -> Result<Vec<u8>, String> {
+        (self.to_json)(value)
+    }
+
+    /// Reads a value of this type from JSON, or says why it is not one.
+    pub fn from_json(&self, bytes: &[u8]) -> Result<AnyValue, String> {
+        (self.from_json)(bytes)
     }
 
     /// A short human-readable rendering of a value, for traces and summaries.

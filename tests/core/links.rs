@@ -105,7 +105,8 @@ async fn runtime_links_are_checked_like_config_links() {
         .unwrap_err()
         .to_string();
     assert!(
-        remote.contains("names agent `r2`, but this is agent `r1`"),
+        remote.contains("names agent `r2`, but this is agent `r1`")
+            && remote.contains("no `team:`"),
         "{remote}"
     );
     agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;

@@ -438,7 +438,7 @@ async fn module_instances_can_be_added_and_removed_while_running() {
     let consumer = ModuleConfig {
         name: "late".into(),
         type_name: "demo.consumer".into(),
-        links: [("in/items".to_string(), "producer/out/items".to_string())].into(),
+        links: [("in/items".to_string(), "producer/out/items".into())].into(),
         ..Default::default()
     };
     modules.add(consumer.clone()).await.unwrap();
@@ -454,7 +454,7 @@ async fn module_instances_can_be_added_and_removed_while_running() {
     );
     let broken = ModuleConfig {
         name: "broken".into(),
-        links: [("in/items".to_string(), "producer/out/nope".to_string())].into(),
+        links: [("in/items".to_string(), "producer/out/nope".into())].into(),
         ..consumer
     };
     let error = modules.add(broken).await.unwrap_err();

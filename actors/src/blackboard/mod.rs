@@ -6,6 +6,7 @@
 
 mod error;
 mod registry;
+mod team;
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -53,6 +54,7 @@ pub(crate) enum BlackboardMsg {
         RpcReplyPort<Result<(), String>>,
     ),
     RemoveModule(String, Reply<()>),
+    Team(team::TeamRequest),
 }
 
 struct BlackboardActor;
@@ -149,6 +151,7 @@ impl Actor for BlackboardActor {
                     .map(|key| reg.link_of(&key).map(str::to_string));
                 let _ = reply.send(result);
             }
+            BlackboardMsg::Team(request) => team::handle(reg, request),
             BlackboardMsg::Snapshot(reply) => {
                 let _ = reply.send(Ok(crate::snapshot::write(reg)));
             }
@@ -161,6 +164,7 @@ impl Actor for BlackboardActor {
 #[derive(Clone)]
 pub struct Blackboard {
     actor: ActorRef<BlackboardMsg>,
+    remote: Arc<crate::team::RemoteLinks>,
 }
 
 impl Blackboard {
@@ -168,10 +172,11 @@ impl Blackboard {
     pub async fn spawn(
         registry: Registry,
     ) -> Result<(Blackboard, tokio::task::JoinHandle<()>), BlackboardError> {
+        let remote = registry.remote_links();
         let (actor, join) = Actor::spawn(None, BlackboardActor, registry)
             .await
             .map_err(|_| BlackboardError::Stopped)?;
-        Ok((Blackboard { actor }, join))
+        Ok((Blackboard { actor, remote }, join))
     }
 
     async fn call<T: Send + 'static>(

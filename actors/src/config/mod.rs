@@ -23,6 +23,7 @@ use serde::Deserialize;
 use crate::blackboard::{BlackboardError, Registry};
 use crate::module_types::ModuleRegistry;
 use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
+use crate::team::{LinkTarget, TeamConfig};
 
 mod error;
 
@@ -44,6 +45,10 @@ pub struct AgentConfig {
     /// module named `contexts` that the runtime adds to the agent.
     #[serde(default)]
     pub contexts: Option<String>,
+    /// The team this agent joins (see [`crate::team`]); without it the agent runs alone and
+    /// its links may name only its own properties.
+    #[serde(default)]
+    pub team: Option<TeamConfig>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -61,9 +66,10 @@ pub struct ModuleConfig {
     /// Property values by path (`params/factor`, `enabled`, ...), checked against their types.
     #[serde(default)]
     pub values: BTreeMap<String, ron::Value>,
-    /// Links: own input or parameter path → target property address.
+    /// Links: own input or parameter path → target property address, or another agent's
+    /// property with transport settings (see [`LinkTarget`]).
     #[serde(default)]
-    pub links: BTreeMap<String, String>,
+    pub links: BTreeMap<String, LinkTarget>,
     /// Capacities of this module's output queues, by path.
     #[serde(default)]
     pub capacities: BTreeMap<String, usize>,
@@ -118,6 +124,9 @@ impl ConfigFile {
     /// capacities replace this config's; modules only it has are appended.
     pub fn overlay(&mut self, overlay: ConfigFile) {
         let source = self.sources.len();
+        if overlay.config.team.is_some() {
+            self.config.team = overlay.config.team.clone();
+        }
         for m in &overlay.config.modules {
             for key in m.values.keys() {
                 self.value_sources
@@ -211,6 +220,14 @@ impl ConfigFile {
             }
         }
         registry.declare_events();
+        if let Some(team) = &self.config.team {
+            registry.declare_team();
+            errors.extend(
+                crate::team::check(team)
+                    .into_iter()
+                    .map(|e| self.locate("team:", e)),
+            );
+        }
         let declared: Vec<&ModuleConfig> = self
             .config
             .modules

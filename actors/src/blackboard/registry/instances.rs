@@ -51,7 +51,7 @@ impl Registry {
     ) -> Vec<(&'a str, BlackboardError)> {
         let mut failed = Vec::new();
         for (path, target) in &m.links {
-            if let Err(e) = self.link(&format!("{}/{path}", m.name), target) {
+            if let Err(e) = self.link_target(&format!("{}/{path}", m.name), target) {
                 failed.push((path.as_str(), e));
             }
         }
@@ -108,6 +108,7 @@ impl Registry {
             });
         }
         self.entries.retain(|k, _| !k.starts_with(&prefix));
+        self.remote.remove_module(module);
         self.order.retain(|m| m != module);
         self.modules.remove(module);
         Ok(())
@@ -133,6 +134,7 @@ impl Registry {
                 decl,
                 handle,
                 link: None,
+                remote: None,
                 own_queue: None,
             },
         );

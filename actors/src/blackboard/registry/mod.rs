@@ -12,7 +12,9 @@ use crate::ports::{Handle, Ports, PropertyDecl, PropertyKind};
 use super::error::BlackboardError;
 
 mod instances;
+mod remote;
 use crate::queue::{dropped_path, QueueCore};
+use crate::team::{LinkTarget, RemoteLinks};
 use crate::url::PropertyUrl;
 use crate::value::{AnyValue, TypeInfo};
 
@@ -20,8 +22,18 @@ pub(crate) struct Entry {
     pub decl: PropertyDecl,
     pub handle: Handle,
     pub link: Option<String>,
+    /// A link to another agent's property: the input reads its own cell (or private queue),
+    /// which the team transport feeds.
+    pub remote: Option<LinkTarget>,
     /// For queue inputs: the private queue read while unlinked.
     own_queue: Option<Arc<QueueCore>>,
+}
+
+/// Whether a property is made by the runtime beside a module's own declarations (queue drop
+/// counters, remote link status): not handed to the module when it binds.
+fn is_runtime_stat(decl: &PropertyDecl) -> bool {
+    decl.kind == PropertyKind::Stats
+        && (decl.path.starts_with("stats/dropped/") || decl.path.starts_with("stats/links/"))
 }
 
 /// Events `_supervisor/events` keeps for its slowest reader.
@@ -39,6 +51,8 @@ pub struct Registry {
     order: Vec<String>,
     modules: HashMap<String, ModuleEntry>,
     entries: BTreeMap<String, Entry>,
+    /// Inputs linked to other agents, shared with the team transport.
+    remote: Arc<RemoteLinks>,
 }
 
 impl Registry {
@@ -49,6 +63,7 @@ impl Registry {
             order: Vec::new(),
             modules: HashMap::new(),
             entries: BTreeMap::new(),
+            remote: Arc::default(),
         }
     }
 
@@ -97,6 +112,7 @@ impl Registry {
                         decl: dropped,
                         handle: Handle::Value(reader.dropped.clone()),
                         link: None,
+                        remote: None,
                         own_queue: None,
                     };
                     self.entries.insert(key, entry);
@@ -111,6 +127,7 @@ impl Registry {
                     decl,
                     handle,
                     link: None,
+                    remote: None,
                     own_queue,
                 },
             );
@@ -132,10 +149,7 @@ impl Registry {
             self.entries
                 .range(prefix.clone()..)
                 .take_while(|(k, _)| k.starts_with(&prefix))
-                .filter(|(_, e)| {
-                    !(e.decl.kind == PropertyKind::Stats
-                        && e.decl.path.starts_with("stats/dropped/"))
-                })
+                .filter(|(_, e)| !is_runtime_stat(&e.decl))
                 .map(|(k, e)| (k[prefix.len()..].to_string(), e.handle.clone()))
                 .collect(),
         )
@@ -163,7 +177,7 @@ impl Registry {
         if let Some(agent) = url.agent() {
             if agent != self.agent {
                 return Err(BlackboardError::BadAddress(format!(
-                    "`{address}` names agent `{agent}`, but this is agent `{}` (links to other agents come with teams)",
+                    "`{address}` names agent `{agent}`, but this is agent `{}` (only a link may name another agent's property)",
                     self.agent
                 )));
             }
@@ -198,7 +212,30 @@ impl Registry {
     }
 
     /// Links `from` (an input, parameter or queue input) to `to`; reads of `from` then read `to`.
+    /// A `to` naming another agent (`petrel://robot2/mod/out/x`) makes a remote link with the
+    /// default transport settings (see [`link_target`](Self::link_target)).
     pub fn link(&mut self, from: &str, to: &str) -> Result<(), BlackboardError> {
+        self.link_target(from, &LinkTarget::new(to))
+    }
+
+    /// Links `from` to a target in either config form: a local property, or another agent's
+    /// property with its transport settings.
+    pub fn link_target(&mut self, from: &str, to: &LinkTarget) -> Result<(), BlackboardError> {
+        let url =
+            PropertyUrl::parse(&to.url).map_err(|e| BlackboardError::BadAddress(e.to_string()))?;
+        if let Some(agent) = url.agent().filter(|a| *a != self.agent) {
+            if !self.modules.contains_key(crate::team::TEAM_MODULE) {
+                return Err(BlackboardError::BadAddress(format!(
+                    "`{}` names agent `{agent}`, but this is agent `{}`, which has no `team:` section to reach other agents (add `team: (name: \"...\", connect: [...])`)",
+                    to.url, self.agent
+                )));
+            }
+            return self.link_remote(from, url, to.qos.unwrap_or_default());
+        }
+        self.link_local(from, &to.url)
+    }
+
+    fn link_local(&mut self, from: &str, to: &str) -> Result<(), BlackboardError> {
         let from = self.key_of(from)?;
         let to = self.key_of(to)?;
         let (f, t) = (&self.entries[&from].decl, &self.entries[&to].decl);
@@ -237,6 +274,7 @@ impl Registry {
         if from == to {
             return Err(BlackboardError::Cycle(vec![from.clone(), from]));
         }
+        self.drop_remote(&from);
         self.entries.get_mut(&from).expect("checked above").link = Some(to);
         self.resolve();
         Ok(())
@@ -245,14 +283,20 @@ impl Registry {
     /// Removes the link of `from`: it reads its own value (or private queue) again.
     pub fn unlink(&mut self, from: &str) -> Result<(), BlackboardError> {
         let from = self.key_of(from)?;
+        self.drop_remote(&from);
         self.entries.get_mut(&from).expect("key_of checked it").link = None;
         self.resolve();
         Ok(())
     }
 
-    /// The link target of `key`, if linked.
+    /// The link target of `key`, if linked (a full URL for a link to another agent).
     pub fn link_of(&self, key: &str) -> Option<&str> {
-        self.entries.get(key)?.link.as_deref()
+        let entry = self.entries.get(key)?;
+        entry
+            .remote
+            .as_ref()
+            .map(|r| r.url.as_str())
+            .or(entry.link.as_deref())
     }
 
     /// Points every endpoint and queue reader at the end of its link chain.

@@ -1,0 +1,201 @@
+//! Links to other agents' properties, the taps a team transport publishes through, and the
+//! runtime's `_team/...` properties.
+
+use std::sync::Arc;
+
+use super::{BlackboardError, Entry, ModuleEntry, Registry};
+use crate::cell::Endpoint;
+use crate::ports::{Handle, PropertyDecl, PropertyKind};
+use crate::queue::{QueueCore, ReaderEndpoint};
+use crate::team::{
+    link_state, LinkStatus, LinkTarget, Qos, QueueTap, RemoteFeed, RemoteLink, RemoteLinks,
+    RemoteQueue, RemoteValue, StatusWriter, Tap, TeamEvent, TeamMembers, ValueTap, TEAM_MODULE,
+};
+use crate::url::PropertyUrl;
+use crate::value::TypeInfo;
+
+/// Membership events `_team/events` keeps for its slowest reader.
+const TEAM_EVENTS_CAPACITY: usize = 256;
+
+impl Registry {
+    /// Links `from` to another agent's property: `from` keeps reading its own cell (or private
+    /// queue), which the team transport feeds; `stats/links/<path>` says how the link fares.
+    pub(crate) fn link_remote(
+        &mut self,
+        from: &str,
+        source: PropertyUrl,
+        qos: Qos,
+    ) -> Result<(), BlackboardError> {
+        let from = self.key_of(from)?;
+        let entry = &self.entries[&from];
+        if !entry.decl.kind.linkable() {
+            return Err(BlackboardError::NotLinkable {
+                key: from,
+                kind: entry.decl.kind,
+            });
+        }
+        let feed = match (&entry.handle, &entry.own_queue) {
+            (Handle::Value(ep), _) => RemoteFeed::Value(RemoteValue { ep: ep.clone() }),
+            (Handle::QueueIn(_), Some(own)) => RemoteFeed::Queue(RemoteQueue { core: own.clone() }),
+            _ => {
+                return Err(BlackboardError::NotLinkable {
+                    key: from,
+                    kind: entry.decl.kind,
+                })
+            }
+        };
+        let (module, path) = from.split_once('/').expect("keys are module/path");
+        let status_key = format!("{module}/stats/links/{path}");
+        let status = match self.entries.get(&status_key).map(|e| &e.handle) {
+            Some(Handle::Value(ep)) => ep.clone(),
+            _ => {
+                let decl = PropertyDecl {
+                    path: format!("stats/links/{path}"),
+                    kind: PropertyKind::Stats,
+                    type_info: TypeInfo::of::<LinkStatus>(),
+                    default: None,
+                    doc: format!("how the remote link of `{path}` fares"),
+                    capacity: None,
+                };
+                let ep =
+                    Endpoint::new(&status_key, decl.type_info, Arc::new(LinkStatus::default()));
+                self.entries.insert(
+                    status_key,
+                    Entry {
+                        decl,
+                        handle: Handle::Value(ep.clone()),
+                        link: None,
+                        remote: None,
+                        own_queue: None,
+                    },
+                );
+                ep
+            }
+        };
+        let status = StatusWriter { ep: status };
+        status.set(LinkStatus {
+            state: link_state::WAITING.into(),
+            source: source.to_string(),
+            ..LinkStatus::default()
+        });
+        let entry = self.entries.get_mut(&from).expect("checked above");
+        entry.link = None;
+        entry.remote = Some(LinkTarget {
+            url: source.to_string(),
+            qos: Some(qos),
+        });
+        self.resolve();
+        self.remote.insert(RemoteLink {
+            input: from,
+            source,
+            qos,
+            feed,
+            status,
+        });
+        Ok(())
+    }
+
+    /// Forgets the remote link of `key`, if it has one.
+    pub(super) fn drop_remote(&mut self, key: &str) {
+        if let Some(entry) = self.entries.get_mut(key) {
+            if entry.remote.take().is_some() {
+                self.remote.remove(key);
+            }
+        }
+    }
+
+    /// The core of an output queue, for writers outside the agent's modules.
+    pub(crate) fn queue_out(&self, address: &str) -> Result<Arc<QueueCore>, BlackboardError> {
+        let key = self.key_of(address)?;
+        let entry = &self.entries[&key];
+        match &entry.handle {
+            Handle::QueueOut(core) => Ok(core.clone()),
+            _ => Err(BlackboardError::NotSettable {
+                key,
+                kind: entry.decl.kind,
+            }),
+        }
+    }
+
+    /// The agent's links to other agents, shared with the team transport.
+    pub fn remote_links(&self) -> Arc<RemoteLinks> {
+        self.remote.clone()
+    }
+
+    /// A tap on a value property or output queue, for a transport that publishes it.
+    pub(crate) fn tap(&self, address: &str) -> Result<Tap, BlackboardError> {
+        let key = self.key_of(address)?;
+        let entry = &self.entries[&key];
+        match &entry.handle {
+            Handle::Value(ep) => Ok(Tap::Value(ValueTap::new(ep.clone()))),
+            Handle::QueueOut(core) => Ok(Tap::Queue(QueueTap::new(queue_tap(&key, core)))),
+            Handle::QueueIn(_) => Err(BlackboardError::NotSettable {
+                key,
+                kind: entry.decl.kind,
+            }),
+        }
+    }
+
+    /// The kind and type of a property.
+    pub(crate) fn kind_of(
+        &self,
+        address: &str,
+    ) -> Result<(PropertyKind, TypeInfo), BlackboardError> {
+        let key = self.key_of(address)?;
+        let decl = &self.entries[&key].decl;
+        Ok((decl.kind, decl.type_info))
+    }
+
+    /// Declares `_team/members` and the `_team/events` queue (for agents that join a team).
+    pub(crate) fn declare_team(&mut self) {
+        if self.modules.contains_key(TEAM_MODULE) {
+            return;
+        }
+        let members = PropertyDecl {
+            path: "members".into(),
+            kind: PropertyKind::Output,
+            type_info: TypeInfo::of::<TeamMembers>(),
+            default: Some(Arc::new(TeamMembers::default())),
+            doc: "the alive agents of the team and their modules".into(),
+            capacity: None,
+        };
+        let key = format!("{TEAM_MODULE}/members");
+        let ep = Endpoint::new(&key, members.type_info, Arc::new(TeamMembers::default()));
+        self.insert_runtime(key, members, Handle::Value(ep));
+        let events = PropertyDecl {
+            path: "events".into(),
+            kind: PropertyKind::QueueOut,
+            type_info: TypeInfo::of::<TeamEvent>(),
+            default: None,
+            doc: "agents that joined, left or rejoined the team".into(),
+            capacity: Some(TEAM_EVENTS_CAPACITY),
+        };
+        let key = format!("{TEAM_MODULE}/events");
+        let core = QueueCore::new(&key, events.type_info, TEAM_EVENTS_CAPACITY);
+        self.insert_runtime(key, events, Handle::QueueOut(core));
+        let entry = ModuleEntry {
+            type_name: "runtime.team".into(),
+            signal: Arc::default(),
+        };
+        self.modules.insert(TEAM_MODULE.to_string(), entry);
+    }
+
+    fn insert_runtime(&mut self, key: String, decl: PropertyDecl, handle: Handle) {
+        let entry = Entry {
+            decl,
+            handle,
+            link: None,
+            remote: None,
+            own_queue: None,
+        };
+        self.entries.insert(key, entry);
+    }
+}
+
+static NEXT_TAP: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1 << 62);
+
+/// A reader of `core` for a tap (ids far from module readers').
+fn queue_tap(key: &str, core: &Arc<QueueCore>) -> Arc<ReaderEndpoint> {
+    let id = NEXT_TAP.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    ReaderEndpoint::new(id, &format!("{key}#tap{id}"), core.type_info, core.clone())
+}

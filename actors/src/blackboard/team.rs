@@ -1,0 +1,90 @@
+//! The blackboard requests a team transport makes: remote links with transport settings,
+//! taps on properties to publish, property kinds for remote writes, queue writers.
+
+use std::sync::Arc;
+
+use super::{Blackboard, BlackboardMsg, Registry, Reply};
+use crate::ports::PropertyKind;
+use crate::team::{LinkTarget, RemoteLinks, Tap};
+use crate::types::PropertyType;
+use crate::value::TypeInfo;
+use crate::{BlackboardError, QueueWriter};
+
+pub(crate) enum TeamRequest {
+    Link(String, LinkTarget, Reply<()>),
+    Tap(String, Reply<Tap>),
+    KindOf(String, Reply<(PropertyKind, TypeInfo)>),
+    Queue(String, Reply<Arc<crate::queue::QueueCore>>),
+}
+
+pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
+    // A reply port whose caller gave up is not the blackboard's failure: ignore send errors.
+    match request {
+        TeamRequest::Link(from, to, reply) => {
+            let result = reg.link_target(&from, &to);
+            match &result {
+                Ok(()) => tracing::info!(agent = reg.agent(), %from, to = %to.url, "linked"),
+                Err(e) => {
+                    tracing::warn!(agent = reg.agent(), %from, to = %to.url, error = %e, "link refused")
+                }
+            }
+            let _ = reply.send(result);
+        }
+        TeamRequest::Tap(key, reply) => {
+            let _ = reply.send(reg.tap(&key));
+        }
+        TeamRequest::KindOf(key, reply) => {
+            let _ = reply.send(reg.kind_of(&key));
+        }
+        TeamRequest::Queue(key, reply) => {
+            let _ = reply.send(reg.queue_out(&key));
+        }
+    }
+}
+
+impl Blackboard {
+    /// Links `from` to a target in either config form while running (a remote target makes a
+    /// link the team transport feeds).
+    pub async fn link_target(&self, from: &str, to: LinkTarget) -> Result<(), BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::Link(from.to_string(), to, r)))
+            .await
+    }
+
+    /// Watches a value property or output queue, for a transport that publishes it.
+    pub async fn tap(&self, address: &str) -> Result<Tap, BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::Tap(address.to_string(), r)))
+            .await
+    }
+
+    /// The kind (`params/`, `out/`, ...) and type of a property.
+    pub async fn kind_of(
+        &self,
+        address: &str,
+    ) -> Result<(PropertyKind, TypeInfo), BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::KindOf(address.to_string(), r)))
+            .await
+    }
+
+    /// A writer to an output queue (e.g. `_team/events`), from outside the agent's modules.
+    pub async fn queue_writer<T: PropertyType>(
+        &self,
+        address: &str,
+    ) -> Result<QueueWriter<T>, BlackboardError> {
+        let core = self
+            .call(|r| BlackboardMsg::Team(TeamRequest::Queue(address.to_string(), r)))
+            .await?;
+        if core.type_info != TypeInfo::of::<T>() {
+            return Err(BlackboardError::BadValue {
+                key: address.to_string(),
+                expected: T::TYPE_NAME,
+                reason: format!("the queue carries {}", core.type_info.name()),
+            });
+        }
+        Ok(QueueWriter::new(core, Arc::default()))
+    }
+
+    /// This agent's links to other agents, which a team transport feeds.
+    pub fn remote_links(&self) -> Arc<RemoteLinks> {
+        self.remote.clone()
+    }
+}

@@ -1,0 +1,375 @@
+//! The `team:` section of an agent config and the long form of links to other agents.
+//!
+//! Pure data: the zenoh transport that acts on it lives in the `petrel-team` crate, so the
+//! core (and every module) stays unaware of the network.
+
+use std::fmt;
+
+use serde::de::{self, MapAccess, Visitor};
+use serde::{Deserialize, Deserializer};
+
+/// Shortest lease accepted, ms: below it a busy machine reports live peers as gone.
+pub const MIN_LEASE_MS: u64 = 100;
+/// Longest lease accepted, ms.
+pub const MAX_LEASE_MS: u64 = 600_000;
+/// Default lease, ms: a peer silent this long has left the team.
+pub const DEFAULT_LEASE_MS: u64 = 1000;
+
+/// How an agent joins its team (`team: (name: "rescue", listen: [...], connect: [...])`).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TeamConfig {
+    /// The team name: agents of different teams on one network never see each other.
+    pub name: String,
+    /// `peer` (default: agents connect to each other) or `client` (through a `zenohd` router).
+    #[serde(default)]
+    pub mode: SessionMode,
+    /// zenoh endpoints this agent listens on, e.g. `tcp/127.0.0.1:7447`.
+    #[serde(default)]
+    pub listen: Vec<String>,
+    /// zenoh endpoints this agent connects to (other agents, or a router in client mode).
+    #[serde(default)]
+    pub connect: Vec<String>,
+    /// How long a silent peer stays a member, ms.
+    #[serde(default = "default_lease")]
+    pub lease_ms: u64,
+    /// Which of this agent's properties other agents may set, as `module/path` patterns where
+    /// `*` matches one segment and `**` any number (`"planner/params/**"`, `"*/control/*"`).
+    /// Only `params/` and `control/` properties can ever be set remotely.
+    #[serde(default)]
+    pub remote_write: Vec<String>,
+    /// Multicast scouting (finding peers without `connect`); off unless asked for.
+    #[serde(default)]
+    pub scouting: bool,
+}
+
+fn default_lease() -> u64 {
+    DEFAULT_LEASE_MS
+}
+
+/// The zenoh session mode of an agent.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SessionMode {
+    /// Agents talk to each other directly (the default; no router needed).
+    #[default]
+    Peer,
+    /// Agents talk through a `zenohd` router they `connect` to (large deployments).
+    Client,
+}
+
+/// How values of a remote link travel: the long form `(from: URL, mode: ..., reliability: ...,
+/// lossy: ...)` of a link.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Qos {
+    /// When the owner sends.
+    pub mode: Mode,
+    /// Whether lost samples are resent.
+    pub reliability: Reliability,
+    /// Whether big payloads (images, maps) may be sent degraded, for display.
+    pub lossy: bool,
+}
+
+/// When the owner of a remote property sends it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// On every change, at most once per `min_interval_ms` (0: every change; the latest
+    /// value is always sent in the end).
+    OnChange {
+        /// Shortest time between two sends, ms.
+        min_interval_ms: u64,
+    },
+    /// The latest value every `ms`, changed or not.
+    Periodic {
+        /// The period, ms.
+        ms: u64,
+    },
+}
+
+impl Default for Mode {
+    fn default() -> Self {
+        Mode::OnChange { min_interval_ms: 0 }
+    }
+}
+
+/// Whether samples lost on the way are resent.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reliability {
+    /// Resent until delivered while the peer is reachable (the default).
+    #[default]
+    Reliable,
+    /// Sent once; the newest sample matters more than every sample.
+    BestEffort,
+}
+
+/// A link target in a config: a property address (short form), or an address of another
+/// agent's property with how its values travel (long form).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkTarget {
+    /// The address, `module/path` or `petrel://agent/module/path`.
+    pub url: String,
+    /// Transport settings, for the long form.
+    pub qos: Option<Qos>,
+}
+
+impl LinkTarget {
+    /// A short-form target.
+    pub fn new(url: impl Into<String>) -> Self {
+        LinkTarget {
+            url: url.into(),
+            qos: None,
+        }
+    }
+
+    /// The target as config text (what a snapshot writes).
+    pub fn to_ron(&self) -> String {
+        let Some(q) = self.qos else {
+            return format!("{:?}", self.url);
+        };
+        let mode = match q.mode {
+            Mode::OnChange { min_interval_ms: 0 } => "on_change".to_string(),
+            Mode::OnChange { min_interval_ms } => {
+                format!("on_change(min_interval_ms: {min_interval_ms})")
+            }
+            Mode::Periodic { ms } => format!("periodic(ms: {ms})"),
+        };
+        let reliability = match q.reliability {
+            Reliability::Reliable => "reliable",
+            Reliability::BestEffort => "best_effort",
+        };
+        format!(
+            "(from: {:?}, mode: {mode}, reliability: {reliability}, lossy: {})",
+            self.url, q.lossy
+        )
+    }
+}
+
+impl From<&str> for LinkTarget {
+    fn from(url: &str) -> Self {
+        LinkTarget::new(url)
+    }
+}
+
+impl From<String> for LinkTarget {
+    fn from(url: String) -> Self {
+        LinkTarget::new(url)
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LongForm {
+    from: String,
+    #[serde(default)]
+    mode: Mode,
+    #[serde(default)]
+    reliability: Reliability,
+    #[serde(default)]
+    lossy: bool,
+}
+
+impl<'de> Deserialize<'de> for LinkTarget {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct TargetVisitor;
+        impl<'de> Visitor<'de> for TargetVisitor {
+            type Value = LinkTarget;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a property address `\"module/path\"` or `(from: \"petrel://agent/module/path\", mode: ..., reliability: ..., lossy: ...)`")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<LinkTarget, E> {
+                Ok(LinkTarget::new(v))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<LinkTarget, A::Error> {
+                let long = LongForm::deserialize(de::value::MapAccessDeserializer::new(map))?;
+                Ok(LinkTarget {
+                    url: long.from,
+                    qos: Some(Qos {
+                        mode: long.mode,
+                        reliability: long.reliability,
+                        lossy: long.lossy,
+                    }),
+                })
+            }
+        }
+        d.deserialize_any(TargetVisitor)
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+enum ModeArgs {
+    OnChange {
+        #[serde(default)]
+        min_interval_ms: u64,
+    },
+    Periodic {
+        ms: u64,
+    },
+}
+
+impl<'de> Deserialize<'de> for Mode {
+    // `on_change` and `on_change(min_interval_ms: 50)` are one variant written with and
+    // without arguments, which serde's derive cannot express: read the raw text first.
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let raw = Box::<ron::value::RawValue>::deserialize(d)?;
+        let text = raw.get_ron().trim();
+        if text == "on_change" {
+            return Ok(Mode::default());
+        }
+        match raw.into_rust::<ModeArgs>() {
+            Ok(ModeArgs::OnChange { min_interval_ms }) => Ok(Mode::OnChange { min_interval_ms }),
+            Ok(ModeArgs::Periodic { ms }) => Ok(Mode::Periodic { ms }),
+            Err(e) => Err(de::Error::custom(format!(
+                "link mode `{text}`: expected `on_change`, `on_change(min_interval_ms: N)` or `periodic(ms: N)` ({})",
+                e.code
+            ))),
+        }
+    }
+}
+
+/// Whether `key` (`module/path`) matches a `remote_write` pattern: segments compared one by
+/// one, `*` matching any one segment and `**` any number of segments (zero included).
+pub fn pattern_matches(pattern: &str, key: &str) -> bool {
+    fn go(p: &[&str], k: &[&str]) -> bool {
+        match (p.first(), k.first()) {
+            (None, None) => true,
+            (Some(&"**"), _) => go(&p[1..], k) || (!k.is_empty() && go(p, &k[1..])),
+            (Some(&ps), Some(&ks)) => (ps == "*" || ps == ks) && go(&p[1..], &k[1..]),
+            _ => false,
+        }
+    }
+    let p: Vec<&str> = pattern.split('/').collect();
+    let k: Vec<&str> = key.split('/').collect();
+    go(&p, &k)
+}
+
+/// What is wrong with a `remote_write` pattern, if anything.
+pub fn pattern_error(pattern: &str) -> Option<String> {
+    let bad = pattern
+        .split('/')
+        .find(|s| !(*s == "*" || *s == "**" || crate::url::valid_segment(s)));
+    bad.map(|s| {
+        format!("remote_write pattern `{pattern}`: segment `{s}` is neither a name, `*` nor `**`")
+    })
+}
+
+/// The problems of a team section, in config terms (empty when it is sound).
+pub fn check(team: &TeamConfig) -> Vec<String> {
+    let mut errors = Vec::new();
+    if !crate::url::valid_segment(&team.name) {
+        errors.push(format!(
+            "team name `{}`: expected letters, digits, `_`, `-` or `.`",
+            team.name
+        ));
+    }
+    if !(MIN_LEASE_MS..=MAX_LEASE_MS).contains(&team.lease_ms) {
+        errors.push(format!(
+            "team lease_ms is {}; expected {MIN_LEASE_MS}..={MAX_LEASE_MS}",
+            team.lease_ms
+        ));
+    }
+    for endpoint in team.listen.iter().chain(&team.connect) {
+        if let Some(e) = endpoint_error(endpoint) {
+            errors.push(e);
+        }
+    }
+    if team.mode == SessionMode::Client && team.connect.is_empty() {
+        errors.push(
+            "team mode `client` needs a router in `connect` (e.g. \"tcp/127.0.0.1:7447\")".into(),
+        );
+    }
+    errors.extend(team.remote_write.iter().filter_map(|p| pattern_error(p)));
+    errors
+}
+
+/// What is wrong with a zenoh endpoint (`tcp/host:port`), if anything.
+fn endpoint_error(endpoint: &str) -> Option<String> {
+    let expected = "expected `tcp/HOST:PORT`, e.g. `tcp/127.0.0.1:7447`";
+    let Some(address) = endpoint.strip_prefix("tcp/") else {
+        return Some(format!(
+            "team endpoint `{endpoint}`: {expected} (petrel is built with zenoh's TCP transport only)"
+        ));
+    };
+    let address = address.split('#').next().unwrap_or_default();
+    let port = address
+        .rsplit_once(':')
+        .map(|(host, port)| (host, port.parse::<u16>()));
+    match port {
+        Some((host, Ok(_))) if !host.is_empty() => None,
+        _ => Some(format!("team endpoint `{endpoint}`: {expected}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn target(text: &str) -> Result<LinkTarget, String> {
+        ron::from_str::<LinkTarget>(text).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn link_targets_read_both_forms_and_round_trip() {
+        assert_eq!(target(r#""a/out/x""#).unwrap(), LinkTarget::new("a/out/x"));
+        let long = target(
+            r#"(from: "petrel://r2/a/out/x", mode: on_change(min_interval_ms: 50), reliability: best_effort, lossy: true)"#,
+        )
+        .unwrap();
+        let qos = long.qos.unwrap();
+        assert_eq!(
+            qos.mode,
+            Mode::OnChange {
+                min_interval_ms: 50
+            }
+        );
+        assert_eq!(qos.reliability, Reliability::BestEffort);
+        assert!(qos.lossy);
+        assert_eq!(target(&long.to_ron()).unwrap(), long);
+        let periodic = target(r#"(from: "petrel://r2/a/out/x", mode: periodic(ms: 200))"#).unwrap();
+        assert_eq!(periodic.qos.unwrap().mode, Mode::Periodic { ms: 200 });
+        assert_eq!(target(&periodic.to_ron()).unwrap(), periodic);
+        let plain = target(r#"(from: "petrel://r2/a/out/x", mode: on_change)"#).unwrap();
+        assert_eq!(plain.qos.unwrap(), Qos::default());
+    }
+
+    #[test]
+    fn bad_link_targets_say_what_was_expected() {
+        let e = target(r#"(from: "x", mode: periodc(ms: 2))"#).unwrap_err();
+        assert!(
+            e.contains("periodic(ms: N)") && e.contains("periodc"),
+            "{e}"
+        );
+        let e = target(r#"(fro: "x")"#).unwrap_err();
+        assert!(e.contains("fro"), "{e}");
+        let e = target(r#"(from: "x", reliability: sometimes)"#).unwrap_err();
+        assert!(e.contains("sometimes"), "{e}");
+    }
+
+    #[test]
+    fn patterns_match_segments() {
+        assert!(pattern_matches("planner/params/**", "planner/params/a/b"));
+        assert!(pattern_matches("planner/params/**", "planner/params/x"));
+        assert!(!pattern_matches("planner/params/*", "planner/params/a/b"));
+        assert!(pattern_matches("*/control/*", "scale/control/fault"));
+        assert!(!pattern_matches("*/control/*", "scale/params/factor"));
+        assert!(pattern_matches("**", "a/b/c"));
+        assert!(pattern_error("a/b*/c").is_some());
+        assert!(pattern_error("a/**/c").is_none());
+    }
+
+    #[test]
+    fn team_checks_name_what_is_wrong() {
+        let mut t: TeamConfig = ron::from_str(r#"(name: "rescue")"#).unwrap();
+        assert!(check(&t).is_empty());
+        assert_eq!(t.lease_ms, DEFAULT_LEASE_MS);
+        t.lease_ms = 5;
+        t.listen = vec!["udp/1.2.3.4:5".into(), "tcp/127.0.0.1:x".into()];
+        t.connect = vec!["tcp/127.0.0.1:7448".into()];
+        let errors = check(&t).join("\n");
+        assert!(errors.contains("lease_ms is 5"), "{errors}");
+        assert!(errors.contains("`udp/1.2.3.4:5`"), "{errors}");
+        assert!(errors.contains("`tcp/127.0.0.1:x`"), "{errors}");
+        assert!(!errors.contains("7448"), "{errors}");
+    }
+}

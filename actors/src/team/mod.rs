@@ -1,0 +1,18 @@
+//! Teams, as the core sees them: the `team:` config section, links to other agents' properties,
+//! and the hooks a transport uses to feed and publish them.
+//!
+//! The core knows no network. The `petrel-team` crate joins an agent to its team over zenoh
+//! through [`RemoteLinks`] (inputs fed from other agents), [`Tap`]s (this agent's properties
+//! to publish) and the `_team/members` / `_team/events` properties.
+
+mod config;
+mod remote;
+
+pub use config::{
+    check, pattern_error, pattern_matches, LinkTarget, Mode, Qos, Reliability, SessionMode,
+    TeamConfig, DEFAULT_LEASE_MS, MAX_LEASE_MS, MIN_LEASE_MS,
+};
+pub use remote::{
+    link_state, LinkStatus, QueueTap, RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue,
+    RemoteValue, StatusWriter, Tap, TeamEvent, TeamMember, TeamMembers, ValueTap, TEAM_MODULE,
+};

@@ -1,0 +1,337 @@
+//! What a team transport needs from an agent, without the core knowing any transport:
+//! the remote links to feed ([`RemoteLinks`]), the agent's properties to publish ([`Tap`]),
+//! and the `_team/...` properties that show membership.
+//!
+//! A remote link feeds the input's *own* cell (or, for a queue input, its private queue): an
+//! input linked to another agent reads a local copy, exactly as it reads an unlinked input,
+//! so modules cannot tell local from remote.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use parking_lot::Mutex;
+use serde::{Deserialize, Serialize};
+use tokio::sync::watch;
+use tokio::time::Instant;
+
+use super::config::Qos;
+use crate::cell::{cause, Endpoint, Signal};
+use crate::queue::{QueueCore, QueueItem, ReaderEndpoint};
+use crate::types::PropertyType;
+use crate::url::PropertyUrl;
+use crate::value::{AnyValue, TypeInfo};
+
+/// The state of one remote link, as `stats/links/<input>` shows it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkStatus {
+    /// `waiting` (nothing received yet), `live`, `stale` (the owner left; the last value is
+    /// kept) or `broken` (the remote property has another type: the input keeps its default).
+    pub state: String,
+    /// The remote property, `petrel://agent/module/path`.
+    pub source: String,
+    /// Samples accepted.
+    pub received: i64,
+    /// Samples refused (undecodable, wrong type, from an impostor).
+    pub rejected: i64,
+    /// Samples lost on the way (gaps in the owner's sequence numbers).
+    pub dropped: i64,
+    /// Why the link is broken or what was last rejected; empty when all is well.
+    pub detail: String,
+}
+
+/// The states a [`LinkStatus`] can be in.
+pub mod link_state {
+    /// Nothing received yet.
+    pub const WAITING: &str = "waiting";
+    /// Samples arrive.
+    pub const LIVE: &str = "live";
+    /// The owner left the team; the input keeps the last value.
+    pub const STALE: &str = "stale";
+    /// The remote property's type differs from the input's.
+    pub const BROKEN: &str = "broken";
+}
+
+/// An agent of the team, as `_team/members` lists it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TeamMember {
+    /// The agent name.
+    pub agent: String,
+    /// Its modules.
+    pub modules: Vec<String>,
+}
+
+/// The alive agents of the team (this one included), sorted by name: `_team/members`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct TeamMembers(pub Vec<TeamMember>);
+
+/// A change of team membership, as the `_team/events` queue carries it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TeamEvent {
+    /// The agent concerned.
+    pub agent: String,
+    /// `joined`, `left`, `rejoined`, or `rejected` (an agent using a name already taken).
+    pub kind: String,
+    /// Wall-clock time of the event, ms since the Unix epoch.
+    pub unix_ms: u64,
+}
+
+impl PropertyType for LinkStatus {
+    const TYPE_NAME: &'static str = "LinkStatus";
+}
+impl PropertyType for TeamMembers {
+    const TYPE_NAME: &'static str = "TeamMembers";
+}
+impl PropertyType for TeamEvent {
+    const TYPE_NAME: &'static str = "TeamEvent";
+}
+
+/// The module of the runtime's team properties.
+pub const TEAM_MODULE: &str = "_team";
+
+/// Where received values of a remote link go.
+#[derive(Clone)]
+pub enum RemoteFeed {
+    /// A value input's own cell.
+    Value(RemoteValue),
+    /// A queue input's private queue.
+    Queue(RemoteQueue),
+}
+
+impl RemoteFeed {
+    /// The input's type: what received samples must decode to.
+    pub fn type_info(&self) -> TypeInfo {
+        match self {
+            RemoteFeed::Value(v) => v.ep.type_info(),
+            RemoteFeed::Queue(q) => q.core.type_info,
+        }
+    }
+}
+
+/// The local copy of a remote value.
+#[derive(Clone)]
+pub struct RemoteValue {
+    pub(crate) ep: Arc<Endpoint>,
+}
+
+impl RemoteValue {
+    /// Stores a received value (of the input's type: decode it with the feed's [`TypeInfo`])
+    /// and wakes the input's watchers.
+    pub fn write(&self, value: AnyValue, stamp: Instant) {
+        debug_assert!(self.ep.type_info().is_type_of(value.as_ref()));
+        self.ep.own.write(value, stamp);
+    }
+}
+
+/// The local end of a remote queue.
+#[derive(Clone)]
+pub struct RemoteQueue {
+    pub(crate) core: Arc<QueueCore>,
+}
+
+impl RemoteQueue {
+    /// Appends a received item for the input's reader (who counts what it lags behind).
+    pub fn push(&self, value: AnyValue, stamp: Instant) {
+        debug_assert!(self.core.type_info.is_type_of(value.as_ref()));
+        self.core.push(value, stamp);
+    }
+}
+
+/// Writes one link's `stats/links/<input>`.
+#[derive(Clone)]
+pub struct StatusWriter {
+    pub(crate) ep: Arc<Endpoint>,
+}
+
+impl StatusWriter {
+    /// Publishes the link's status.
+    pub fn set(&self, status: LinkStatus) {
+        self.ep.write(Arc::new(status));
+    }
+
+    /// The status as last published.
+    pub fn get(&self) -> LinkStatus {
+        self.ep
+            .value()
+            .downcast_ref::<LinkStatus>()
+            .cloned()
+            .unwrap_or_default()
+    }
+}
+
+/// One input of this agent linked to another agent's property.
+#[derive(Clone)]
+pub struct RemoteLink {
+    /// The input, `module/path`.
+    pub input: String,
+    /// The remote property, with its agent.
+    pub source: PropertyUrl,
+    /// How its values travel.
+    pub qos: Qos,
+    /// Where received values go.
+    pub feed: RemoteFeed,
+    /// The link's `stats/links/<input>`.
+    pub status: StatusWriter,
+}
+
+/// The remote links of one agent, shared by its registry (which adds and removes them as
+/// links change) and the team transport (which feeds them).
+pub struct RemoteLinks {
+    links: Mutex<BTreeMap<String, RemoteLink>>,
+    generation: watch::Sender<u64>,
+}
+
+impl Default for RemoteLinks {
+    fn default() -> Self {
+        RemoteLinks {
+            links: Mutex::default(),
+            generation: watch::channel(0).0,
+        }
+    }
+}
+
+impl RemoteLinks {
+    /// Every remote link, by input.
+    pub fn links(&self) -> Vec<RemoteLink> {
+        self.links.lock().values().cloned().collect()
+    }
+
+    /// How many remote links there are.
+    pub fn len(&self) -> usize {
+        self.links.lock().len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// A receiver that sees a new generation whenever links are added or removed.
+    pub fn watch(&self) -> watch::Receiver<u64> {
+        self.generation.subscribe()
+    }
+
+    pub(crate) fn insert(&self, link: RemoteLink) {
+        self.links.lock().insert(link.input.clone(), link);
+        self.generation.send_modify(|g| *g += 1);
+    }
+
+    pub(crate) fn remove(&self, input: &str) {
+        if self.links.lock().remove(input).is_some() {
+            self.generation.send_modify(|g| *g += 1);
+        }
+    }
+
+    pub(crate) fn remove_module(&self, module: &str) {
+        let prefix = format!("{module}/");
+        let mut links = self.links.lock();
+        let before = links.len();
+        links.retain(|k, _| !k.starts_with(&prefix));
+        if links.len() != before {
+            self.generation.send_modify(|g| *g += 1);
+        }
+    }
+}
+
+/// A running agent's property, watched by a team transport that publishes it.
+pub enum Tap {
+    /// A value property: publish its changes.
+    Value(ValueTap),
+    /// An output queue: publish its items.
+    Queue(QueueTap),
+}
+
+impl Tap {
+    /// The property's value (or item) type.
+    pub fn type_info(&self) -> TypeInfo {
+        match self {
+            Tap::Value(v) => v.ep.type_info(),
+            Tap::Queue(q) => q.reader.type_info,
+        }
+    }
+}
+
+/// Watches a value property; unsubscribes when dropped.
+pub struct ValueTap {
+    ep: Arc<Endpoint>,
+    signal: Arc<Signal>,
+}
+
+impl ValueTap {
+    pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
+        let signal = Arc::new(Signal::default());
+        ep.subscribe(&signal);
+        ValueTap { ep, signal }
+    }
+
+    /// The current value, its version and write time.
+    pub fn read(&self) -> (AnyValue, u64, Instant) {
+        let slot = self.ep.read();
+        (slot.value, slot.version, slot.written)
+    }
+
+    /// The current version, without reading the value.
+    pub fn version(&self) -> u64 {
+        self.ep.version()
+    }
+
+    /// Waits for the next change (at once if it changed since the last call).
+    pub async fn changed(&self) {
+        self.signal.wait().await;
+    }
+}
+
+impl Drop for ValueTap {
+    fn drop(&mut self) {
+        self.ep.unsubscribe(&self.signal, cause::CHANGE);
+    }
+}
+
+/// Reads every item of an output queue as one more reader; detaches when dropped.
+pub struct QueueTap {
+    reader: Arc<ReaderEndpoint>,
+    signal: Arc<Signal>,
+    buffer: Vec<QueueItem>,
+}
+
+impl QueueTap {
+    pub(crate) fn new(reader: Arc<ReaderEndpoint>) -> Self {
+        let signal = Arc::new(Signal::default());
+        reader.subscribe(&signal);
+        QueueTap {
+            reader,
+            signal,
+            buffer: Vec::new(),
+        }
+    }
+
+    /// Takes up to `max` new items (sequence number, push time, value), oldest first; they
+    /// count as consumed at once. `lost` says how many this tap missed by lagging so far.
+    pub fn take(&mut self, max: usize) -> Vec<(u64, Instant, AnyValue)> {
+        self.buffer.clear();
+        self.reader.take(max, &mut self.buffer);
+        self.reader.ack();
+        self.buffer
+            .drain(..)
+            .map(|i| (i.seq, i.stamp, i.value))
+            .collect()
+    }
+
+    /// Items this tap lost by lagging more than the queue's capacity.
+    pub fn lost(&self) -> i64 {
+        *self
+            .reader
+            .dropped
+            .value()
+            .downcast_ref::<i64>()
+            .unwrap_or(&0)
+    }
+
+    /// Waits until items arrive (at once if some arrived since the last call).
+    pub async fn changed(&self) {
+        self.signal.wait().await;
+    }
+}

@@ -1,0 +1,322 @@
+//! Teams: agents share properties, queues and remote writes over zenoh, across processes and
+//! machines, and notice each other's departures.
+//!
+//! [`Team::join`] puts a running [`Agent`] on the team its config names. The agent's remote
+//! links (inputs linked to `petrel://other_agent/...`) are then fed from the other agents, its
+//! own properties are published to the agents that link to them, and `_team/members` and
+//! `_team/events` show who is in the team. Modules see none of this: a remote input reads like
+//! any input.
+//!
+//! The pure parts (key layout, attachments, link states, membership) are in [`keys`],
+//! [`wire`], [`tracker`] and [`membership`], tested without a network; the rest is a thin
+//! shell around a zenoh session. The wire format is documented in `docs/wire-format.md`.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use parking_lot::Mutex;
+use petrel_actors::team::{RemoteLinks, TeamConfig, TeamEvent, TeamMembers, TEAM_MODULE};
+use petrel_actors::url::PropertyUrl;
+use petrel_actors::{Agent, Blackboard, PropertyType};
+use tokio::sync::mpsc;
+use tokio::task::JoinHandle;
+use zenoh::sample::SampleKind;
+
+mod export;
+mod import;
+pub mod keys;
+pub mod lossy;
+mod members;
+pub mod membership;
+mod service;
+mod session;
+pub mod tracker;
+pub mod wire;
+
+pub use session::zenoh_config;
+
+use keys::Keys;
+use membership::Membership;
+
+/// Why an agent could not join its team, or a remote request failed.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum TeamError {
+    /// The team section cannot be turned into a zenoh config.
+    #[error("team config: {0}")]
+    Config(String),
+    /// zenoh could not open a session (e.g. a `listen` port is taken).
+    #[error("cannot join the team: {0}")]
+    Open(String),
+    /// A zenoh declaration failed.
+    #[error("team transport: {0}")]
+    Transport(String),
+    /// The agent lacks the `_team` properties (its config has no `team:` section).
+    #[error("agent `{0}` was built without a `team:` section")]
+    NotATeamAgent(String),
+    /// The other agent refused a remote write, saying why.
+    #[error("{0}")]
+    Refused(String),
+    /// Nobody answered.
+    #[error(
+        "agent `{agent}` did not answer within {timeout:?} (is it a member of team `{team}`?)"
+    )]
+    NoAnswer {
+        /// The agent asked.
+        agent: String,
+        /// The team.
+        team: String,
+        /// How long we waited.
+        timeout: Duration,
+    },
+}
+
+impl From<zenoh::Error> for TeamError {
+    fn from(e: zenoh::Error) -> Self {
+        TeamError::Transport(e.to_string())
+    }
+}
+
+/// What the shell's tasks and callbacks share.
+pub(crate) struct Ctx {
+    session: zenoh::Session,
+    keys: Keys,
+    agent: String,
+    zid: String,
+    config: TeamConfig,
+    blackboard: Blackboard,
+    modules: Vec<String>,
+    /// Incoming streams by id, for membership changes to reach their trackers.
+    streams: Mutex<HashMap<String, Arc<import::Stream>>>,
+    membership: Mutex<Membership>,
+}
+
+/// Token events buffered between zenoh's callbacks and the tasks that apply them; beyond it
+/// events are dropped and counted (a peer flooding the team cannot grow memory).
+const EVENT_BUFFER: usize = 4096;
+
+/// How long a remote write waits for the owner's answer.
+pub const SET_TIMEOUT: Duration = Duration::from_secs(3);
+
+/// An agent's membership of its team. Dropping it leaves the team.
+pub struct Team {
+    ctx: Arc<Ctx>,
+    tasks: Vec<JoinHandle<()>>,
+    declared: Vec<Box<dyn Send + Sync>>,
+    overflow: Arc<AtomicU64>,
+}
+
+impl Team {
+    /// Joins `agent` to the team `config` describes (the agent's config's `team:` section).
+    pub async fn join(agent: &Agent, config: &TeamConfig) -> Result<Team, TeamError> {
+        let blackboard = agent.blackboard().clone();
+        let members = blackboard
+            .handle::<TeamMembers>(&format!("{TEAM_MODULE}/members"))
+            .await
+            .map_err(|_| TeamError::NotATeamAgent(agent.name().into()))?;
+        let events = blackboard
+            .queue_writer::<TeamEvent>(&format!("{TEAM_MODULE}/events"))
+            .await
+            .map_err(|_| TeamError::NotATeamAgent(agent.name().into()))?;
+        let session = session::open(config).await?;
+        let zid = session.zid().to_string();
+        let modules = agent
+            .summary()
+            .await
+            .modules
+            .into_iter()
+            .map(|m| m.name)
+            .collect();
+        let ctx = Arc::new(Ctx {
+            keys: Keys::new(&config.name),
+            agent: agent.name().to_string(),
+            zid,
+            config: config.clone(),
+            blackboard: blackboard.clone(),
+            modules,
+            streams: Mutex::default(),
+            membership: Mutex::default(),
+            session,
+        });
+        let mut team = Team {
+            ctx: ctx.clone(),
+            tasks: Vec::new(),
+            declared: Vec::new(),
+            overflow: Arc::default(),
+        };
+        team.serve().await?;
+        let (alive_tx, alive_rx) = mpsc::channel(EVENT_BUFFER);
+        team.watch_tokens(ctx.keys.all_alive(), alive_tx).await?;
+        let board = members::Board { members, events };
+        team.tasks
+            .push(tokio::spawn(members::run(ctx.clone(), board, alive_rx)));
+        let (want_tx, want_rx) = mpsc::channel(EVENT_BUFFER);
+        team.watch_tokens(ctx.keys.wants_of(&ctx.agent), want_tx)
+            .await?;
+        team.tasks
+            .push(tokio::spawn(export::run(ctx.clone(), want_rx)));
+        team.tasks.push(tokio::spawn(import_links(
+            ctx.clone(),
+            blackboard.remote_links(),
+        )));
+        // Announced last: when others see the agent, it already answers.
+        let alive = ctx.keys.alive(&ctx.agent, &ctx.zid);
+        let token = ctx.session.liveliness().declare_token(alive).await?;
+        team.declared.push(Box::new(token));
+        tracing::info!(agent = %ctx.agent, team = %config.name, zid = %ctx.zid, "joined the team");
+        Ok(team)
+    }
+
+    /// This agent's zenoh session id.
+    pub fn zid(&self) -> &str {
+        &self.ctx.zid
+    }
+
+    /// Token events dropped because they came faster than they could be applied.
+    pub fn overflowed(&self) -> u64 {
+        self.overflow.load(Ordering::Relaxed)
+    }
+
+    /// Sets another agent's `params/` or `control/` property to `value`, if its owner's
+    /// `remote_write` patterns allow it; the owner's refusal comes back as the error.
+    pub async fn set<T: PropertyType>(
+        &self,
+        url: &PropertyUrl,
+        value: &T,
+    ) -> Result<(), TeamError> {
+        let json = serde_json::to_vec(value).map_err(|e| TeamError::Refused(e.to_string()))?;
+        self.set_json(url, json).await
+    }
+
+    /// [`set`](Self::set) with the value already in JSON (as tools have it).
+    pub async fn set_json(&self, url: &PropertyUrl, json: Vec<u8>) -> Result<(), TeamError> {
+        let agent = url.agent().unwrap_or(&self.ctx.agent).to_string();
+        let key = self.ctx.keys.set(&agent, &url.key());
+        let replies = self
+            .ctx
+            .session
+            .get(key)
+            .payload(json)
+            .timeout(SET_TIMEOUT)
+            .await?;
+        match replies.recv_async().await {
+            Ok(reply) => match reply.result() {
+                Ok(_) => Ok(()),
+                Err(e) => Err(TeamError::Refused(
+                    String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
+                )),
+            },
+            Err(_) => Err(TeamError::NoAnswer {
+                agent,
+                team: self.ctx.config.name.clone(),
+                timeout: SET_TIMEOUT,
+            }),
+        }
+    }
+
+    /// Leaves the team: others see this agent leave at once (not after the lease).
+    pub async fn leave(mut self) {
+        self.stop();
+        if let Err(e) = self.ctx.session.close().await {
+            tracing::warn!(error = %e, "closing the team session");
+        }
+        tracing::info!(agent = %self.ctx.agent, "left the team");
+    }
+
+    fn stop(&mut self) {
+        for task in self.tasks.drain(..) {
+            task.abort();
+        }
+        // Undeclaring drops the callbacks, which hold the shared context.
+        self.declared.clear();
+    }
+
+    /// Declares the queryables this agent answers.
+    async fn serve(&mut self) -> Result<(), TeamError> {
+        let ctx = &self.ctx;
+        let runtime = tokio::runtime::Handle::current();
+        let info = service::info(ctx);
+        let key = ctx.keys.info(&ctx.agent);
+        let q = ctx
+            .session
+            .declare_queryable(key.clone())
+            .callback(move |query| {
+                let (info, key) = (info.clone(), key.clone());
+                runtime.spawn(async move {
+                    let _ = query.reply(key, info).await;
+                });
+            })
+            .await?;
+        self.declared.push(Box::new(q));
+        for (key, is_set) in [
+            (ctx.keys.values_of(&ctx.agent), false),
+            (ctx.keys.sets_of(&ctx.agent), true),
+        ] {
+            let (ctx, runtime) = (ctx.clone(), tokio::runtime::Handle::current());
+            let q = self
+                .ctx
+                .session
+                .declare_queryable(key)
+                .callback(move |query| match is_set {
+                    true => drop(runtime.spawn(service::set(ctx.clone(), query))),
+                    false => drop(runtime.spawn(service::get(ctx.clone(), query))),
+                })
+                .await?;
+            self.declared.push(Box::new(q));
+        }
+        Ok(())
+    }
+
+    /// Sends liveliness tokens under `key` (those alive now, then changes) to `tx`.
+    async fn watch_tokens(
+        &mut self,
+        key: String,
+        tx: mpsc::Sender<(String, bool)>,
+    ) -> Result<(), TeamError> {
+        let overflow = self.overflow.clone();
+        let sub = self
+            .ctx
+            .session
+            .liveliness()
+            .declare_subscriber(key)
+            .history(true)
+            .callback(move |sample| {
+                let event = (
+                    sample.key_expr().to_string(),
+                    sample.kind() == SampleKind::Put,
+                );
+                if tx.try_send(event).is_err() {
+                    let n = overflow.fetch_add(1, Ordering::Relaxed) + 1;
+                    if n.is_power_of_two() {
+                        tracing::warn!(
+                            dropped = n,
+                            "team token events come faster than they are applied: dropped"
+                        );
+                    }
+                }
+            })
+            .await?;
+        self.declared.push(Box::new(sub));
+        Ok(())
+    }
+}
+
+impl Drop for Team {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+/// Keeps the subscriptions equal to the agent's remote links, as links change.
+async fn import_links(ctx: Arc<Ctx>, links: Arc<RemoteLinks>) {
+    let mut changes = links.watch();
+    let mut importer = import::Importer::default();
+    loop {
+        changes.borrow_and_update();
+        importer.sync(&ctx, links.links()).await;
+        if changes.changed().await.is_err() {
+            return;
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! What this agent answers: its modules (`@info`), current values by query (`session.get` on
+//! a property's key), and remote writes (`@set`) where its `remote_write` patterns allow.
+
+use std::sync::Arc;
+
+use petrel_actors::team::pattern_matches;
+use petrel_actors::PropertyKind;
+use zenoh::query::Query;
+
+use crate::wire::{Attachment, StampClock};
+use crate::Ctx;
+
+/// Answers an `@info` query: `{"agent": ..., "zid": ..., "modules": [...]}`.
+pub(crate) fn info(ctx: &Ctx) -> Vec<u8> {
+    serde_json::to_vec(&serde_json::json!({
+        "agent": ctx.agent,
+        "zid": ctx.zid,
+        "modules": ctx.modules,
+    }))
+    .expect("JSON of strings")
+}
+
+/// Answers a query for the current value of one of this agent's properties.
+pub(crate) async fn get(ctx: Arc<Ctx>, query: Query) {
+    let Some(key) = ctx.keys.parse_value(&ctx.agent, query.key_expr().as_str()) else {
+        return;
+    };
+    let key = key.to_string();
+    let handle = match ctx.blackboard.any_handle(&key).await {
+        Ok(h) => h,
+        Err(e) => {
+            let _ = query.reply_err(e.to_string()).await;
+            return;
+        }
+    };
+    let sample = handle.read();
+    let type_info = handle.type_info();
+    match type_info.to_json(&sample.value) {
+        Ok(payload) => {
+            let attachment = Attachment {
+                seq: sample.version,
+                stamp_ns: StampClock::now().to_unix_ns(sample.written),
+                type_name: type_info.name().to_string(),
+                zid: ctx.zid.clone(),
+            };
+            let _ = query
+                .reply(query.key_expr().clone(), payload)
+                .attachment(attachment.encode())
+                .await;
+        }
+        Err(e) => {
+            let _ = query.reply_err(format!("cannot encode `{key}`: {e}")).await;
+        }
+    }
+}
+
+/// Why a remote write was refused, in words the writer can act on.
+pub(crate) async fn set(ctx: Arc<Ctx>, query: Query) {
+    let Some(key) = ctx.keys.parse_set(&ctx.agent, query.key_expr().as_str()) else {
+        return;
+    };
+    let key = key.to_string();
+    let payload = query
+        .payload()
+        .map(|p| p.to_bytes().into_owned())
+        .unwrap_or_default();
+    match apply_set(&ctx, &key, &payload).await {
+        Ok(()) => {
+            tracing::info!(property = %key, "remote write");
+            let _ = query.reply(query.key_expr().clone(), "ok").await;
+        }
+        Err(why) => {
+            tracing::warn!(property = %key, "remote write refused: {why}");
+            let _ = query.reply_err(why).await;
+        }
+    }
+}
+
+async fn apply_set(ctx: &Ctx, key: &str, payload: &[u8]) -> Result<(), String> {
+    let (kind, type_info) = ctx
+        .blackboard
+        .kind_of(key)
+        .await
+        .map_err(|e| e.to_string())?;
+    if !matches!(kind, PropertyKind::Param | PropertyKind::Control) {
+        return Err(format!(
+            "`{key}` is a {kind}: only params/ and control/ properties can be set from another agent"
+        ));
+    }
+    if !ctx
+        .config
+        .remote_write
+        .iter()
+        .any(|p| pattern_matches(p, key))
+    {
+        let allowed = match ctx.config.remote_write.is_empty() {
+            true => "none (add patterns to `remote_write` in its team section)".to_string(),
+            false => ctx.config.remote_write.join(", "),
+        };
+        return Err(format!(
+            "agent `{}` does not allow remote writes to `{key}`; allowed: {allowed}",
+            ctx.agent
+        ));
+    }
+    let value = type_info
+        .from_json(payload)
+        .map_err(|e| format!("`{key}` takes a {} as JSON: {e}", type_info.name()))?;
+    let handle = ctx
+        .blackboard
+        .any_handle(key)
+        .await
+        .map_err(|e| e.to_string())?;
+    handle.set(value).map_err(|e| e.to_string())
+}

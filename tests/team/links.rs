@@ -1,0 +1,153 @@
+//! Remote links: values and queues between agents, status, type mismatches, relinks.
+
+use petrel::actors::team::LinkStatus;
+
+use crate::support::*;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_remote_value_feeds_an_input_like_a_local_link() {
+    let team = team_name("value");
+    let (pa, pb) = (free_port(), free_port());
+    let a = start(&agent_config(
+        "a",
+        &team,
+        pa,
+        &[],
+        "",
+        r#"
+        (name: "count", type: "demo.counter", values: {"params/period_ms": 5}),"#,
+    ))
+    .await;
+    let b = start(&agent_config(
+        "b",
+        &team,
+        pb,
+        &[pa],
+        "",
+        r#"
+        (name: "scale", type: "demo.scale", values: {"params/factor": 2.0},
+         links: {"in/value": "petrel://a/count/out/value"}),"#,
+    ))
+    .await;
+    let out = b.handle::<f64>("scale/out/value").await;
+    wait_for(&out, "twice a remote count of 10", |v| *v >= 20.0).await;
+    let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
+    let s = wait_for(&status, "a live link", |s| s.state == "live").await;
+    assert_eq!(s.source, "petrel://a/count/out/value");
+    assert!(s.received >= 1 && s.rejected == 0, "{s:?}");
+    b.stop().await;
+    a.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_remote_queue_keeps_order_and_loses_nothing() {
+    let team = team_name("queue");
+    let (pa, pb) = (free_port(), free_port());
+    let a = start(&agent_config(
+        "a",
+        &team,
+        pa,
+        &[],
+        "",
+        r#"
+        (name: "producer", type: "demo.producer",
+         values: {"params/period_ms": 2, "params/batch": 5, "enabled": false}),"#,
+    ))
+    .await;
+    let b = start(&agent_config("b", &team, pb, &[pa], "", r#"
+        (name: "consumer", type: "demo.consumer",
+         links: {"in/items": (from: "petrel://a/producer/out/items", mode: on_change, reliability: reliable)}),"#)).await;
+    // The consumer counts gaps from item 0: produce only once the stream is open.
+    let status = b
+        .handle::<LinkStatus>("consumer/stats/links/in/items")
+        .await;
+    wait_for(&status, "an open queue stream", |s| s.state == "live").await;
+    a.agent
+        .blackboard()
+        .set("producer/enabled", true)
+        .await
+        .unwrap();
+    let received = b.handle::<i64>("consumer/out/received").await;
+    wait_for(&received, "500 remote items", |n| *n >= 500).await;
+    let gaps = b.handle::<i64>("consumer/out/gaps").await;
+    let duplicates = b.handle::<i64>("consumer/out/duplicates").await;
+    assert_eq!((gaps.value(), duplicates.value()), (0, 0));
+    let s = status.get();
+    assert_eq!(
+        (s.state.as_str(), s.dropped, s.rejected),
+        ("live", 0, 0),
+        "{s:?}"
+    );
+    b.stop().await;
+    a.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_type_mismatch_breaks_the_link_and_keeps_the_default() {
+    let team = team_name("mismatch");
+    let (pa, pb) = (free_port(), free_port());
+    let a = start(&agent_config(
+        "a",
+        &team,
+        pa,
+        &[],
+        "",
+        r#"
+        (name: "count", type: "demo.counter"),"#,
+    ))
+    .await;
+    // `count/enabled` is a bool; the scale's input is an f64.
+    let b = start(&agent_config(
+        "b",
+        &team,
+        pb,
+        &[pa],
+        "",
+        r#"
+        (name: "scale", type: "demo.scale", values: {"in/value": 7.0},
+         links: {"in/value": "petrel://a/count/enabled"}),"#,
+    ))
+    .await;
+    let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
+    let s = wait_for(&status, "a broken link", |s| s.state == "broken").await;
+    assert!(
+        s.detail.contains("bool") && s.detail.contains("f64"),
+        "{s:?}"
+    );
+    assert!(s.rejected >= 1);
+    let input = b.handle::<f64>("scale/in/value").await;
+    assert_eq!(input.value(), 7.0, "the input keeps its value");
+    b.stop().await;
+    a.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_link_to_a_missing_property_says_so() {
+    let team = team_name("missing");
+    let (pa, pb) = (free_port(), free_port());
+    let a = start(&agent_config(
+        "a",
+        &team,
+        pa,
+        &[],
+        "",
+        r#"
+        (name: "count", type: "demo.counter"),"#,
+    ))
+    .await;
+    let b = start(&agent_config(
+        "b",
+        &team,
+        pb,
+        &[pa],
+        "",
+        r#"
+        (name: "scale", type: "demo.scale", links: {"in/value": "petrel://a/count/out/nope"}),"#,
+    ))
+    .await;
+    let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
+    let s = wait_for(&status, "a refused link", |s| s.state == "broken").await;
+    assert!(s.detail.contains("out/nope"), "{s:?}");
+    b.stop().await;
+    a.stop().await;
+}

@@ -1,0 +1,110 @@
+//! Members, departures and rejoins: links to a departed agent go stale and resume by
+//! themselves when it comes back.
+
+use petrel::actors::team::{LinkStatus, Tap, TeamEvent, TeamMembers};
+
+use crate::support::*;
+
+fn names(m: &TeamMembers) -> Vec<&str> {
+    m.0.iter().map(|m| m.agent.as_str()).collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn three_agents_see_each_other_and_a_departure_makes_links_stale_until_rejoin() {
+    let team = team_name("members");
+    let (pa, pb, pc) = (free_port(), free_port(), free_port());
+    let counter = r#"(name: "count", type: "demo.counter", values: {"params/period_ms": 5}),"#;
+    let a = start(&agent_config("a", &team, pa, &[], "", counter)).await;
+    let b = start(&agent_config(
+        "b",
+        &team,
+        pb,
+        &[pa],
+        "",
+        r#"
+        (name: "scale", type: "demo.scale", links: {"in/value": "petrel://c/count/out/value"}),"#,
+    ))
+    .await;
+    let c = start(&agent_config("c", &team, pc, &[pa], "", counter)).await;
+    for m in [&a, &b, &c] {
+        let members = m.handle::<TeamMembers>("_team/members").await;
+        let list = wait_for(&members, "three members with their modules", |l| {
+            names(l) == ["a", "b", "c"] && l.0.iter().all(|m| !m.modules.is_empty())
+        })
+        .await;
+        assert_eq!(list.0[1].modules, ["scale"]);
+    }
+    let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
+    wait_for(&status, "a live link to c", |s| s.state == "live").await;
+    let Ok(Tap::Queue(mut events)) = a.agent.blackboard().tap("_team/events").await else {
+        panic!("_team/events is a queue");
+    };
+
+    c.stop().await;
+    let s = wait_for(&status, "a stale link once c left", |s| s.state == "stale").await;
+    let input = b.handle::<f64>("scale/in/value").await;
+    assert!(input.value() > 0.0, "the last value is kept: {s:?}");
+    let members = a.handle::<TeamMembers>("_team/members").await;
+    wait_for(&members, "c gone from a's members", |l| {
+        names(l) == ["a", "b"]
+    })
+    .await;
+    let left: Vec<TeamEvent> = events
+        .take(16)
+        .into_iter()
+        .filter_map(|(_, _, v)| v.downcast_ref::<TeamEvent>().cloned())
+        .collect();
+    assert!(
+        left.iter().any(|e| e.agent == "c" && e.kind == "left"),
+        "{left:?}"
+    );
+
+    // The same agent comes back (a restarted process): links resume with no manual step.
+    let before = input.value();
+    let c = start(&agent_config("c", &team, pc, &[pa], "", counter)).await;
+    wait_for(&status, "the link live again", |s| s.state == "live").await;
+    wait_for(&members, "c back in a's members", |l| {
+        names(l) == ["a", "b", "c"]
+    })
+    .await;
+    let rejoined: Vec<TeamEvent> = events
+        .take(16)
+        .into_iter()
+        .filter_map(|(_, _, v)| v.downcast_ref::<TeamEvent>().cloned())
+        .collect();
+    assert!(
+        rejoined
+            .iter()
+            .any(|e| e.agent == "c" && e.kind == "rejoined"),
+        "{rejoined:?}"
+    );
+    // The new c counts from 0 again: values move on from what it sends now.
+    wait_for(&input, "values from the new c", |v| *v != before).await;
+    for m in [c, b, a] {
+        m.stop().await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn teams_with_different_names_never_see_each_other() {
+    let (pa, pb) = (free_port(), free_port());
+    let a = start(&agent_config("a", &team_name("red"), pa, &[], "", "")).await;
+    let b = start(&agent_config("b", &team_name("blue"), pb, &[pa], "", "")).await;
+    let c = start(&agent_config(
+        "c",
+        &team_name("red"),
+        free_port(),
+        &[pa],
+        "",
+        "",
+    ))
+    .await;
+    let members = a.handle::<TeamMembers>("_team/members").await;
+    wait_for(&members, "a and c in red", |l| names(l) == ["a", "c"]).await;
+    let blue = b.handle::<TeamMembers>("_team/members").await;
+    wait_for(&blue, "b alone in blue", |l| names(l) == ["b"]).await;
+    assert_eq!(names(&members.get()), ["a", "c"], "b never joined red");
+    for m in [c, b, a] {
+        m.stop().await;
+    }
+}

@@ -1,0 +1,110 @@
+//! Agents on a team over loopback, and bounded waits on their properties.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use petrel::actors::{Agent, ConfigFile, PropertyHandle, PropertyType};
+use petrel::team::Team;
+
+/// How long any wait in these tests may take before the test fails.
+pub const DEADLINE: Duration = Duration::from_secs(20);
+
+/// A free TCP port on 127.0.0.1 (asked from the OS).
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .expect("a free port")
+}
+
+/// A unique team name, so parallel tests never see each other.
+pub fn team_name(test: &str) -> String {
+    format!("t{}-{test}", std::process::id())
+}
+
+/// An agent config on team `team` listening on `port`, connecting to `connect`, with
+/// `extra` team fields and the modules `modules` (RON list items).
+pub fn agent_config(
+    name: &str,
+    team: &str,
+    port: u16,
+    connect: &[u16],
+    extra: &str,
+    modules: &str,
+) -> String {
+    let connect: Vec<String> = connect
+        .iter()
+        .map(|p| format!("\"tcp/127.0.0.1:{p}\""))
+        .collect();
+    format!(
+        r#"Agent(
+    name: "{name}",
+    team: (name: "{team}", listen: ["tcp/127.0.0.1:{port}"], connect: [{}], lease_ms: 1000, {extra}),
+    modules: [{modules}],
+)"#,
+        connect.join(", ")
+    )
+}
+
+/// A running agent and its team membership.
+pub struct Member {
+    pub agent: Agent,
+    pub team: Team,
+}
+
+/// Starts the agent of `config` and joins its team.
+pub async fn start(config: &str) -> Member {
+    let file = ConfigFile::parse("team-test.ron", config)
+        .unwrap_or_else(|e| panic!("config should parse:\n{e}\n{config}"));
+    let registry = petrel::Petrel::new().registry().clone();
+    let agent = Agent::start(&file, &registry)
+        .await
+        .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
+    let team_config = file.config.team.clone().expect("a team section");
+    let team = Team::join(&agent, &team_config)
+        .await
+        .unwrap_or_else(|e| panic!("agent should join:\n{e}"));
+    Member { agent, team }
+}
+
+impl Member {
+    /// A handle to one of this agent's properties.
+    pub async fn handle<T: PropertyType>(&self, address: &str) -> PropertyHandle<T> {
+        self.agent
+            .blackboard()
+            .handle::<T>(address)
+            .await
+            .unwrap_or_else(|e| panic!("{address}: {e}"))
+    }
+
+    /// Stops the agent and leaves the team.
+    pub async fn stop(self) {
+        self.agent.stop(Duration::from_secs(2)).await;
+        self.team.leave().await;
+    }
+}
+
+/// Waits until `pred` holds for `handle`'s value, failing the test after [`DEADLINE`]; returns
+/// the value that satisfied it.
+pub async fn wait_for<T: PropertyType>(
+    handle: &PropertyHandle<T>,
+    what: &str,
+    pred: impl Fn(&T) -> bool,
+) -> Arc<T> {
+    let deadline = tokio::time::Instant::now() + DEADLINE;
+    loop {
+        let value = handle.get();
+        if pred(&value) {
+            return value;
+        }
+        if tokio::time::timeout_at(deadline, handle.changed())
+            .await
+            .is_err()
+        {
+            panic!(
+                "timed out waiting for {what}; last value of {}: {value:?}",
+                handle.key()
+            );
+        }
+    }
+}
