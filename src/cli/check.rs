@@ -6,33 +6,126 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use petrel_actors::{
-    ConfigError, ConfigErrors, ConfigFile, FilePath, Module, ModuleRegistry, Registry,
+    ConfigError, ConfigErrors, ConfigFile, FilePath, Module, ModuleRegistry, PropertyKind, Registry,
 };
 
 use super::{bad_input, load};
 
-/// `petrel check CONFIG [--overlay ...]`.
-pub(crate) fn check(registry: &ModuleRegistry, config: &PathBuf, overlays: &[PathBuf]) -> ExitCode {
-    let result = load(config, overlays)
-        .and_then(|file| check_all(&file, registry).map(|agent| (file, agent)));
-    match result {
-        Ok((file, agent)) => {
-            let links = file
-                .config
-                .modules
-                .iter()
-                .map(|m| m.links.len())
-                .sum::<usize>();
-            println!(
-                "{}: ok: agent `{}`, {} modules, {links} links",
-                config.display(),
-                agent.name,
-                agent.modules
-            );
-            ExitCode::SUCCESS
-        }
-        Err(errors) => bad_input(&errors),
+/// `petrel check CONFIG... [--overlay ...]`.
+pub(crate) fn check(
+    registry: &ModuleRegistry,
+    configs: &[PathBuf],
+    overlays: &[PathBuf],
+) -> ExitCode {
+    if configs.len() > 1 && !overlays.is_empty() {
+        eprintln!("error: --overlay takes one config; check each overlaid agent on its own");
+        return ExitCode::from(super::EXIT_BAD_INPUT);
     }
+    let mut files = Vec::new();
+    let mut errors = Vec::new();
+    for config in configs {
+        match load(config, overlays).and_then(|f| check_all(&f, registry).map(|a| (f, a))) {
+            Ok(checked) => files.push(checked),
+            Err(e) => errors.extend(e.0),
+        }
+    }
+    if errors.is_empty() {
+        let loaded: Vec<ConfigFile> = files.iter().map(|(f, _)| f.clone()).collect();
+        if let Err(e) = check_team(&loaded, registry) {
+            errors.extend(e.0);
+        }
+    }
+    if !errors.is_empty() {
+        return bad_input(&ConfigErrors(errors));
+    }
+    for (file, agent) in files {
+        let links = file
+            .config
+            .modules
+            .iter()
+            .map(|m| m.links.len())
+            .sum::<usize>();
+        println!(
+            "{}: ok: agent `{}`, {} modules, {links} links",
+            file.path().display(),
+            agent.name,
+            agent.modules
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+/// Checks agents that run together: unique names, and each link from one of them to another
+/// names a property that exists there, of the same kind (queue or value) and type.
+pub(crate) fn check_team(
+    files: &[ConfigFile],
+    registry: &ModuleRegistry,
+) -> Result<(), ConfigErrors> {
+    let mut errors = Vec::new();
+    let mut built = Vec::new();
+    for file in files {
+        if let Some((first, _)) = built
+            .iter()
+            .find(|(f, _): &&(&ConfigFile, Registry)| f.config.name == file.config.name)
+        {
+            errors.push(ConfigError::in_file(
+                file.path(),
+                format!(
+                    "agent name `{}` is also the name of the agent in {}: each agent of a team needs its own name",
+                    file.config.name,
+                    first.path().display()
+                ),
+            ));
+            continue;
+        }
+        built.push((file, file.build(registry)?));
+    }
+    for (file, reader) in &built {
+        for link in reader.remote_links().links() {
+            let Some((_, owner)) = built
+                .iter()
+                .find(|(f, _)| Some(f.config.name.as_str()) == link.source.agent())
+            else {
+                continue;
+            };
+            if let Some(problem) = remote_link_problem(owner, &link) {
+                let (module, path) = link.input.split_once('/').unwrap_or_default();
+                let message = format!(
+                    "module `{module}`, `{path}`: links to `{}`, {problem}",
+                    link.source
+                );
+                errors.push(file.error(module, Some(path), message));
+            }
+        }
+    }
+    match errors.is_empty() {
+        true => Ok(()),
+        false => Err(ConfigErrors(errors)),
+    }
+}
+
+/// What is wrong with `link` given the agent that owns its source, if anything.
+fn remote_link_problem(owner: &Registry, link: &petrel_actors::team::RemoteLink) -> Option<String> {
+    let source = &link.source;
+    if let Err(e) = owner.key_of(&source.key()) {
+        return Some(format!("but {e}"));
+    }
+    let decl = owner
+        .declarations(source.module())
+        .into_iter()
+        .find(|d| d.path == source.path())?;
+    let wants_queue = matches!(link.feed, petrel_actors::team::RemoteFeed::Queue(_));
+    if decl.kind == PropertyKind::QueueIn {
+        return Some("which is a queue input: link to the queue it reads instead".into());
+    }
+    if decl.kind.is_queue() != wants_queue {
+        return Some(format!(
+            "which is a {}: a queue input links to a queue, a value to a value",
+            decl.kind
+        ));
+    }
+    let (theirs, ours) = (decl.type_info.name(), link.feed.type_info().name());
+    (theirs != ours).then(|| format!("which is a {theirs}, but the input is a {ours}"))
 }
 
 /// What a config that checks describes.

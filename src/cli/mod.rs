@@ -15,7 +15,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry};
 
 /// Exit code for bad input (config errors, unknown names).
-const EXIT_BAD_INPUT: u8 = 2;
+pub(crate) const EXIT_BAD_INPUT: u8 = 2;
 
 #[derive(Parser)]
 #[command(
@@ -30,12 +30,14 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Runs an agent from a RON config until Ctrl-C or --for elapses.
+    /// Runs agents from RON configs (several: a team in one process) until Ctrl-C or --for.
     Run(RunArgs),
-    /// Checks a config (and overlays) without running anything; prints every error found.
+    /// Checks configs (and overlays) without running anything; prints every error found.
+    /// Several configs are also checked together: unique agent names, links between them.
     Check {
-        /// The agent config (RON).
-        config: PathBuf,
+        /// The agent configs (RON).
+        #[arg(required = true)]
+        configs: Vec<PathBuf>,
         /// Configs or snapshots laid over CONFIG, in order.
         #[arg(long)]
         overlay: Vec<PathBuf>,
@@ -64,8 +66,10 @@ enum ModulesCommand {
 /// Arguments of `petrel run`.
 #[derive(clap::Args)]
 pub(crate) struct RunArgs {
-    /// The agent config (RON).
-    config: PathBuf,
+    /// The agent configs (RON); several run as a team in one process, each agent with its own
+    /// team session.
+    #[arg(required = true)]
+    configs: Vec<PathBuf>,
     /// Stop after this long (e.g. `10s`, `1m30s`); default: run until Ctrl-C.
     #[arg(long = "for", value_parser = humantime::parse_duration)]
     duration: Option<Duration>,
@@ -86,6 +90,9 @@ pub(crate) struct RunArgs {
     /// modules on one core, where a hand-over between modules costs no thread wake-up.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     workers: Option<u16>,
+    /// Do not join the teams the configs name: links to other agents stay `waiting`.
+    #[arg(long)]
+    no_remote: bool,
 }
 
 /// How logs are written.
@@ -112,7 +119,7 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
     };
     match cli.command {
         Command::Run(args) => run::run(&registry, args),
-        Command::Check { config, overlay } => check::check(&registry, &config, &overlay),
+        Command::Check { configs, overlay } => check::check(&registry, &configs, &overlay),
         Command::Modules { command: None } => modules::list(&registry),
         Command::Modules {
             command: Some(ModulesCommand::Describe { type_name }),

@@ -1,21 +1,27 @@
-//! `petrel run`: start an agent, wait for Ctrl-C or `--for`, stop cleanly, summarise.
+//! `petrel run`: start one agent or several (a team in one process), wait for Ctrl-C, `--for`
+//! or an agent asking to end, stop cleanly, summarise.
 
+use std::future::Future;
+use std::pin::Pin;
 use std::process::ExitCode;
+use std::task::Poll;
 
-use petrel_actors::{status, Agent, ModuleRegistry, StartError};
+use petrel_actors::{status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
+use petrel_team::Team;
 
-use super::check::check_all;
-use super::{bad_input, load, logging, RunArgs};
+use super::check::{check_all, check_team};
+use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
     logging::init(args.log_format);
-    let file = match load(&args.config, &args.overlay) {
-        Ok(file) => file,
-        Err(errors) => return bad_input(&errors),
-    };
-    if let Err(errors) = check_all(&file, registry) {
-        return bad_input(&errors);
+    if args.configs.len() > 1 && (!args.overlay.is_empty() || args.snapshot_out.is_some()) {
+        eprintln!("error: --overlay and --snapshot-out take one agent; run each agent with its own `petrel run` to use them");
+        return ExitCode::from(EXIT_BAD_INPUT);
     }
+    let files = match load_all(registry, &args) {
+        Ok(files) => files,
+        Err(code) => return code,
+    };
     let mut builder = tokio::runtime::Builder::new_multi_thread();
     if let Some(workers) = args.workers {
         builder.worker_threads(workers.into());
@@ -27,57 +33,156 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    runtime.block_on(async move {
-        // Listen before the agent starts, so a SIGHUP sent as soon as the rules are loaded is
-        // a reload, not the default "terminate".
-        let hangups = Hangups::listen();
-        let agent = match Agent::start(&file, registry).await {
-            Ok(agent) => agent,
-            Err(StartError::Config(errors)) => return bad_input(&errors),
+    runtime.block_on(run_agents(registry, &args, files))
+}
+
+/// Loads and checks every config, alone and together (links between them, unique names).
+fn load_all(registry: &ModuleRegistry, args: &RunArgs) -> Result<Vec<ConfigFile>, ExitCode> {
+    let mut files = Vec::new();
+    for config in &args.configs {
+        let file = load(config, &args.overlay).map_err(|e| bad_input(&e))?;
+        check_all(&file, registry).map_err(|e| bad_input(&e))?;
+        files.push(file);
+    }
+    check_team(&files, registry).map_err(|e| bad_input(&e))?;
+    Ok(files)
+}
+
+async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<ConfigFile>) -> ExitCode {
+    // Listen before the agents start, so a SIGHUP sent as soon as the rules are loaded is a
+    // reload, not the default "terminate".
+    let hangups = Hangups::listen();
+    let mut agents = Vec::new();
+    let mut teams = Vec::new();
+    let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
+    if let Err(code) = started {
+        stop_all(&agents, teams, args).await;
+        for agent in agents {
+            agent.shutdown().await;
+        }
+        return code;
+    }
+    let forever = std::future::pending::<()>();
+    let (why, mut code) = tokio::select! {
+        exit = first_exit(&agents) => (exit.reason, ExitCode::from(exit.code)),
+        _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), ExitCode::SUCCESS),
+        _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
+        _ = async {
+            match args.duration {
+                Some(d) => tokio::time::sleep(d).await,
+                None => forever.await,
+            }
+        } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), ExitCode::SUCCESS),
+    };
+    for agent in &agents {
+        tracing::info!(agent = agent.name(), "stopping: {why}");
+    }
+    let summaries = stop_all(&agents, teams, args).await;
+    if let (Some(path), [agent]) = (&args.snapshot_out, agents.as_slice()) {
+        match agent
+            .snapshot()
+            .await
+            .map_err(|e| e.to_string())
+            .and_then(|s| std::fs::write(path, s).map_err(|e| e.to_string()))
+        {
+            Ok(()) => println!("snapshot written to {}", path.display()),
+            Err(e) => {
+                eprintln!(
+                    "error: could not write the snapshot to {}: {e}",
+                    path.display()
+                );
+                code = ExitCode::FAILURE;
+            }
+        }
+    }
+    for agent in agents {
+        agent.shutdown().await;
+    }
+    println!("\n{why}");
+    for summary in &summaries {
+        println!("{summary}");
+    }
+    let failed = summaries
+        .iter()
+        .flat_map(|s| &s.modules)
+        .any(|m| m.status == status::FAILED);
+    if failed {
+        eprintln!("some modules failed: see the summary above and the log");
+        code = ExitCode::FAILURE;
+    }
+    code
+}
+
+/// Starts every agent, then joins each to its team (unless `--no-remote`).
+async fn start_all(
+    registry: &ModuleRegistry,
+    args: &RunArgs,
+    files: &[ConfigFile],
+    agents: &mut Vec<Agent>,
+    teams: &mut Vec<Team>,
+) -> Result<(), ExitCode> {
+    for file in files {
+        match Agent::start(file, registry).await {
+            Ok(agent) => agents.push(agent),
+            Err(StartError::Config(errors)) => return Err(bad_input(&errors)),
             Err(e) => {
                 eprintln!("error: {e}");
-                return ExitCode::FAILURE;
-            }
-        };
-        let forever = std::future::pending::<()>();
-        let (why, mut code) = tokio::select! {
-            exit = agent.finished() => (exit.reason, ExitCode::from(exit.code)),
-            _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), ExitCode::SUCCESS),
-            _ = reload_on_hangup(hangups, &agent) => unreachable!("reloading never ends"),
-            _ = async {
-                match args.duration {
-                    Some(d) => tokio::time::sleep(d).await,
-                    None => forever.await,
-                }
-            } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), ExitCode::SUCCESS),
-        };
-        tracing::info!(agent = agent.name(), "stopping: {why}");
-        let summary = agent.stop_modules(args.stop_timeout).await;
-        if let Some(path) = &args.snapshot_out {
-            match agent
-                .snapshot()
-                .await
-                .map_err(|e| e.to_string())
-                .and_then(|s| std::fs::write(path, s).map_err(|e| e.to_string()))
-            {
-                Ok(()) => println!("snapshot written to {}", path.display()),
-                Err(e) => {
-                    eprintln!(
-                        "error: could not write the snapshot to {}: {e}",
-                        path.display()
-                    );
-                    code = ExitCode::FAILURE;
-                }
+                return Err(ExitCode::FAILURE);
             }
         }
-        agent.shutdown().await;
-        println!("\n{why}\n{summary}");
-        if summary.modules.iter().any(|m| m.status == status::FAILED) {
-            eprintln!("some modules failed: see the summary above and the log");
-            code = ExitCode::FAILURE;
+    }
+    if args.no_remote {
+        return Ok(());
+    }
+    for (agent, file) in agents.iter().zip(files) {
+        let Some(team) = &file.config.team else {
+            continue;
+        };
+        match Team::join(agent, team).await {
+            Ok(t) => teams.push(t),
+            Err(e) => {
+                eprintln!(
+                    "error: agent `{}` ({}): {e}",
+                    agent.name(),
+                    file.path().display()
+                );
+                return Err(ExitCode::FAILURE);
+            }
         }
-        code
+    }
+    Ok(())
+}
+
+/// Stops every agent's modules (last started first), then leaves the teams.
+async fn stop_all(
+    agents: &[Agent],
+    teams: Vec<Team>,
+    args: &RunArgs,
+) -> Vec<petrel_actors::RunSummary> {
+    let mut summaries = Vec::new();
+    for agent in agents.iter().rev() {
+        summaries.push(agent.stop_modules(args.stop_timeout).await);
+    }
+    summaries.reverse();
+    for team in teams {
+        team.leave().await;
+    }
+    summaries
+}
+
+/// The first agent that asks for the run to end.
+async fn first_exit(agents: &[Agent]) -> AgentExit {
+    let mut waits: Vec<Pin<Box<dyn Future<Output = AgentExit> + Send + '_>>> =
+        agents.iter().map(|a| Box::pin(a.finished()) as _).collect();
+    std::future::poll_fn(|cx| {
+        for wait in waits.iter_mut() {
+            if let Poll::Ready(exit) = wait.as_mut().poll(cx) {
+                return Poll::Ready(exit);
+            }
+        }
+        Poll::Pending
     })
+    .await
 }
 
 /// SIGHUPs received (on Unix; elsewhere, none ever arrive).
@@ -101,37 +206,44 @@ impl Hangups {
     }
 }
 
-/// On every SIGHUP, asks each `context.manager` to re-read its rules (its `params/reload`).
-async fn reload_on_hangup(hangups: Hangups, agent: &Agent) {
+/// On every SIGHUP, asks each `context.manager` of every agent to re-read its rules.
+async fn reload_on_hangup(hangups: Hangups, agents: &[Agent]) {
     #[cfg(unix)]
     {
         if let Some(mut hangups) = hangups.signals {
             while hangups.recv().await.is_some() {
-                let summary = agent.summary().await;
-                for m in summary
-                    .modules
-                    .iter()
-                    .filter(|m| m.module_type == "context.manager")
-                {
-                    let key = format!("{}/params/reload", m.name);
-                    let next = agent
-                        .blackboard()
-                        .get::<i64>(&key)
-                        .await
-                        .map_or(1, |n| *n + 1);
-                    match agent.blackboard().set(&key, next).await {
-                        Ok(()) => {
-                            tracing::info!(module = %m.name, "SIGHUP: reloading context rules")
-                        }
-                        Err(e) => {
-                            tracing::error!(module = %m.name, error = %e, "SIGHUP: cannot ask for a reload")
-                        }
-                    }
+                for agent in agents {
+                    reload_contexts(agent).await;
                 }
             }
         }
     }
     #[cfg(not(unix))]
-    let _ = (hangups, agent);
+    let _ = (hangups, agents);
     std::future::pending::<()>().await
+}
+
+/// Bumps `params/reload` of each of `agent`'s context managers.
+async fn reload_contexts(agent: &Agent) {
+    let summary = agent.summary().await;
+    for m in summary
+        .modules
+        .iter()
+        .filter(|m| m.module_type == "context.manager")
+    {
+        let key = format!("{}/params/reload", m.name);
+        let next = agent
+            .blackboard()
+            .get::<i64>(&key)
+            .await
+            .map_or(1, |n| *n + 1);
+        match agent.blackboard().set(&key, next).await {
+            Ok(()) => {
+                tracing::info!(agent = agent.name(), module = %m.name, "SIGHUP: reloading context rules")
+            }
+            Err(e) => {
+                tracing::error!(agent = agent.name(), module = %m.name, error = %e, "SIGHUP: cannot ask for a reload")
+            }
+        }
+    }
 }

@@ -123,7 +123,7 @@ async fn export(ctx: Arc<Ctx>, variant: String, qos: Qos, key: String, newcomer:
     out.type_info = tap.as_ref().ok().map(Tap::type_info);
     match tap {
         Ok(Tap::Value(tap)) => export_value(&mut out, tap, qos.mode, &newcomer).await,
-        Ok(Tap::Queue(tap)) => export_queue(&mut out, tap).await,
+        Ok(Tap::Queue(tap)) => export_queue(&mut out, tap, &newcomer).await,
         Err(e) => {
             tracing::warn!(property = %key, error = %e, "a reader wants a property this agent cannot publish");
             let why = format!("agent `{}` cannot publish `{key}`: {e}", ctx.agent);
@@ -179,10 +179,14 @@ async fn export_value(out: &mut Sender<'_>, tap: ValueTap, mode: Mode, newcomer:
 /// network never holds one huge batch.
 const QUEUE_SLICE: usize = 64;
 
-async fn export_queue(out: &mut Sender<'_>, mut tap: QueueTap) {
+async fn export_queue(out: &mut Sender<'_>, mut tap: QueueTap, newcomer: &Notify) {
     out.control(OPEN_TYPE, "").await;
     loop {
-        tap.changed().await;
+        tokio::select! {
+            _ = tap.changed() => {}
+            // A new reader's link is live before the next item.
+            _ = newcomer.notified() => out.control(OPEN_TYPE, "").await,
+        }
         loop {
             let items = tap.take(QUEUE_SLICE);
             if items.is_empty() {

@@ -215,6 +215,46 @@ impl Team {
         }
     }
 
+    /// The current value of another agent's property: its type name and JSON text.
+    pub async fn get_json(&self, url: &PropertyUrl) -> Result<(String, Vec<u8>), TeamError> {
+        let agent = url.agent().unwrap_or(&self.ctx.agent).to_string();
+        let key = self.ctx.keys.data(keys::CANONICAL, &agent, &url.key());
+        let replies = self.ctx.session.get(key).timeout(SET_TIMEOUT).await?;
+        let reply = replies
+            .recv_async()
+            .await
+            .map_err(|_| TeamError::NoAnswer {
+                agent,
+                team: self.ctx.config.name.clone(),
+                timeout: SET_TIMEOUT,
+            })?;
+        match reply.result() {
+            Ok(sample) => {
+                let type_name = sample
+                    .attachment()
+                    .and_then(|a| wire::Attachment::decode(&a.to_bytes()).ok())
+                    .map(|a| a.type_name)
+                    .unwrap_or_default();
+                Ok((type_name, sample.payload().to_bytes().into_owned()))
+            }
+            Err(e) => Err(TeamError::Refused(
+                String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
+            )),
+        }
+    }
+
+    /// [`get_json`](Self::get_json), decoded as a `T`.
+    pub async fn get<T: PropertyType>(&self, url: &PropertyUrl) -> Result<T, TeamError> {
+        let (type_name, json) = self.get_json(url).await?;
+        if type_name != T::TYPE_NAME {
+            return Err(TeamError::Refused(format!(
+                "`{url}` is a {type_name}, not a {}",
+                T::TYPE_NAME
+            )));
+        }
+        serde_json::from_slice(&json).map_err(|e| TeamError::Refused(e.to_string()))
+    }
+
     /// Leaves the team: others see this agent leave at once (not after the lease).
     pub async fn leave(mut self) {
         self.stop();

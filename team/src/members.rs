@@ -53,9 +53,9 @@ fn apply(ctx: &Ctx, board: &Board, change: &Change) {
     let agent = change.agent();
     match change {
         Change::Rejected { zid, .. } => {
-            tracing::warn!(%agent, %zid, "a second agent uses the name `{agent}`: its samples are refused");
+            tracing::warn!(agent = %ctx.agent, member = %agent, %zid, "a second agent uses the name `{agent}`: its samples are refused");
         }
-        _ => tracing::info!(%agent, "team: {}", change.kind()),
+        _ => tracing::info!(agent = %ctx.agent, member = %agent, "team: {} {agent}", change.kind()),
     }
     let zid = ctx.membership.lock().zid_of(agent).map(str::to_string);
     for stream in ctx.streams.lock().values().filter(|s| s.owner == agent) {

@@ -31,7 +31,9 @@ pub struct StreamTracker {
     expected_type: &'static str,
     /// The owner's session, once known: samples from another session are an impostor's.
     owner_zid: Option<String>,
-    next_seq: Option<u64>,
+    /// The next sequence number expected, and the session numbering it: a session that comes
+    /// back after a partition continues its numbering (gaps are counted), a new one starts anew.
+    next_seq: Option<(String, u64)>,
     status: LinkStatus,
     last_log: Option<Instant>,
 }
@@ -75,8 +77,10 @@ impl StreamTracker {
                 attachment.type_name, self.expected_type
             ));
         }
-        match self.next_seq {
-            Some(next) if attachment.seq < next => Verdict::Duplicate,
+        match &self.next_seq {
+            Some((zid, next)) if *zid == attachment.zid && attachment.seq < *next => {
+                Verdict::Duplicate
+            }
             _ => Verdict::Accept,
         }
     }
@@ -86,23 +90,25 @@ impl StreamTracker {
         if self.owner_zid.is_none() {
             self.owner_zid = Some(attachment.zid.clone());
         }
-        if let Some(next) = self.next_seq {
-            self.status.dropped += attachment.seq.saturating_sub(next) as i64;
+        if let Some((zid, next)) = &self.next_seq {
+            if *zid == attachment.zid {
+                self.status.dropped += attachment.seq.saturating_sub(*next) as i64;
+            }
         }
-        self.next_seq = Some(attachment.seq.saturating_add(1));
+        self.next_seq = Some((attachment.zid.clone(), attachment.seq.saturating_add(1)));
         self.status.received += 1;
         self.status.state = link_state::LIVE.into();
         self.status.detail.clear();
     }
 
-    /// The owner opened a queue stream: items come from now on, numbered by its queue.
+    /// The owner opened a queue stream: items come from now on, numbered by its queue (a
+    /// stream reopened after a partition goes on with the same numbers, so its gaps count).
     pub fn opened(&mut self, zid: &str) {
         if self.owner_zid.as_deref().is_some_and(|z| z != zid) {
             self.reject(format!("an opening from session {zid}, not the owner's"));
             return;
         }
         self.owner_zid = Some(zid.to_string());
-        self.next_seq = None;
         if self.status.state != link_state::BROKEN {
             self.status.state = link_state::LIVE.into();
         }
@@ -132,15 +138,11 @@ impl StreamTracker {
             self.status.state = link_state::STALE.into();
         }
         self.owner_zid = None;
-        self.next_seq = None;
     }
 
-    /// The owner is (again) the session `zid`: a new session numbers its samples afresh.
+    /// The owner is (again) the session `zid`.
     pub fn owner_is(&mut self, zid: &str) {
-        if self.owner_zid.as_deref() != Some(zid) {
-            self.owner_zid = Some(zid.to_string());
-            self.next_seq = None;
-        }
+        self.owner_zid = Some(zid.to_string());
     }
 
     /// Whether a rejection may be logged now (at most once per [`LOG_EVERY`]).
@@ -234,6 +236,21 @@ mod tests {
         assert!(
             matches!(t.on_sample(&att(1, "f64", "z2")), Verdict::Reject(_)),
             "z3 owns the name now"
+        );
+    }
+
+    #[test]
+    fn a_session_back_from_a_partition_has_its_losses_counted() {
+        let mut t = StreamTracker::new("petrel://a/m/out/q", "f64");
+        t.owner_is("z1");
+        t.on_sample(&att(4, "f64", "z1"));
+        t.owner_left();
+        t.owner_is("z1");
+        assert_eq!(t.on_sample(&att(9, "f64", "z1")), Verdict::Accept);
+        assert_eq!(
+            t.status().dropped,
+            4,
+            "items 5..=8 were lost during the partition"
         );
     }
 

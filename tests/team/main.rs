@@ -3,5 +3,7 @@
 
 mod links;
 mod membership;
+mod partition;
+mod processes;
 mod support;
 mod writes;

@@ -3,7 +3,11 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use petrel::actors::{Agent, ConfigFile, PropertyHandle, PropertyType};
+use petrel::actors::team::LinkStatus;
+use petrel::actors::{
+    Agent, ConfigFile, Context, Input, Module, ModuleRegistry, Ports, PropertyHandle, PropertyType,
+    Schedule,
+};
 use petrel::team::Team;
 
 /// How long any wait in these tests may take before the test fails.
@@ -46,6 +50,37 @@ pub fn agent_config(
     )
 }
 
+/// Built-in module types plus `test.probe`.
+pub fn registry() -> ModuleRegistry {
+    let mut r = petrel::Petrel::new().registry().clone();
+    r.register::<Probe>();
+    r
+}
+
+/// `test.probe`: inputs to link to other agents' properties, so a test can watch them
+/// (`in/status` for a link status, `in/value` for a number).
+pub struct Probe {
+    _status: Input<LinkStatus>,
+    _value: Input<f64>,
+}
+
+impl Module for Probe {
+    const TYPE: &'static str = "test.probe";
+    const DESCRIPTION: &'static str = "Inputs for a test to watch.";
+    fn declare(ports: &mut Ports) -> Self {
+        Probe {
+            _status: ports.input("in/status", LinkStatus::default(), "a link status"),
+            _value: ports.input("in/value", 0.0, "a number"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new()
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
 /// A running agent and its team membership.
 pub struct Member {
     pub agent: Agent,
@@ -56,7 +91,7 @@ pub struct Member {
 pub async fn start(config: &str) -> Member {
     let file = ConfigFile::parse("team-test.ron", config)
         .unwrap_or_else(|e| panic!("config should parse:\n{e}\n{config}"));
-    let registry = petrel::Petrel::new().registry().clone();
+    let registry = registry();
     let agent = Agent::start(&file, &registry)
         .await
         .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
