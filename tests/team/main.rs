@@ -5,5 +5,7 @@ mod links;
 mod membership;
 mod partition;
 mod processes;
+mod rogue;
+mod scale;
 mod support;
 mod writes;

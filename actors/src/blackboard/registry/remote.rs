@@ -84,7 +84,7 @@ impl Registry {
             url: source.to_string(),
             qos: Some(qos),
         });
-        self.resolve();
+        self.resolve(&from);
         self.remote.insert(RemoteLink {
             input: from,
             source,
