@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+pub mod team;
+
 use petrel::actors::{
     Agent, ConfigFile, Context, Image, Input, Module, ModuleRegistry, Output, Ports, QueueReader,
     QueueWriter, Schedule,
