@@ -62,7 +62,7 @@ mod text;
 pub use analysis::{check, CheckReport, Finding};
 pub use condition::{parse_condition, Cond, CondError};
 pub use dot::to_dot;
-pub use error::PlanError;
+pub use error::{PlanError, MAX_DEPTH};
 pub use exec::{step, CallRecord, Environment, PlanState, PlanStatus, StepReport};
 pub use label::{split_label, CallKind};
 pub use load::{compile_to_pnml, load_plan, LoadedPlan};
