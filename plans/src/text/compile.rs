@@ -315,6 +315,7 @@ pub fn compile_text(
         net.raw.places[end].label = "goal".into();
         net.goal = Some(end);
     }
+    drop(items); // the net holds everything from here on
     for (t, label, at) in std::mem::take(&mut net.gotos) {
         let Some(&p) = net.labels.get(&label) else {
             return Err(syntax_error(
