@@ -382,3 +382,27 @@ fn a_mission_runs_to_its_goal_on_one_worker_thread() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(text(&refused.stderr).contains("'--workers <WORKERS>'"));
 }
+
+#[test]
+fn plan_check_stops_at_max_states_and_says_how_to_go_further() {
+    let out = petrel(&[
+        "plan",
+        "check",
+        "plans/tests/fixtures/delivery.plan",
+        "--max-states",
+        "3",
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("(3 markings explored, incomplete)")
+            && stdout.contains("warning[incomplete]: stopped after exploring 3 markings (the limit); raise --max-states"),
+        "{stdout}"
+    );
+    let full = petrel(&["plan", "check", "plans/tests/fixtures/delivery.plan"]);
+    assert!(
+        !text(&full.stdout).contains("incomplete"),
+        "{}",
+        text(&full.stdout)
+    );
+}

@@ -150,6 +150,9 @@ struct Parser {
     toks: Vec<(usize, Tok)>,
     pos: usize,
     end_col: usize,
+    /// Parentheses open around the current token: the parser recurses once per level, so the
+    /// level is bounded by [`crate::MAX_DEPTH`].
+    depth: usize,
 }
 
 impl Parser {
@@ -176,8 +179,13 @@ impl Parser {
                 Ok(Cond::Atom(w))
             }
             Some((_, Tok::Open)) => {
+                if self.depth == crate::MAX_DEPTH {
+                    return self.err(format!("nesting deeper than {} levels", crate::MAX_DEPTH));
+                }
+                self.depth += 1;
                 self.pos += 1;
                 let c = self.compound()?;
+                self.depth -= 1;
                 match self.toks.get(self.pos) {
                     Some((_, Tok::Close)) => {
                         self.pos += 1;
@@ -227,6 +235,7 @@ pub fn parse_condition(text: &str) -> Result<Cond<String>, CondError> {
         toks,
         pos: 0,
         end_col,
+        depth: 0,
     };
     let cond = match p.toks.first() {
         None => return Ok(Cond::True),

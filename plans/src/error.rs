@@ -6,6 +6,12 @@
 
 use std::path::PathBuf;
 
+/// How deeply a plan input may nest: blocks and conditionals of a text plan, parentheses of a
+/// condition, elements of a PNML file. Deeper input is refused with [`PlanError::TooDeep`] (or,
+/// for a condition, a [`crate::CondError`]) at the first level too many, before any recursion
+/// could exhaust the stack of the thread reading it; real plans stay far below it.
+pub const MAX_DEPTH: usize = 256;
+
 /// Anything that can go wrong while reading, compiling or loading a plan, a
 /// rules file or a simulation script.
 #[derive(Debug, thiserror::Error)]
@@ -80,6 +86,19 @@ pub enum PlanError {
         column: u32,
         /// What was found and what was expected.
         message: String,
+    },
+    /// The input nests deeper than [`MAX_DEPTH`] levels (text plan blocks and conditionals,
+    /// PNML elements); the position is the first level too many.
+    #[error("{file}:{line}:{column}: nesting deeper than {limit} levels")]
+    TooDeep {
+        /// The file.
+        file: String,
+        /// 1-based line.
+        line: u32,
+        /// 1-based column.
+        column: u32,
+        /// The limit, [`MAX_DEPTH`].
+        limit: usize,
     },
     /// A bad line in a simulation script.
     #[error("{file}:{line}: {message}")]

@@ -96,6 +96,9 @@ pub struct PlanState {
     tokens: Vec<u32>,
     marked: BTreeSet<u32>,
     subs: Vec<Option<Box<PlanState>>>,
+    /// The executables that are sub-plans (the `Some`s of `subs`), so that walking the
+    /// sub-plan states does not cost the number of executables.
+    sub_execs: Vec<usize>,
     reported: HashSet<String>,
     scratch: Scratch,
 }
@@ -118,15 +121,17 @@ impl PlanState {
             .filter(|(_, t)| **t > 0)
             .map(|(i, _)| i as u32)
             .collect();
-        let subs = plan
+        let subs: Vec<_> = plan
             .executables()
             .iter()
             .map(|e| e.subplan.as_ref().map(|sp| Box::new(PlanState::new(sp))))
             .collect();
+        let sub_execs = (0..subs.len()).filter(|&e| subs[e].is_some()).collect();
         PlanState {
             tokens,
             marked,
             subs,
+            sub_execs,
             reported: HashSet::new(),
             scratch: Scratch::default(),
         }
@@ -200,6 +205,55 @@ impl PlanState {
         );
         ex.sort_unstable();
         ex.dedup();
+    }
+}
+
+/// The analysis' view of a state: its marking as a compact key, and back.
+impl PlanState {
+    /// Appends the marking: the number of marked places, then `place, tokens` for each in
+    /// place order, then each sub-plan's own key in executable order. Equal states give equal
+    /// keys, and a key costs what is marked, not the net size.
+    pub(crate) fn encode(&self, out: &mut Vec<u32>) {
+        out.push(self.marked.len() as u32);
+        for &p in &self.marked {
+            out.extend([p, self.tokens[p as usize]]);
+        }
+        for &e in &self.sub_execs {
+            if let Some(sub) = &self.subs[e] {
+                sub.encode(out);
+            }
+        }
+    }
+
+    /// Sets the marking to `key` (from [`PlanState::encode`] on a state of the same plan),
+    /// touching only the places marked before and after; returns what follows the key.
+    pub(crate) fn decode<'k>(&mut self, key: &'k [u32]) -> &'k [u32] {
+        for &p in &self.marked {
+            self.tokens[p as usize] = 0;
+        }
+        self.marked.clear();
+        let n = key[0] as usize;
+        for pair in key[1..1 + 2 * n].chunks_exact(2) {
+            self.tokens[pair[0] as usize] = pair[1];
+            self.marked.insert(pair[0]);
+        }
+        let mut rest = &key[1 + 2 * n..];
+        for &e in &self.sub_execs {
+            if let Some(sub) = &mut self.subs[e] {
+                rest = sub.decode(rest);
+            }
+        }
+        rest
+    }
+
+    /// Whether some transition has the tokens it needs (guards aside).
+    pub(crate) fn token_enabled(&self, plan: &Plan) -> bool {
+        let hot = plan.hot();
+        self.marked.iter().any(|&p| {
+            plan.output_transitions(p as usize)
+                .iter()
+                .any(|&t| has_tokens(self, hot.trans[t as usize].inputs(&hot.arcs)))
+        })
     }
 }
 

@@ -39,7 +39,8 @@
 //!   place label are errors. A guard glued to a call (`A.end[x]`) is accepted.
 //! * `check`: a missing goal place, no initial token and a transition
 //!   without inputs are errors; dead transitions, dead-end places, places
-//!   that may hold several tokens, deadlocks and an unreachable goal marking
+//!   that may hold several tokens, deadlocks, livelocks (markings from which
+//!   neither goal nor fail can be reached) and an unreachable goal marking
 //!   are warnings.
 //! * Execution rules only apply to text plans (an error with a `.pnml`).
 #![warn(missing_docs)]
@@ -59,10 +60,10 @@ mod pnml;
 mod simulate;
 mod text;
 
-pub use analysis::{check, CheckReport, Finding};
+pub use analysis::{check, check_with, CheckOptions, CheckReport, Finding, DEFAULT_MAX_STATES};
 pub use condition::{parse_condition, Cond, CondError};
 pub use dot::to_dot;
-pub use error::PlanError;
+pub use error::{PlanError, MAX_DEPTH};
 pub use exec::{step, CallRecord, Environment, PlanState, PlanStatus, StepReport};
 pub use label::{split_label, CallKind};
 pub use load::{compile_to_pnml, load_plan, LoadedPlan};

@@ -1,6 +1,7 @@
 //! A deterministic scripted simulator.
 //!
-//! Script lines (`#` starts a comment, blank lines are ignored):
+//! Script lines (blank lines are ignored; a word starting with `#` starts a comment, so names
+//! may contain `#` anywhere else, as in `robot_0#pathLeft`; any name without spaces works):
 //! * `finish A N`: `A.finished` is true once `A` was stepped `N` times since
 //!   its last start (default 2 for unlisted actions; `-1` = never);
 //! * `fail A N`: `A.failed` likewise (default never);
@@ -42,8 +43,7 @@ impl Script {
                 line: i as u32 + 1,
                 message,
             };
-            let line = line.split('#').next().unwrap_or("").trim();
-            let words: Vec<&str> = line.split_whitespace().collect();
+            let words = statement(line);
             match words.as_slice() {
                 [] => {}
                 [kw @ ("finish" | "fail"), name, n] => {
@@ -60,13 +60,22 @@ impl Script {
                 }
                 _ => {
                     return Err(err(format!(
-                        "cannot read '{line}'; expected 'finish ACTION N', 'fail ACTION N' or 'cond NAME FROM TO'"
+                        "cannot read '{}'; expected 'finish ACTION N', 'fail ACTION N' or 'cond NAME FROM TO'", words.join(" ")
                     )))
                 }
             }
         }
         Ok(s)
     }
+}
+
+/// The words of a script line before its comment: the first word starting with `#` and the
+/// rest of the line. Names never start with `#` (text-plan actions and condition atoms start
+/// with a letter, a digit or `_`), but they may contain it, e.g. a robot prefix `robot_0#go`.
+fn statement(line: &str) -> Vec<&str> {
+    line.split_whitespace()
+        .take_while(|w| !w.starts_with('#'))
+        .collect()
 }
 
 /// The [`Environment`] the simulator runs a plan against.

@@ -2,7 +2,7 @@
 mod common;
 
 use common::*;
-use petrel_plans::{check, compile_text, load_plan, to_dot};
+use petrel_plans::{check, check_with, compile_text, load_plan, to_dot, CheckOptions};
 
 fn codes(r: &petrel_plans::CheckReport) -> (Vec<&str>, Vec<&str>) {
     (
@@ -140,4 +140,68 @@ fn dot_output() {
     );
     assert!(d.contains("  p2 -> t0;\n  t0 -> p0;\n"), "{d}");
     assert!(d.ends_with("}\n"));
+}
+
+#[test]
+fn livelocks_are_reported_with_a_witness() {
+    // The y branch loops on b forever: from there neither goal nor fail can be reached.
+    let p = compile_text(
+        "a; <x ? c : y ? LABEL_l; b; GOTO_LABEL_l>",
+        "t.plan",
+        "t",
+        None,
+    )
+    .unwrap();
+    let r = check(&p);
+    assert!(r.complete && r.is_ok(), "{r}");
+    let live: Vec<&str> = r
+        .warnings
+        .iter()
+        .filter(|w| w.code == "livelock")
+        .map(|w| w.message.as_str())
+        .collect();
+    assert_eq!(live.len(), 1, "{r}");
+    assert!(
+        live[0].starts_with("from {'X6': 1} the plan can never reach its goal or fail: it stays among 3 markings forever; reached by step 1: t0 ('a.start'); step 2: t1 ('a.end'); step 3: t5 ('[y]')"),
+        "{}",
+        live[0]
+    );
+    // Without the loop there is none.
+    let p = compile_text("a; <x ? c : y ? b>", "t.plan", "t", None).unwrap();
+    assert!(!check(&p).warnings.iter().any(|w| w.code == "livelock"));
+}
+
+#[test]
+fn a_linear_plan_has_one_marking_per_place() {
+    let n = 20_000;
+    let src: Vec<String> = (0..n).map(|i| format!("a{i}")).collect();
+    let p = compile_text(&src.join("; "), "l.plan", "l", None).unwrap();
+    let r = check(&p);
+    assert_eq!(codes(&r), (vec![], vec![]), "{r}");
+    assert!(r.complete);
+    assert_eq!(r.states, 2 * n + 1);
+}
+
+#[test]
+fn the_budget_stops_wide_plans_with_a_message() {
+    let branches: Vec<String> = (0..12).map(|i| format!("{{ a{i}; b{i} }}")).collect();
+    let p = compile_text(&branches.join(" || "), "w.plan", "w", None).unwrap();
+    let r = check_with(&p, &CheckOptions { max_states: 5_000 });
+    assert!(!r.complete);
+    assert_eq!(r.states, 5_000);
+    assert_eq!(r.warnings[0].code, "incomplete", "{r}");
+    assert_eq!(
+        r.warnings[0].message,
+        "stopped after exploring 5000 markings (the limit); raise --max-states to explore further; the findings below may be partial"
+    );
+    assert!(
+        r.to_string()
+            .contains("(5000 markings explored, incomplete)"),
+        "{r}"
+    );
+    // Findings that need the whole graph are not given.
+    assert!(!r
+        .warnings
+        .iter()
+        .any(|w| w.code == "dead-transition" || w.code == "livelock"));
 }

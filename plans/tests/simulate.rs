@@ -114,3 +114,31 @@ fn script_errors_name_the_line() {
         .to_string();
     assert_eq!(e, "s.txt:1: 'z' is not a step number");
 }
+
+#[test]
+fn scripts_accept_every_name_a_plan_can_contain() {
+    // Multi-robot plans prefix names with `robot#`; names may also contain dots.
+    let p = petrel_plans::compile_text(
+        "robot_0#pathLeft; robot_1#go.to_2; <robot_0#door.open ? x : robot_1@hall ? y>",
+        "m.plan",
+        "m",
+        None,
+    )
+    .unwrap();
+    let script = "# two robots\nfinish robot_0#pathLeft 3   # slower than the default 2\n\
+                  finish robot_1#go.to_2 1\ncond robot_1@hall 0 100 #comment\n";
+    let (out, status) = lines(&p, script, 100);
+    assert_eq!(status, PlanStatus::Goal);
+    let step_of = |call: &str| {
+        out.iter()
+            .position(|l| l.contains(&format!("\"{call}\"")))
+            .unwrap_or_else(|| panic!("no {call} in {out:?}"))
+    };
+    // Started at step 1, stepped at 2, 3, 4: finished after 3 steps.
+    assert_eq!(step_of("robot_0#pathLeft.end"), 4);
+    assert_eq!(step_of("robot_1#go.to_2.end"), 6);
+    assert!(out.iter().any(|l| l.contains("\"y.start\"")), "{out:?}");
+    assert!(!out.iter().any(|l| l.contains("\"x.start\"")), "{out:?}");
+    let e = Script::parse("finish #x 2 3", "s").unwrap_err().to_string();
+    assert!(e.starts_with("s:1: cannot read 'finish'"), "{e}");
+}

@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use clap::Subcommand;
 use petrel_plans::{
-    check, compile_to_pnml, load_plan, simulate, to_dot, LoadedPlan, PlanStatus, Script,
-    DEFAULT_MAX_STEPS,
+    check_with, compile_to_pnml, load_plan, simulate, to_dot, CheckOptions, LoadedPlan, PlanStatus,
+    Script, DEFAULT_MAX_STATES, DEFAULT_MAX_STEPS,
 };
 
 use super::EXIT_BAD_INPUT;
@@ -25,6 +25,9 @@ pub(crate) enum PlanCommand {
         /// Execution rules for a text plan.
         #[arg(long)]
         rules: Option<PathBuf>,
+        /// Markings explored at most; beyond, the report is marked incomplete.
+        #[arg(long, default_value_t = DEFAULT_MAX_STATES)]
+        max_states: usize,
     },
     /// Prints the plan as a Graphviz graph (`petrel plan dot P | dot -Tsvg > p.svg`).
     Dot {
@@ -64,8 +67,12 @@ pub(crate) enum PlanCommand {
 
 pub(crate) fn run(command: PlanCommand) -> ExitCode {
     match command {
-        PlanCommand::Check { plan, rules } => with_plan(&plan, rules.as_deref(), |loaded| {
-            let report = check(&loaded.plan);
+        PlanCommand::Check {
+            plan,
+            rules,
+            max_states,
+        } => with_plan(&plan, rules.as_deref(), |loaded| {
+            let report = check_with(&loaded.plan, &CheckOptions { max_states });
             print!("{report}");
             if report.is_ok() {
                 ExitCode::SUCCESS

@@ -32,6 +32,8 @@ mod never;
 mod parse;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_depth;
 mod types;
 mod value;
 
@@ -42,6 +44,13 @@ pub use never::never_true;
 pub use parse::{parse, Ast, AstKind, BinOp, Func};
 pub use types::{Ty, TypeEnv};
 pub use value::Value;
+
+/// How deeply an expression may nest: parentheses, function calls, `not`/`!`, unary `-`, and
+/// the operators of one chain (`a + b + c` is two levels) and field accesses (`p.a.b`) each
+/// count one level. [`parse`] refuses deeper input with an error at the first level too many
+/// ("nesting deeper than 256 levels"), so neither it nor the checker and evaluator, which
+/// recurse over the tree, can exhaust the stack of the thread running them.
+pub const MAX_DEPTH: usize = 256;
 
 /// A byte range of the source.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 //! `+ -`, `* /`, unary `-`, field access `.name`, then literals, paths, calls and parentheses.
 
 use super::lexer::{lex, Tok};
-use super::{ExprError, Span};
+use super::{ExprError, Span, MAX_DEPTH};
 
 /// A binary operator.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -122,7 +122,12 @@ pub enum AstKind {
 /// Parses one expression; the whole source must be consumed.
 pub fn parse(src: &str) -> Result<Ast, ExprError> {
     let toks = lex(src)?;
-    let mut p = Parser { src, toks, pos: 0 };
+    let mut p = Parser {
+        src,
+        toks,
+        pos: 0,
+        depth: 0,
+    };
     let ast = p.or()?;
     match p.toks.get(p.pos) {
         None => Ok(ast),
@@ -133,10 +138,21 @@ pub fn parse(src: &str) -> Result<Ast, ExprError> {
     }
 }
 
+/// Precedences of [`Parser::expr`], loosest first.
+const OR: u8 = 1;
+const AND: u8 = 2;
+const NOT: u8 = 3;
+const CMP: u8 = 4;
+const ADD: u8 = 5;
+const MUL: u8 = 6;
+
 struct Parser<'a> {
     src: &'a str,
     toks: Vec<(Tok, Span)>,
     pos: usize,
+    /// Levels open at the current token (see [`MAX_DEPTH`]): the parser recurses once per
+    /// parenthesis, call, `not` and `-`, and later passes recurse once per tree level.
+    depth: usize,
 }
 
 fn show(t: &Tok) -> String {
@@ -152,6 +168,19 @@ fn show(t: &Tok) -> String {
 impl Parser<'_> {
     fn err(&self, span: Span, msg: impl Into<String>) -> ExprError {
         ExprError::at(self.src, span.start, msg)
+    }
+
+    /// Opens one more level at `span`; closed by `leave`.
+    fn enter(&mut self, span: Span) -> Result<(), ExprError> {
+        if self.depth == MAX_DEPTH {
+            return Err(self.err(span, format!("nesting deeper than {MAX_DEPTH} levels")));
+        }
+        self.depth += 1;
+        Ok(())
+    }
+
+    fn leave(&mut self, levels: usize) {
+        self.depth -= levels;
     }
 
     fn end_span(&self) -> Span {
@@ -186,42 +215,73 @@ impl Parser<'_> {
         }
     }
 
-    fn binary(
-        &mut self,
-        ops: &[&str],
-        next: fn(&mut Self) -> Result<Ast, ExprError>,
-        chain: bool,
-    ) -> Result<Ast, ExprError> {
-        let mut lhs = next(self)?;
-        while let Some((op, s)) = self.peek_op(ops) {
+    /// The binary operator at the current token, with its precedence (tighter is higher).
+    fn peek_binary(&self) -> Option<(BinOp, u8, Span)> {
+        let (op, s) = self.peek_op(&[
+            "||", "or", "&&", "and", "<", "<=", ">", ">=", "==", "!=", "+", "-", "*", "/",
+        ])?;
+        let (op, prec) = match op {
+            "||" | "or" => (BinOp::Or, OR),
+            "&&" | "and" => (BinOp::And, AND),
+            "<" => (BinOp::Lt, CMP),
+            "<=" => (BinOp::Le, CMP),
+            ">" => (BinOp::Gt, CMP),
+            ">=" => (BinOp::Ge, CMP),
+            "==" => (BinOp::Eq, CMP),
+            "!=" => (BinOp::Ne, CMP),
+            "+" => (BinOp::Add, ADD),
+            "-" => (BinOp::Sub, ADD),
+            "*" => (BinOp::Mul, MUL),
+            _ => (BinOp::Div, MUL),
+        };
+        Some((op, prec, s))
+    }
+
+    /// An expression whose binary operators bind at least as tightly as `min` (precedence
+    /// climbing: one function for every level keeps the recursion per parenthesis short).
+    fn expr(&mut self, min: u8) -> Result<Ast, ExprError> {
+        let mut lhs = match self.peek_op(&["!", "not"]) {
+            Some((_, s)) if min <= NOT => {
+                self.enter(s)?;
+                self.pos += 1;
+                let inner = self.expr(NOT)?;
+                self.leave(1);
+                Ast {
+                    span: s.to(inner.span),
+                    kind: AstKind::Not(Box::new(inner)),
+                }
+            }
+            _ => self.unary()?,
+        };
+        // Each operator of a chain puts the chain's start one tree level deeper.
+        let mut links = 0;
+        let mut comparison: Option<Span> = None;
+        while let Some((op, prec, s)) = self.peek_binary() {
+            if prec < min {
+                break;
+            }
+            if let (Some(first), CMP) = (comparison, prec) {
+                return Err(self.chained(first, s));
+            }
+            comparison = (prec == CMP).then_some(s);
+            self.enter(s)?;
+            links += 1;
             self.pos += 1;
-            let rhs = next(self)?;
-            let op = match op {
-                "||" | "or" => BinOp::Or,
-                "&&" | "and" => BinOp::And,
-                "+" => BinOp::Add,
-                "-" => BinOp::Sub,
-                "*" => BinOp::Mul,
-                "/" => BinOp::Div,
-                "<" => BinOp::Lt,
-                "<=" => BinOp::Le,
-                ">" => BinOp::Gt,
-                ">=" => BinOp::Ge,
-                "==" => BinOp::Eq,
-                _ => BinOp::Ne,
-            };
+            let rhs = self.expr(prec + 1)?;
             let span = lhs.span.to(rhs.span);
             lhs = Ast {
                 kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)),
                 span,
             };
-            if !chain {
-                if let Some((o, s2)) = self.peek_op(ops) {
-                    return Err(self.err(s2, format!("comparisons do not chain: use `and` between them (before `{o}`, after the comparison at column {})", self.col(s))));
-                }
-            }
         }
+        self.leave(links);
         Ok(lhs)
+    }
+
+    fn chained(&self, first: Span, second: Span) -> ExprError {
+        let o = &self.src[second.start..second.end];
+        let msg = format!("comparisons do not chain: use `and` between them (before `{o}`, after the comparison at column {})", self.col(first));
+        self.err(second, msg)
     }
 
     fn col(&self, s: Span) -> u32 {
@@ -229,50 +289,36 @@ impl Parser<'_> {
     }
 
     fn or(&mut self) -> Result<Ast, ExprError> {
-        self.binary(&["||", "or"], Self::and, true)
+        self.expr(OR)
     }
 
-    fn and(&mut self) -> Result<Ast, ExprError> {
-        self.binary(&["&&", "and"], Self::not, true)
-    }
-
-    fn not(&mut self) -> Result<Ast, ExprError> {
-        if let Some((_, s)) = self.peek_op(&["!", "not"]) {
-            self.pos += 1;
-            let inner = self.not()?;
-            let span = s.to(inner.span);
-            return Ok(Ast {
-                kind: AstKind::Not(Box::new(inner)),
-                span,
-            });
-        }
-        self.cmp()
-    }
-
-    fn cmp(&mut self) -> Result<Ast, ExprError> {
-        self.binary(&["<", "<=", ">", ">=", "==", "!="], Self::add, false)
-    }
-
-    fn add(&mut self) -> Result<Ast, ExprError> {
-        self.binary(&["+", "-"], Self::mul, true)
-    }
-
-    fn mul(&mut self) -> Result<Ast, ExprError> {
-        self.binary(&["*", "/"], Self::unary, true)
-    }
+    // unary, primary and parenthesised are on the recursive path with expr: the cold parts
+    // (field chains, leaves, errors) live in separate functions so that, in a debug build,
+    // MAX_DEPTH levels of parentheses fit in well under a megabyte of stack.
 
     fn unary(&mut self) -> Result<Ast, ExprError> {
         if let Some((_, s)) = self.peek_op(&["-"]) {
+            self.enter(s)?;
             self.pos += 1;
             let inner = self.unary()?;
+            self.leave(1);
             let span = s.to(inner.span);
             return Ok(Ast {
                 kind: AstKind::Neg(Box::new(inner)),
                 span,
             });
         }
-        let mut base = self.primary()?;
-        while self.peek_op(&["."]).is_some() {
+        let base = self.primary()?;
+        self.fields(base)
+    }
+
+    /// `base.name.name...`
+    #[inline(never)]
+    fn fields(&mut self, mut base: Ast) -> Result<Ast, ExprError> {
+        let mut links = 0;
+        while let Some((_, dot)) = self.peek_op(&["."]) {
+            self.enter(dot)?;
+            links += 1;
             self.pos += 1;
             match self.toks.get(self.pos).cloned() {
                 Some((Tok::Word(name), s)) => {
@@ -292,6 +338,7 @@ impl Parser<'_> {
                 None => return Err(self.err(self.end_span(), "expected a field name after `.`")),
             }
         }
+        self.leave(links);
         Ok(base)
     }
 
@@ -300,28 +347,46 @@ impl Parser<'_> {
             return Err(self.err(self.end_span(), "expected a value, found the end"));
         };
         self.pos += 1;
+        match tok {
+            Tok::Op("(") => self.parenthesised(span),
+            Tok::Word(w) => match Func::from_name(&w) {
+                Some(f) => self.call(f, span),
+                None => self.leaf(Tok::Word(w), span),
+            },
+            t => self.leaf(t, span),
+        }
+    }
+
+    /// `( expr )`, after the `(` at `open`.
+    fn parenthesised(&mut self, open: Span) -> Result<Ast, ExprError> {
+        self.enter(open)?;
+        let inner = self.or()?;
+        let close = self.expect(")")?;
+        self.leave(1);
+        Ok(Ast {
+            kind: inner.kind,
+            span: open.to(close),
+        })
+    }
+
+    /// A literal or a property, or the error for any other token.
+    #[inline(never)]
+    fn leaf(&self, tok: Tok, span: Span) -> Result<Ast, ExprError> {
         let kind = match tok {
             Tok::Num(n) => AstKind::Num(n),
             Tok::Str(s) => AstKind::Str(s),
             Tok::Path(p) => AstKind::Path(p),
-            Tok::Op("(") => {
-                let inner = self.or()?;
-                let close = self.expect(")")?;
-                return Ok(Ast { kind: inner.kind, span: span.to(close) });
-            }
             Tok::Word(w) if w == "true" || w == "false" => AstKind::Bool(w == "true"),
-            Tok::Word(w) => match Func::from_name(&w) {
-                Some(f) => return self.call(f, span),
-                None => return Err(self.err(span, format!(
-                    "unknown name `{w}`; expected a property `module/path`, a number, a string, true/false, or a function (abs, min, max, clamp, held, age)"
-                ))),
-            },
+            Tok::Word(w) => return Err(self.err(span, format!(
+                "unknown name `{w}`; expected a property `module/path`, a number, a string, true/false, or a function (abs, min, max, clamp, held, age)"
+            ))),
             t => return Err(self.err(span, format!("expected a value, found {}", show(&t)))),
         };
         Ok(Ast { kind, span })
     }
 
     fn call(&mut self, f: Func, name: Span) -> Result<Ast, ExprError> {
+        self.enter(name)?;
         self.expect("(")?;
         let mut args = Vec::new();
         if self.peek_op(&[")"]).is_none() {
@@ -334,6 +399,7 @@ impl Parser<'_> {
             }
         }
         let close = self.expect(")")?;
+        self.leave(1);
         Ok(Ast {
             kind: AstKind::Call(f, args),
             span: name.to(close),

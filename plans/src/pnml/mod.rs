@@ -1,5 +1,6 @@
 //! PNML as PNP's editor (JARP) and generator write it.
 
+mod depth;
 mod read;
 mod write;
 

@@ -19,6 +19,7 @@ use crate::model::{Comment, Plan, Position};
 /// no `PLAN NAME:` comment gives one (the loader passes the file name up to
 /// its first dot). Sub-plans are not resolved here (see [`crate::load_plan`]).
 pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, PlanError> {
+    super::depth::check_depth(text, file)?;
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
         PlanError::Xml {
@@ -57,8 +58,26 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
     Plan::build(raw, file)
 }
 
-fn read_nodes(parent: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
-    for n in parent.children().filter(Node::is_element) {
+/// Reads the nodes of `net` and of its pages, in document order. Pages may nest; they are
+/// walked with an explicit stack, not by recursion.
+fn read_nodes(net: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
+    let mut stack = vec![net.children()];
+    while let Some(children) = stack.last_mut() {
+        match children.next() {
+            None => {
+                stack.pop();
+            }
+            Some(n) if n.tag_name().name() == "page" => stack.push(n.children()),
+            Some(n) if n.is_element() => read_node(n, raw, file)?,
+            Some(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// Reads one place, transition, arc or comment (other elements are ignored).
+fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
+    {
         let id = || n.attribute("id").unwrap_or("").to_string();
         let need_id = |kind: &str| -> Result<String, PlanError> {
             match n.attribute("id") {
@@ -71,7 +90,6 @@ fn read_nodes(parent: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanErro
             }
         };
         match n.tag_name().name() {
-            "page" => read_nodes(n, raw, file)?,
             "place" => {
                 let id = need_id("place")?;
                 let initial = match value(n, &["initialMarking", "value"]) {

@@ -7,6 +7,7 @@ use super::parse::{Item, Parser};
 use super::rules::{parse_rules, Rule, RuleEnd};
 use super::syntax_error;
 use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
+use crate::condition::Cond;
 use crate::error::PlanError;
 use crate::model::Plan;
 
@@ -84,22 +85,14 @@ impl Net<'_> {
         (exec, after)
     }
 
+    // seq, item, choice and parallel recurse once per nesting level: they keep their frames
+    // small (labels and errors are built in separate functions), so a debug build compiles
+    // MAX_DEPTH levels in well under a megabyte of stack.
+
     fn seq(&mut self, mut cur: Option<usize>, items: &[Item]) -> Result<Option<usize>, PlanError> {
         for item in items {
             if let Item::Label { name, at } = item {
-                let here = match cur {
-                    Some(p) => p,
-                    None => self.place(""),
-                };
-                if self.labels.insert(name.clone(), here).is_some() {
-                    return Err(syntax_error(
-                        self.src,
-                        self.file,
-                        *at,
-                        format!("label '{name}' defined twice"),
-                    ));
-                }
-                cur = Some(here);
+                cur = Some(self.label(cur, name, *at)?);
                 continue;
             }
             // Only reachable through a conditional whose branches all jump.
@@ -112,8 +105,73 @@ impl Net<'_> {
         Ok(cur)
     }
 
+    #[inline(never)]
+    fn label(&mut self, cur: Option<usize>, name: &str, at: usize) -> Result<usize, PlanError> {
+        let here = match cur {
+            Some(p) => p,
+            None => self.place(""),
+        };
+        if self.labels.insert(name.to_string(), here).is_some() {
+            return Err(syntax_error(
+                self.src,
+                self.file,
+                at,
+                format!("label '{name}' defined twice"),
+            ));
+        }
+        Ok(here)
+    }
+
     fn item(&mut self, cur: usize, item: &Item) -> Result<Option<usize>, PlanError> {
-        Ok(match item {
+        match item {
+            Item::Choice(branches) => self.choice(cur, branches),
+            Item::Block(body) => self.seq(Some(cur), body),
+            Item::Parallel(branches) => self.parallel(cur, branches),
+            leaf => Ok(self.leaf(cur, leaf)),
+        }
+    }
+
+    fn choice(
+        &mut self,
+        cur: usize,
+        branches: &[(Cond<String>, Vec<Item>)],
+    ) -> Result<Option<usize>, PlanError> {
+        let mut ends = Vec::new();
+        for (cond, body) in branches {
+            let start = self.branch(cur, cond);
+            ends.extend(self.seq(Some(start), body)?);
+        }
+        let merge = self.place("");
+        for e in ends {
+            self.trans(" ", &[e], &[merge]);
+        }
+        Ok(Some(merge))
+    }
+
+    /// A `[COND]` transition from `cur` to a new place, returned.
+    #[inline(never)]
+    fn branch(&mut self, cur: usize, cond: &Cond<String>) -> usize {
+        let start = self.place("");
+        self.trans(&format!("[{cond}]"), &[cur], &[start]);
+        start
+    }
+
+    fn parallel(&mut self, cur: usize, branches: &[Vec<Item>]) -> Result<Option<usize>, PlanError> {
+        let starts: Vec<usize> = branches.iter().map(|_| self.place("")).collect();
+        self.trans("[]", &[cur], &starts);
+        let mut ends = Vec::new();
+        for (s, body) in starts.iter().zip(branches) {
+            ends.extend(self.seq(Some(*s), body)?);
+        }
+        let next = self.place("");
+        self.trans("[]", &ends, &[next]);
+        Ok(Some(next))
+    }
+
+    /// An item without nested items.
+    #[inline(never)]
+    fn leaf(&mut self, cur: usize, item: &Item) -> Option<usize> {
+        match item {
             Item::Action {
                 name,
                 timeout: None,
@@ -139,31 +197,6 @@ impl Net<'_> {
                 self.trans(&format!("{name}.interrupt []"), &[exec, end_w], &[next]);
                 Some(next)
             }
-            Item::Choice(branches) => {
-                let mut ends = Vec::new();
-                for (cond, body) in branches {
-                    let start = self.place("");
-                    self.trans(&format!("[{cond}]"), &[cur], &[start]);
-                    ends.extend(self.seq(Some(start), body)?);
-                }
-                let merge = self.place("");
-                for e in ends {
-                    self.trans(" ", &[e], &[merge]);
-                }
-                Some(merge)
-            }
-            Item::Block(body) => self.seq(Some(cur), body)?,
-            Item::Parallel(branches) => {
-                let starts: Vec<usize> = branches.iter().map(|_| self.place("")).collect();
-                self.trans("[]", &[cur], &starts);
-                let mut ends = Vec::new();
-                for (s, body) in starts.iter().zip(branches) {
-                    ends.extend(self.seq(Some(*s), body)?);
-                }
-                let next = self.place("");
-                self.trans("[]", &ends, &[next]);
-                Some(next)
-            }
             Item::Goto { label, at } => {
                 let t = self.trans(" ", &[cur], &[]);
                 self.gotos.push((t, label.clone(), *at));
@@ -179,8 +212,8 @@ impl Net<'_> {
                 self.trans(" ", &[cur], &[fail]);
                 None
             }
-            Item::Label { .. } => Some(cur),
-        })
+            Item::Label { .. } | Item::Choice(_) | Item::Block(_) | Item::Parallel(_) => Some(cur),
+        }
     }
 
     fn occurrence(&mut self, name: &str, before: usize, exec: usize, after: usize, rules: &[Rule]) {
@@ -282,6 +315,7 @@ pub fn compile_text(
         net.raw.places[end].label = "goal".into();
         net.goal = Some(end);
     }
+    drop(items); // the net holds everything from here on
     for (t, label, at) in std::mem::take(&mut net.gotos) {
         let Some(&p) = net.labels.get(&label) else {
             return Err(syntax_error(

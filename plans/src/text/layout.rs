@@ -8,42 +8,57 @@ use crate::build::RawNet;
 use crate::model::Position;
 
 pub(crate) fn layout(net: &mut RawNet) {
-    let mut succ: HashMap<&str, Vec<&str>> = HashMap::new();
+    // Nodes by number: places, then transitions; arcs as successor lists.
+    let np = net.places.len();
+    let n = np + net.transitions.len();
+    let ids: HashMap<&str, usize> = net
+        .places
+        .iter()
+        .map(|p| p.id.as_str())
+        .chain(net.transitions.iter().map(|t| t.id.as_str()))
+        .enumerate()
+        .map(|(i, id)| (id, i))
+        .collect();
+    let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
     for a in &net.arcs {
-        succ.entry(a.source.as_str())
-            .or_default()
-            .push(a.target.as_str());
+        if let (Some(&s), Some(&t)) = (ids.get(a.source.as_str()), ids.get(a.target.as_str())) {
+            succ[s].push(t);
+        }
     }
-    let mut depth: HashMap<String, usize> = HashMap::new();
+    let mut depth = vec![usize::MAX; n];
     let mut queue = VecDeque::new();
-    for p in net.places.iter().filter(|p| p.initial > 0) {
-        depth.insert(p.id.clone(), 0);
-        queue.push_back(p.id.as_str());
+    for (i, p) in net.places.iter().enumerate() {
+        if p.initial > 0 && depth[i] == usize::MAX {
+            depth[i] = 0;
+            queue.push_back(i);
+        }
     }
-    while let Some(n) = queue.pop_front() {
-        let d = depth[n];
-        for &s in succ.get(n).map(Vec::as_slice).unwrap_or_default() {
-            if !depth.contains_key(s) {
-                depth.insert(s.to_string(), d + 1);
+    while let Some(i) = queue.pop_front() {
+        for &s in &succ[i] {
+            if depth[s] == usize::MAX {
+                depth[s] = depth[i] + 1;
                 queue.push_back(s);
             }
         }
     }
-    let far = depth.values().max().map_or(0, |d| d + 1);
-    let mut rows: HashMap<usize, usize> = HashMap::new();
-    let mut place = |id: &str| {
-        let d = depth.get(id).copied().unwrap_or(far);
-        let row = rows.entry(d).or_insert(0);
-        *row += 1;
+    let far = depth
+        .iter()
+        .filter(|&&d| d != usize::MAX)
+        .max()
+        .map_or(0, |d| d + 1);
+    let mut rows = vec![0usize; far + 1];
+    let mut place = |i: usize| {
+        let d = depth[i].min(far);
+        rows[d] += 1;
         Some(Position {
             x: 60.0 + 70.0 * d as f64,
-            y: 60.0 * *row as f64,
+            y: 60.0 * rows[d] as f64,
         })
     };
-    for p in &mut net.places {
-        p.position = place(&p.id);
+    for (i, p) in net.places.iter_mut().enumerate() {
+        p.position = place(i);
     }
-    for t in &mut net.transitions {
-        t.position = place(&t.id);
+    for (j, t) in net.transitions.iter_mut().enumerate() {
+        t.position = place(np + j);
     }
 }

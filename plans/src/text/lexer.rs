@@ -32,13 +32,17 @@ impl<'a> Lexer<'a> {
             let rest = &self.src[self.pos..];
             let trimmed = rest.trim_start();
             self.pos += rest.len() - trimmed.len();
-            let at_line_start = self.src[..self.pos]
-                .rsplit('\n')
-                .next()
-                .unwrap_or("")
-                .trim()
-                .is_empty();
-            if trimmed.starts_with('#') && at_line_start {
+            // Only a '#' needs the look back to the line start (which would make lexing a
+            // long one-line plan quadratic if done for every token).
+            let at_line_start = || {
+                self.src[..self.pos]
+                    .rsplit('\n')
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .is_empty()
+            };
+            if trimmed.starts_with('#') && at_line_start() {
                 self.pos += trimmed.find('\n').unwrap_or(trimmed.len());
             } else {
                 return;

@@ -56,3 +56,14 @@ pub(crate) fn syntax_error(
         message: message.into(),
     }
 }
+
+/// The error for input nested deeper than [`crate::MAX_DEPTH`] levels at byte `offset`.
+pub(crate) fn too_deep(src: &str, file: &str, offset: usize) -> crate::PlanError {
+    let (line, column) = line_col(src, offset);
+    crate::PlanError::TooDeep {
+        file: file.to_string(),
+        line,
+        column,
+        limit: crate::MAX_DEPTH,
+    }
+}

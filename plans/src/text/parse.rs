@@ -2,9 +2,9 @@
 
 use super::lexer::{Lexer, Tok};
 use super::rules::{parse_rule, Rule};
-use super::syntax_error;
+use super::{syntax_error, too_deep};
 use crate::condition::{parse_condition, Cond};
-use crate::error::PlanError;
+use crate::error::{PlanError, MAX_DEPTH};
 
 /// A plan item; `at` fields are byte offsets for error messages.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,9 +29,20 @@ pub(crate) enum Item {
     FailPlan,
 }
 
+/// A block or conditional being parsed; `usize` is the byte offset of its `{` or `<`.
+enum Open {
+    /// `{ seq } || { seq } ...`: the branches closed so far.
+    Block(usize, Vec<Vec<Item>>),
+    /// `< COND ? seq : ...`: the branches closed so far and the condition of the open one.
+    Choice(usize, Vec<(Cond<String>, Vec<Item>)>, Cond<String>),
+}
+
 pub(crate) struct Parser<'a> {
     lx: Lexer<'a>,
     file: &'a str,
+    /// Blocks and conditionals open around the current item, at most [`MAX_DEPTH`] (the
+    /// compiler recurses once per level).
+    depth: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -39,7 +50,21 @@ impl<'a> Parser<'a> {
         Parser {
             lx: Lexer::new(src),
             file,
+            depth: 0,
         }
+    }
+
+    /// Opens one more level at byte `at` (a `{` or a `<`); closed by `leave`.
+    fn enter(&mut self, at: usize) -> Result<(), PlanError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(too_deep(self.lx.src, self.file, at));
+        }
+        Ok(())
+    }
+
+    fn leave(&mut self) {
+        self.depth -= 1;
     }
 
     fn err<T>(&self, at: usize, m: impl Into<String>) -> Result<T, PlanError> {
@@ -62,91 +87,133 @@ impl<'a> Parser<'a> {
 
     /// The whole plan.
     pub fn plan(&mut self) -> Result<Vec<Item>, PlanError> {
-        let items = self.seq()?;
+        let items = self.nested()?;
         match self.next()? {
             (_, Tok::End) => Ok(items),
-            (at, t) => self.err(
-                at,
-                format!(
-                    "unexpected {}; expected ';' or the end of the plan",
-                    show(&t)
-                ),
-            ),
+            (at, t) => Err(self.unexpected(at, &t, "';' or the end of the plan")),
         }
     }
 
-    /// Items separated by `;`, up to a token that cannot start an item.
-    fn seq(&mut self) -> Result<Vec<Item>, PlanError> {
+    /// The top-level sequence, up to a token that cannot continue it.
+    ///
+    /// Blocks and conditionals nest, but the parser does not recurse: each open one is a
+    /// [`Open`] on an explicit stack together with the sequence it interrupts, so nesting costs
+    /// heap, not stack; [`MAX_DEPTH`] bounds it for the compiler, which does recurse.
+    fn nested(&mut self) -> Result<Vec<Item>, PlanError> {
+        let mut stack: Vec<(Open, Vec<Item>)> = Vec::new();
         let mut items: Vec<Item> = Vec::new();
+        // Whether the current sequence may go on (at its start, or after a ';').
+        let mut more = true;
         loop {
-            match self.peek()? {
-                (at, Tok::Word(_) | Tok::Punct("<" | "{")) => {
-                    let item = self.item()?;
-                    let jumped = matches!(
-                        items.last(),
-                        Some(Item::Goto { .. } | Item::RestartPlan | Item::FailPlan)
-                    );
-                    if jumped && !matches!(item, Item::Label { .. }) {
-                        return self.err(at, "unreachable: only a LABEL_x may follow a jump");
+            if more {
+                if let (at, Tok::Word(_) | Tok::Punct("<" | "{")) = self.peek()? {
+                    let (_, tok) = self.next()?;
+                    let item = match tok {
+                        Tok::Punct("<") => {
+                            self.enter(at)?;
+                            let cond = self.condition()?;
+                            let open = Open::Choice(at, Vec::new(), cond);
+                            stack.push((open, std::mem::take(&mut items)));
+                            continue;
+                        }
+                        Tok::Punct("{") => {
+                            self.enter(at)?;
+                            stack.push((Open::Block(at, Vec::new()), std::mem::take(&mut items)));
+                            continue;
+                        }
+                        Tok::Word(w) => self.word(at, w)?,
+                        _ => unreachable!("peeked a word, '<' or '{{'"),
+                    };
+                    self.push(&mut items, item, at)?;
+                    more = self.eat(";")?;
+                    continue;
+                }
+            }
+            // The current sequence ends here: close what encloses it.
+            let Some((open, outer)) = stack.last_mut() else {
+                return Ok(items);
+            };
+            let (at, t) = self.next()?;
+            let (item, start) = match open {
+                Open::Block(open_at, branches) => {
+                    if t != Tok::Punct("}") {
+                        return Err(self.unclosed(at, &t, *open_at));
                     }
-                    items.push(item);
-                }
-                _ => return Ok(items),
-            }
-            match self.peek()? {
-                (_, Tok::Punct(";")) => {
-                    self.next()?;
-                }
-                _ => return Ok(items),
-            }
-        }
-    }
-
-    fn item(&mut self) -> Result<Item, PlanError> {
-        let (at, tok) = self.next()?;
-        match tok {
-            Tok::Word(w) => self.word(at, w),
-            Tok::Punct("<") => self.choice(),
-            Tok::Punct("{") => {
-                let mut branches = vec![self.block_rest(at)?];
-                while let (_, Tok::Punct("||")) = self.peek()? {
-                    self.next()?;
-                    match self.next()? {
-                        (at, Tok::Punct("{")) => branches.push(self.block_rest(at)?),
-                        (at, t) => {
-                            return self.err(
-                                at,
-                                format!("unexpected {}; expected '{{' after '||'", show(&t)),
-                            )
+                    branches.push(std::mem::take(&mut items));
+                    if self.eat("||")? {
+                        match self.next()? {
+                            (_, Tok::Punct("{")) => {
+                                more = true;
+                                continue;
+                            }
+                            (at, t) => return Err(self.unexpected(at, &t, "'{' after '||'")),
                         }
                     }
+                    let item = if branches.len() == 1 {
+                        Item::Block(branches.pop().unwrap_or_default())
+                    } else {
+                        Item::Parallel(std::mem::take(branches))
+                    };
+                    (item, *open_at)
                 }
-                Ok(if branches.len() == 1 {
-                    Item::Block(branches.pop().unwrap_or_default())
-                } else {
-                    Item::Parallel(branches)
-                })
-            }
-            t => self.err(
-                at,
-                format!("unexpected {}; expected an action, '<' or '{{'", show(&t)),
-            ),
+                Open::Choice(open_at, branches, cond) => {
+                    branches.push((
+                        std::mem::replace(cond, Cond::True),
+                        std::mem::take(&mut items),
+                    ));
+                    match t {
+                        Tok::Punct(":") => {
+                            *cond = self.condition()?;
+                            more = true;
+                            continue;
+                        }
+                        Tok::Punct(">") => (Item::Choice(std::mem::take(branches)), *open_at),
+                        t => return Err(self.unexpected(at, &t, "';', ':' or '>'")),
+                    }
+                }
+            };
+            items = std::mem::take(outer);
+            stack.pop();
+            self.leave();
+            self.push(&mut items, item, start)?;
+            more = self.eat(";")?;
         }
     }
 
-    fn block_rest(&mut self, open: usize) -> Result<Vec<Item>, PlanError> {
-        let items = self.seq()?;
-        match self.next()? {
-            (_, Tok::Punct("}")) => Ok(items),
-            (at, t) => self.err(
-                at,
-                format!(
-                    "unexpected {}; expected '}}' closing the '{{' at {}",
-                    show(&t),
-                    self.here(open)
-                ),
-            ),
+    /// Appends `item` (starting at byte `at`) to a sequence: only a label may follow a jump.
+    fn push(&self, items: &mut Vec<Item>, item: Item, at: usize) -> Result<(), PlanError> {
+        let jumped = matches!(
+            items.last(),
+            Some(Item::Goto { .. } | Item::RestartPlan | Item::FailPlan)
+        );
+        if jumped && !matches!(item, Item::Label { .. }) {
+            return self.err(at, "unreachable: only a LABEL_x may follow a jump");
         }
+        items.push(item);
+        Ok(())
+    }
+
+    /// Consumes the next token if it is `punct`.
+    fn eat(&mut self, punct: &'static str) -> Result<bool, PlanError> {
+        let found = self.peek()?.1 == Tok::Punct(punct);
+        if found {
+            self.next()?;
+        }
+        Ok(found)
+    }
+
+    fn unexpected(&self, at: usize, t: &Tok, expected: &str) -> PlanError {
+        syntax_error(
+            self.lx.src,
+            self.file,
+            at,
+            format!("unexpected {}; expected {expected}", show(t)),
+        )
+    }
+
+    fn unclosed(&self, at: usize, t: &Tok, open: usize) -> PlanError {
+        let expected = format!("'}}' closing the '{{' at {}", self.here(open));
+        self.unexpected(at, t, &expected)
     }
 
     fn here(&self, at: usize) -> String {
@@ -206,37 +273,24 @@ impl<'a> Parser<'a> {
         })
     }
 
-    fn choice(&mut self) -> Result<Item, PlanError> {
-        let mut branches = Vec::new();
-        loop {
-            let start = self.lx.pos;
-            let Some((base, text)) = self.lx.raw_until('?') else {
-                return self.err(start, "expected 'CONDITION ?' in a conditional plan");
-            };
-            if let Some(bad) = text.find([';', ':', '>', '<']) {
-                return self.err(base + bad, "expected '?' after the condition");
-            }
-            let cond = match parse_condition(text) {
-                Ok(Cond::True) => return self.err(base, "expected a condition before '?'"),
-                Ok(c) => c,
-                Err(e) => {
-                    let col = text
-                        .char_indices()
-                        .nth(e.column - 1)
-                        .map_or(text.len(), |(i, _)| i);
-                    return self.err(base + col, format!("bad condition: {}", e.message));
-                }
-            };
-            branches.push((cond, self.seq()?));
-            match self.next()? {
-                (_, Tok::Punct(":")) => {}
-                (_, Tok::Punct(">")) => return Ok(Item::Choice(branches)),
-                (at, t) => {
-                    return self.err(
-                        at,
-                        format!("unexpected {}; expected ';', ':' or '>'", show(&t)),
-                    )
-                }
+    /// `COND ?` of a conditional.
+    fn condition(&mut self) -> Result<Cond<String>, PlanError> {
+        let start = self.lx.pos;
+        let Some((base, text)) = self.lx.raw_until('?') else {
+            return self.err(start, "expected 'CONDITION ?' in a conditional plan");
+        };
+        if let Some(bad) = text.find([';', ':', '>', '<']) {
+            return self.err(base + bad, "expected '?' after the condition");
+        }
+        match parse_condition(text) {
+            Ok(Cond::True) => self.err(base, "expected a condition before '?'"),
+            Ok(c) => Ok(c),
+            Err(e) => {
+                let col = text
+                    .char_indices()
+                    .nth(e.column - 1)
+                    .map_or(text.len(), |(i, _)| i);
+                self.err(base + col, format!("bad condition: {}", e.message))
             }
         }
     }

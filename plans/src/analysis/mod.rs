@@ -8,20 +8,39 @@
 //! at run time). The result over-approximates what the plan can do, so
 //! "never fires" and "never reaches goal" are sure when the exploration is
 //! complete, and "can hold more than one token" means "may".
+//!
+//! The exploration (`explore.rs`) interns sparse markings and keeps the explored steps in a
+//! petgraph graph, so a linear plan costs linear time and memory; `livelock.rs` finds traps
+//! (markings from which neither goal nor fail can be reached) as bottom strongly connected
+//! components, with a witness path. At most [`CheckOptions::max_states`] markings are kept;
+//! beyond, the report is incomplete and says how to raise the limit.
 
-use std::collections::{HashSet, VecDeque};
+mod explore;
+mod livelock;
+
 use std::fmt;
 
-use crate::exec::{status_of, PlanStatus};
-use crate::model::{Atom, Plan};
+use crate::model::Plan;
+use explore::{explore, top_pairs, Kind, MAX_TOKENS};
 
-/// Markings explored at most.
-const MAX_STATES: usize = 20_000;
-/// A place holding more tokens than this is taken as unbounded.
-const MAX_TOKENS: u32 = 64;
-/// Atoms tried in all combinations in one step; beyond, transitions are
-/// fired one at a time instead.
-const MAX_ATOMS: usize = 10;
+/// The markings [`check`] explores at most, and the default of `petrel plan check
+/// --max-states`: a linear plan of 100,000 actions has about 200,000 markings.
+pub const DEFAULT_MAX_STATES: usize = 500_000;
+
+/// How [`check_with`] explores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CheckOptions {
+    /// Markings explored at most; beyond, the report says so and is incomplete.
+    pub max_states: usize,
+}
+
+impl Default for CheckOptions {
+    fn default() -> Self {
+        CheckOptions {
+            max_states: DEFAULT_MAX_STATES,
+        }
+    }
+}
 
 /// One problem found by [`check`].
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
@@ -107,8 +126,13 @@ fn place_name(plan: &Plan, p: usize) -> String {
 }
 
 /// Checks a plan and its sub-plans (their findings are prefixed with
-/// `sub-plan NAME:`).
+/// `sub-plan NAME:`), exploring at most [`DEFAULT_MAX_STATES`] markings.
 pub fn check(plan: &Plan) -> CheckReport {
+    check_with(plan, &CheckOptions::default())
+}
+
+/// [`check`] with explicit options.
+pub fn check_with(plan: &Plan, options: &CheckOptions) -> CheckReport {
     let mut r = CheckReport {
         plan: plan.name().to_string(),
         ..CheckReport::default()
@@ -117,7 +141,7 @@ pub fn check(plan: &Plan) -> CheckReport {
         match &e.subplan {
             Some(sp) => {
                 r.subplans.push(e.name.clone());
-                let sub = check(sp);
+                let sub = check_with(sp, options);
                 let pre =
                     |f: Finding| finding(f.code, format!("sub-plan {}: {}", e.name, f.message));
                 r.errors.extend(sub.errors.into_iter().map(pre));
@@ -128,7 +152,7 @@ pub fn check(plan: &Plan) -> CheckReport {
     }
     r.conditions = plan.conditions().to_vec();
     structural(plan, &mut r);
-    explore(plan, &mut r);
+    behaviour(plan, options.max_states, &mut r);
     r
 }
 
@@ -169,104 +193,35 @@ fn structural(plan: &Plan, r: &mut CheckReport) {
     }
 }
 
-/// Fires, in document order, every transition in `enabled` that still has
-/// its tokens; returns the successor and whether anything fired.
-fn fire_all(plan: &Plan, m: &[u32], enabled: &[usize], fired: &mut [bool]) -> Option<Vec<u32>> {
-    let mut next = m.to_vec();
-    let mut any = false;
-    for &ti in enabled {
-        let t = &plan.transitions()[ti];
-        if t.inputs.iter().all(|e| next[e.place] >= e.weight) {
-            t.inputs.iter().for_each(|e| next[e.place] -= e.weight);
-            t.outputs
-                .iter()
-                .for_each(|e| next[e.place] = next[e.place].saturating_add(e.weight));
-            fired[ti] = true;
-            any = true;
-        }
-    }
-    any.then_some(next)
+/// `{'label': tokens, ...}` for the top-level places of a marking key.
+fn show_marking(plan: &Plan, key: &[u32]) -> String {
+    let marked: Vec<String> = top_pairs(key)
+        .map(|(p, k)| format!("'{}': {k}", plan.places()[p].label))
+        .collect();
+    format!("{{{}}}", marked.join(", "))
 }
 
-fn explore(plan: &Plan, r: &mut CheckReport) {
-    let n = plan.places().len();
-    let initial: Vec<u32> = plan.places().iter().map(|p| p.initial).collect();
-    let mut seen: HashSet<Vec<u32>> = HashSet::from([initial.clone()]);
-    let mut queue = VecDeque::from([initial]);
-    let mut fired = vec![false; plan.transitions().len()];
-    let mut max_tokens = vec![0u32; n];
-    let (mut goal_reached, mut unbounded, mut complete) = (false, false, true);
-    let mut deadlock: Option<Vec<u32>> = None;
-    while let Some(m) = queue.pop_front() {
-        for (mx, &k) in max_tokens.iter_mut().zip(&m) {
-            *mx = (*mx).max(k);
-        }
-        match status_of(plan, &m) {
-            PlanStatus::Goal => {
-                goal_reached = true;
-                continue;
-            }
-            PlanStatus::Fail => continue,
-            PlanStatus::Running => {}
-        }
-        if m.iter().any(|&k| k > MAX_TOKENS) {
-            unbounded = true;
-            continue;
-        }
-        let cands: Vec<usize> = (0..plan.transitions().len())
-            .filter(|&ti| {
-                plan.transitions()[ti]
-                    .inputs
-                    .iter()
-                    .all(|e| m[e.place] >= e.weight)
-            })
-            .collect();
-        if cands.is_empty() {
-            deadlock.get_or_insert_with(|| m.clone());
-            continue;
-        }
-        let mut atoms: Vec<Atom> = Vec::new();
-        for &ti in &cands {
-            plan.transitions()[ti].guard.for_each_atom(&mut |a| {
-                if !atoms.contains(a) {
-                    atoms.push(*a);
-                }
-            });
-        }
-        let mut succ = Vec::new();
-        if atoms.len() <= MAX_ATOMS {
-            for mask in 0u32..(1 << atoms.len()) {
-                let value =
-                    |a: &Atom| mask & (1 << atoms.iter().position(|x| x == a).unwrap_or(0)) != 0;
-                let enabled: Vec<usize> = cands
-                    .iter()
-                    .copied()
-                    .filter(|&ti| plan.transitions()[ti].guard.eval(&mut |a| value(a)))
-                    .collect();
-                succ.extend(fire_all(plan, &m, &enabled, &mut fired));
-            }
-        } else {
-            for &ti in &cands {
-                succ.extend(fire_all(plan, &m, &[ti], &mut fired));
-            }
-        }
-        for s in succ {
-            if seen.len() >= MAX_STATES {
-                complete = false;
-                break;
-            }
-            if seen.insert(s.clone()) {
-                queue.push_back(s);
-            }
+/// The findings of the exploration.
+fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
+    let ex = explore(plan, max_states);
+    let mut max_tokens = vec![0u32; plan.places().len()];
+    for id in 0..ex.markings.len() as u32 {
+        for (p, k) in top_pairs(ex.markings.get(id)) {
+            max_tokens[p] = max_tokens[p].max(k);
         }
     }
-    r.states = seen.len();
-    r.complete = complete && !unbounded;
-    if !complete {
+    let has = |kind: Kind| ex.kinds.contains(&kind);
+    let unbounded = ex.kinds.iter().zip(0..).any(|(k, id)| {
+        *k == Kind::Open && top_pairs(ex.markings.get(id)).any(|(_, k)| k > MAX_TOKENS)
+    });
+    r.states = ex.markings.len();
+    r.complete = !ex.budget_hit && !unbounded;
+    if ex.budget_hit {
         r.warnings.push(finding(
             "incomplete",
             format!(
-                "stopped exploring after {MAX_STATES} markings; the findings below may be partial"
+                "stopped after exploring {} markings (the limit); raise --max-states to explore further; the findings below may be partial",
+                ex.markings.len()
             ),
         ));
     }
@@ -276,18 +231,12 @@ fn explore(plan: &Plan, r: &mut CheckReport) {
             format!("some place can hold more than {MAX_TOKENS} tokens"),
         ));
     }
-    if let Some(m) = deadlock {
-        let marked: Vec<String> = m
-            .iter()
-            .enumerate()
-            .filter(|(_, k)| **k > 0)
-            .map(|(p, k)| format!("'{}': {k}", plan.places()[p].label))
-            .collect();
+    if let Some(id) = ex.kinds.iter().position(|k| *k == Kind::Deadlock) {
         r.warnings.push(finding(
             "deadlock",
             format!(
-                "the plan can get stuck in a marking that is neither goal nor fail: {{{}}}",
-                marked.join(", ")
+                "the plan can get stuck in a marking that is neither goal nor fail: {}",
+                show_marking(plan, ex.markings.get(id as u32))
             ),
         ));
     }
@@ -299,37 +248,41 @@ fn explore(plan: &Plan, r: &mut CheckReport) {
             ));
         }
     }
-    if r.complete {
-        for (ti, t) in plan.transitions().iter().enumerate() {
-            if !fired[ti] {
-                r.warnings.push(finding(
-                    "dead-transition",
-                    format!("transition '{}' ('{}') can never fire", t.id, t.label),
-                ));
-            }
-        }
-        if !goal_reached && !plan.goal_places().is_empty() {
-            let over: Vec<String> = plan
-                .goal_places()
-                .iter()
-                .filter(|&&(p, k)| max_tokens[p] > k)
-                .map(|&(p, k)| {
-                    format!(
-                        "{} gets {} tokens but its goal marking is {k}",
-                        place_name(plan, p),
-                        max_tokens[p]
-                    )
-                })
-                .collect();
-            let why = if over.is_empty() {
-                String::new()
-            } else {
-                format!(": {}", over.join("; "))
-            };
+    if !r.complete {
+        return;
+    }
+    for (ti, t) in plan.transitions().iter().enumerate() {
+        if !ex.fired[ti] {
             r.warnings.push(finding(
-                "goal-unreachable",
-                format!("the goal marking can never be reached exactly{why}"),
+                "dead-transition",
+                format!("transition '{}' ('{}') can never fire", t.id, t.label),
             ));
         }
+    }
+    if let Some(f) = livelock::find(plan, &ex) {
+        r.warnings.push(f);
+    }
+    if !has(Kind::Goal) && !plan.goal_places().is_empty() {
+        let over: Vec<String> = plan
+            .goal_places()
+            .iter()
+            .filter(|&&(p, k)| max_tokens[p] > k)
+            .map(|&(p, k)| {
+                format!(
+                    "{} gets {} tokens but its goal marking is {k}",
+                    place_name(plan, p),
+                    max_tokens[p]
+                )
+            })
+            .collect();
+        let why = if over.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", over.join("; "))
+        };
+        r.warnings.push(finding(
+            "goal-unreachable",
+            format!("the goal marking can never be reached exactly{why}"),
+        ));
     }
 }

@@ -1,0 +1,350 @@
+//! The exploration behind [`super::check`]: every marking reachable under the real step
+//! function ([`crate::step`]), with the guard atoms left open.
+//!
+//! * A marking is a compact key ([`PlanState::encode`]: marked places only, sub-plans
+//!   included), interned once in [`Markings`]; its id is its node in a petgraph [`Graph`] of
+//!   the explored steps, so a marking touching a few places costs a few words, whatever the
+//!   net size, and one step costs what is marked.
+//! * Successors: the step runs once per combination of the atoms it asks, found lazily
+//!   ([`Decisions`]): an atom asked for the first time answers false, and the runs backtrack
+//!   over those answers, so only atoms that matter are combined. One atom answers the same
+//!   for every transition asking it within a step, as at run time. Beyond [`MAX_ATOMS`] atoms
+//!   in one step, each atom is tried alone, then all together.
+//! * Markings are numbered in breadth-first order, so the first parent of each is on a
+//!   shortest path from the initial marking: the witness of a livelock.
+
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
+
+use petgraph::graph::{Graph, NodeIndex};
+
+use crate::exec::{step, Environment, PlanState, PlanStatus};
+use crate::label::CallKind;
+use crate::model::Plan;
+
+/// A place holding more tokens than this is taken as unbounded.
+pub(super) const MAX_TOKENS: u32 = 64;
+/// Atoms tried in all combinations in one step; beyond, one at a time, then all together.
+const MAX_ATOMS: usize = 10;
+
+/// What a marking turned out to be when explored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Kind {
+    /// Expanded: its successors are in the graph.
+    Running,
+    Goal,
+    Fail,
+    /// No transition has its tokens.
+    Deadlock,
+    /// Not expanded: a place exceeds [`MAX_TOKENS`], or the budget ran out first.
+    Open,
+}
+
+/// Interned marking keys: an arena of words and a hash table from key to id.
+#[derive(Default)]
+pub(super) struct Markings {
+    words: Vec<u32>,
+    start: Vec<usize>,
+    /// Key hash to the last id with that hash; `same_hash` chains to the earlier ones.
+    table: HashMap<u64, u32>,
+    same_hash: Vec<u32>,
+}
+
+const NONE: u32 = u32::MAX;
+
+impl Markings {
+    pub fn len(&self) -> usize {
+        self.start.len()
+    }
+
+    pub fn get(&self, id: u32) -> &[u32] {
+        let from = self.start[id as usize];
+        let to = self
+            .start
+            .get(id as usize + 1)
+            .copied()
+            .unwrap_or(self.words.len());
+        &self.words[from..to]
+    }
+
+    fn hash(key: &[u32]) -> u64 {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        key.hash(&mut h);
+        h.finish()
+    }
+
+    pub fn find(&self, key: &[u32]) -> Option<u32> {
+        let mut id = self.table.get(&Self::hash(key)).copied().unwrap_or(NONE);
+        while id != NONE {
+            if self.get(id) == key {
+                return Some(id);
+            }
+            id = self.same_hash[id as usize];
+        }
+        None
+    }
+
+    /// Adds a key not yet present; returns its id.
+    pub fn add(&mut self, key: &[u32]) -> u32 {
+        let id = self.len() as u32;
+        let prev = self.table.insert(Self::hash(key), id).unwrap_or(NONE);
+        self.same_hash.push(prev);
+        self.start.push(self.words.len());
+        self.words.extend_from_slice(key);
+        id
+    }
+}
+
+/// The top-level `(place, tokens)` pairs of a key.
+pub(super) fn top_pairs(key: &[u32]) -> impl Iterator<Item = (usize, u32)> + '_ {
+    key[1..1 + 2 * key[0] as usize]
+        .chunks_exact(2)
+        .map(|p| (p[0] as usize, p[1]))
+}
+
+/// How unanswered atoms are answered.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// False, and recorded as a decision to backtrack over.
+    Record,
+    /// True for this atom only.
+    Only(u32),
+    /// True.
+    All,
+}
+
+/// The [`Environment`] of the exploration: answers atoms from a list of decisions.
+struct Decisions<'p> {
+    /// Executable and condition names (sub-plans' included) to numbers.
+    names: HashMap<&'p str, u32>,
+    /// Atoms answered in this run, in the order asked (atom = name * 3 + kind).
+    path: Vec<(u32, bool)>,
+    mode: Mode,
+}
+
+impl<'p> Decisions<'p> {
+    fn new(plan: &'p Plan) -> Self {
+        let mut names = HashMap::new();
+        let mut plans = vec![plan];
+        while let Some(p) = plans.pop() {
+            for name in p
+                .conditions()
+                .iter()
+                .chain(p.executables().iter().map(|e| &e.name))
+            {
+                let n = names.len() as u32;
+                names.entry(name.as_str()).or_insert(n);
+            }
+            plans.extend(p.executables().iter().filter_map(|e| e.subplan.as_deref()));
+        }
+        Decisions {
+            names,
+            path: Vec::new(),
+            mode: Mode::Record,
+        }
+    }
+
+    fn answer(&mut self, name: &str, kind: u32) -> bool {
+        let atom = self.names.get(name).map_or(u32::MAX - 3, |n| n * 3) + kind;
+        if let Some(&(_, v)) = self.path.iter().find(|(a, _)| *a == atom) {
+            return v;
+        }
+        match self.mode {
+            Mode::Record => {
+                self.path.push((atom, false));
+                false
+            }
+            Mode::Only(a) => a == atom,
+            Mode::All => true,
+        }
+    }
+}
+
+impl Environment for Decisions<'_> {
+    fn condition(&mut self, name: &str) -> Option<bool> {
+        Some(self.answer(name, 0))
+    }
+    fn step_action(&mut self, _: &str) {}
+    fn action_finished(&mut self, name: &str) -> bool {
+        self.answer(name, 1)
+    }
+    fn action_failed(&mut self, name: &str) -> bool {
+        self.answer(name, 2)
+    }
+    fn call(&mut self, _: &str, _: CallKind) {}
+}
+
+/// Runs the real step from given markings.
+pub(super) struct Stepper<'p> {
+    plan: &'p Plan,
+    state: PlanState,
+    env: Decisions<'p>,
+    next: Vec<u32>,
+}
+
+impl<'p> Stepper<'p> {
+    pub fn new(plan: &'p Plan) -> Self {
+        Stepper {
+            plan,
+            state: PlanState::new(plan),
+            env: Decisions::new(plan),
+            next: Vec::new(),
+        }
+    }
+
+    /// The initial marking's key.
+    pub fn initial(&self) -> Vec<u32> {
+        let mut key = Vec::new();
+        PlanState::new(self.plan).encode(&mut key);
+        key
+    }
+
+    /// What marking `key` is, before expanding it.
+    pub fn kind(&mut self, key: &[u32]) -> Kind {
+        self.state.decode(key);
+        match self.state.status(self.plan) {
+            PlanStatus::Goal => Kind::Goal,
+            PlanStatus::Fail => Kind::Fail,
+            PlanStatus::Running if top_pairs(key).any(|(_, k)| k > MAX_TOKENS) => Kind::Open,
+            PlanStatus::Running if !self.state.token_enabled(self.plan) => Kind::Deadlock,
+            PlanStatus::Running => Kind::Running,
+        }
+    }
+
+    /// Calls `visit(successor key, transitions fired)` for every answer combination of the
+    /// atoms a step from `key` asks (successors may repeat).
+    pub fn expand(&mut self, key: &[u32], visit: &mut dyn FnMut(&[u32], &[usize])) {
+        self.env.path.clear();
+        self.env.mode = Mode::Record;
+        loop {
+            self.run(key, visit);
+            if self.env.path.len() > MAX_ATOMS {
+                break;
+            }
+            while self.env.path.last().is_some_and(|d| d.1) {
+                self.env.path.pop();
+            }
+            match self.env.path.last_mut() {
+                Some(last) => last.1 = true,
+                None => return,
+            }
+        }
+        // Too many atoms to combine: each alone, then all true.
+        let mut atoms: Vec<u32> = self.env.path.iter().map(|d| d.0).collect();
+        atoms.sort_unstable();
+        atoms.dedup();
+        for a in atoms {
+            self.env.path.clear();
+            self.env.mode = Mode::Only(a);
+            self.run(key, visit);
+        }
+        self.env.path.clear();
+        self.env.mode = Mode::All;
+        self.run(key, visit);
+    }
+
+    fn run(&mut self, key: &[u32], visit: &mut dyn FnMut(&[u32], &[usize])) {
+        self.state.decode(key);
+        let report = step(self.plan, &mut self.state, &mut self.env);
+        self.next.clear();
+        self.state.encode(&mut self.next);
+        visit(&self.next, &report.fired);
+    }
+}
+
+/// The explored reachability graph.
+pub(super) struct Explored {
+    pub markings: Markings,
+    /// Node `i` is marking `i`; an edge is a step changing the marking.
+    pub graph: Graph<(), (), petgraph::Directed, u32>,
+    /// Per marking expanded (or classified), in id order: all of them unless the budget ran
+    /// out.
+    pub kinds: Vec<Kind>,
+    /// The marking each was first reached from (`u32::MAX` for the initial one).
+    pub parent: Vec<u32>,
+    /// Top-level transitions fired in some step.
+    pub fired: Vec<bool>,
+    /// Whether the budget stopped the exploration.
+    pub budget_hit: bool,
+}
+
+/// Explores `plan` breadth-first, interning at most `max_states` markings; stops at the first
+/// marking beyond.
+pub(super) fn explore(plan: &Plan, max_states: usize) -> Explored {
+    let mut stepper = Stepper::new(plan);
+    let mut ex = Explored {
+        markings: Markings::default(),
+        graph: Graph::default(),
+        kinds: Vec::new(),
+        parent: vec![u32::MAX],
+        fired: vec![false; plan.transitions().len()],
+        budget_hit: false,
+    };
+    ex.markings.add(&stepper.initial());
+    ex.graph.add_node(());
+    let (mut key, mut succ) = (Vec::new(), Vec::new());
+    let mut id = 0u32;
+    while (id as usize) < ex.markings.len() {
+        key.clear();
+        key.extend_from_slice(ex.markings.get(id));
+        let kind = stepper.kind(&key);
+        ex.kinds.push(kind);
+        if kind == Kind::Running {
+            succ.clear();
+            stepper.expand(&key, &mut |next, fired| {
+                fired.iter().for_each(|&t| ex.fired[t] = true);
+                let n = match ex.markings.find(next) {
+                    Some(n) => n,
+                    None if ex.markings.len() < max_states => {
+                        ex.graph.add_node(());
+                        ex.parent.push(id);
+                        ex.markings.add(next)
+                    }
+                    None => {
+                        ex.budget_hit = true;
+                        return;
+                    }
+                };
+                if n != id && !succ.contains(&n) {
+                    succ.push(n);
+                }
+            });
+            for &n in &succ {
+                ex.graph
+                    .add_edge(NodeIndex::new(id as usize), NodeIndex::new(n as usize), ());
+            }
+        }
+        if ex.budget_hit {
+            // The rest could only be expanded into markings that are not kept.
+            break;
+        }
+        id += 1;
+    }
+    ex
+}
+
+/// The transitions fired by each step of the shortest path from the initial marking to
+/// `to`, replayed with the real step.
+pub(super) fn witness(plan: &Plan, ex: &Explored, to: u32) -> Vec<Vec<usize>> {
+    let mut path = vec![to];
+    while let Some(&p) = path.last().and_then(|&n| ex.parent.get(n as usize)) {
+        if p == u32::MAX {
+            break;
+        }
+        path.push(p);
+    }
+    path.reverse();
+    let mut stepper = Stepper::new(plan);
+    path.windows(2)
+        .map(|w| {
+            let (from, target) = (ex.markings.get(w[0]), ex.markings.get(w[1]));
+            let mut found = Vec::new();
+            stepper.expand(from, &mut |next, fired| {
+                if found.is_empty() && next == target {
+                    found = fired.to_vec();
+                }
+            });
+            found
+        })
+        .collect()
+}

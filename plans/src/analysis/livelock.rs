@@ -1,0 +1,102 @@
+//! Livelocks: reachable markings from which the plan can reach neither its goal nor its fail
+//! marking, though it can still step (a deadlock is reported on its own).
+//!
+//! On a complete exploration these are exactly the bottom strongly connected components of
+//! the reachability graph (no step leaves them) holding no goal, fail or deadlocked marking:
+//! whatever the environment answers, the plan stays inside forever. Components come from
+//! petgraph's Kosaraju (iterative: a 200,000-marking chain must not recurse). The witness is
+//! the shortest path from the initial marking to the trap, replayed with the real step.
+
+use petgraph::algo::kosaraju_scc;
+
+use super::explore::{witness, Explored, Kind};
+use super::{finding, show_marking, Finding};
+use crate::model::Plan;
+
+/// Steps of a witness shown at each end; the middle of a longer one is elided.
+const SHOWN_STEPS: usize = 6;
+
+/// The livelock whose trap is reached first (breadth-first), with a witness, if any.
+pub(super) fn find(plan: &Plan, ex: &Explored) -> Option<Finding> {
+    if plan.goal_places().is_empty() {
+        return None; // no goal to miss: the plan is reported unusable already
+    }
+    let sccs = kosaraju_scc(&ex.graph);
+    let mut component = vec![0usize; ex.markings.len()];
+    for (c, scc) in sccs.iter().enumerate() {
+        for n in scc {
+            component[n.index()] = c;
+        }
+    }
+    let traps: Vec<&Vec<_>> = sccs
+        .iter()
+        .enumerate()
+        .filter(|(c, scc)| {
+            let bottom = scc
+                .iter()
+                .all(|&n| ex.graph.neighbors(n).all(|m| component[m.index()] == *c));
+            bottom && scc.iter().all(|n| ex.kinds[n.index()] == Kind::Running)
+        })
+        .map(|(_, scc)| scc)
+        .collect();
+    let trap = traps
+        .iter()
+        .min_by_key(|scc| scc.iter().map(|n| n.index()).min())?;
+    let entry = trap.iter().map(|n| n.index() as u32).min()?;
+    let steps = witness(plan, ex, entry);
+    let others = match traps.len() - 1 {
+        0 => String::new(),
+        1 => " (and 1 other such trap)".to_string(),
+        n => format!(" (and {n} other such traps)"),
+    };
+    let size = match trap.len() {
+        1 => "in this marking".to_string(),
+        n => format!("among {n} markings"),
+    };
+    Some(finding(
+        "livelock",
+        format!(
+            "from {} the plan can never reach its goal or fail: it stays {size} forever{others}; reached by {}",
+            show_marking(plan, ex.markings.get(entry)),
+            show_steps(plan, &steps)
+        ),
+    ))
+}
+
+/// `step 1: t0 ('a.start'); step 2: ...`, the middle elided when long.
+fn show_steps(plan: &Plan, steps: &[Vec<usize>]) -> String {
+    if steps.is_empty() {
+        return "starting there".into();
+    }
+    let show = |(i, fired): (usize, &Vec<usize>)| {
+        let ts: Vec<String> = fired
+            .iter()
+            .map(|&t| {
+                let t = &plan.transitions()[t];
+                format!("{} ('{}')", t.id, t.label)
+            })
+            .collect();
+        let ts = if ts.is_empty() {
+            "sub-plans only".to_string()
+        } else {
+            ts.join(" + ")
+        };
+        format!("step {}: {ts}", i + 1)
+    };
+    let all: Vec<(usize, &Vec<usize>)> = steps.iter().enumerate().collect();
+    if all.len() <= 2 * SHOWN_STEPS {
+        return all.into_iter().map(show).collect::<Vec<_>>().join("; ");
+    }
+    let head: Vec<String> = all[..SHOWN_STEPS].iter().copied().map(show).collect();
+    let tail: Vec<String> = all[all.len() - SHOWN_STEPS..]
+        .iter()
+        .copied()
+        .map(show)
+        .collect();
+    format!(
+        "{}; ... {} more steps ...; {}",
+        head.join("; "),
+        all.len() - 2 * SHOWN_STEPS,
+        tail.join("; ")
+    )
+}
