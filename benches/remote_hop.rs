@@ -44,13 +44,31 @@ impl RemotePair {
         use common::team::{config, free_port, start};
         let (pa, pb) = (free_port(), free_port());
         let team = format!("hop{}", std::process::id());
-        let a = start(&config("a", &team, pa, None, r#"
-            (name: "a", type: "bench.ping", links: {"in/pong": "petrel://b/b/out/value"}),"#)).await;
-        let b = start(&config("b", &team, pb, Some(pa), r#"
-            (name: "b", type: "bench.echo", links: {"in/value": "petrel://a/a/out/ping"}),"#)).await;
+        let a = start(&config(
+            "a",
+            &team,
+            pa,
+            None,
+            r#"
+            (name: "a", type: "bench.ping", links: {"in/pong": "petrel://b/b/out/value"}),"#,
+        ))
+        .await;
+        let b = start(&config(
+            "b",
+            &team,
+            pb,
+            Some(pa),
+            r#"
+            (name: "b", type: "bench.echo", links: {"in/value": "petrel://a/a/out/ping"}),"#,
+        ))
+        .await;
         let go = a.0.blackboard().handle::<i64>("a/in/go").await.unwrap();
         let done = a.0.blackboard().handle::<i64>("a/out/done").await.unwrap();
-        RemotePair { go, done, _agents: vec![a, b] }
+        RemotePair {
+            go,
+            done,
+            _agents: vec![a, b],
+        }
     }
 
     async fn round_trips(&self, n: u64) -> Duration {
@@ -76,7 +94,9 @@ struct Floor {
 const PAYLOAD: &str = "1.0";
 
 fn attachment(seq: u64) -> String {
-    format!("v=1;seq={seq};stamp_ns=1732300000000000000;type=f64;zid=0123456789abcdef0123456789abcdef")
+    format!(
+        "v=1;seq={seq};stamp_ns=1732300000000000000;type=f64;zid=0123456789abcdef0123456789abcdef"
+    )
 }
 
 impl Floor {
@@ -103,14 +123,22 @@ impl Floor {
             })
             .await
             .unwrap();
-        let floor = Floor { x, answered, _y: y, _subs: vec![echo, back] };
+        let floor = Floor {
+            x,
+            answered,
+            _y: y,
+            _subs: vec![echo, back],
+        };
         // Pings sent before the sessions know each other's subscribers are lost: ping until
         // one is answered.
         let ping = floor.x.declare_publisher("floor/ping").await.unwrap();
         loop {
             ping.put(PAYLOAD).attachment(attachment(0)).await.unwrap();
             let answered = floor.answered.notified();
-            if tokio::time::timeout(Duration::from_millis(20), answered).await.is_ok() {
+            if tokio::time::timeout(Duration::from_millis(20), answered)
+                .await
+                .is_ok()
+            {
                 break;
             }
         }

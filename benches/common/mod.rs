@@ -37,7 +37,9 @@ pub fn registry() -> ModuleRegistry {
         .register::<Idle>()
         .register::<Crashy>()
         .register::<Work>()
-        .register::<Trigger>();
+        .register::<Trigger>()
+        .register::<team::ScanSource>()
+        .register::<team::ScanSink>();
     r
 }
 

@@ -4,6 +4,7 @@ mod check;
 mod logging;
 mod modules;
 mod plan;
+mod remote;
 mod run;
 
 use std::ffi::OsString;
@@ -46,6 +47,25 @@ enum Command {
     Modules {
         #[command(subcommand)]
         command: Option<ModulesCommand>,
+    },
+    /// Prints a property of a running agent of a team (its JSON and type).
+    Get {
+        /// The property, `petrel://agent/module/path`.
+        url: String,
+        /// The config of any agent of the team: its `team:` section says where to connect.
+        #[arg(long)]
+        via: PathBuf,
+    },
+    /// Sets a `params/` or `control/` property of a running agent of a team, where the owner's
+    /// `remote_write` allows it. The value is RON, as in a config (`2.5`, `(x: 1.0, y: 2.0, theta: 0.0)`).
+    Set {
+        /// The property, `petrel://agent/module/path`.
+        url: String,
+        /// The new value (RON).
+        value: String,
+        /// The config of any agent of the team: its `team:` section says where to connect.
+        #[arg(long)]
+        via: PathBuf,
     },
     /// Petri Net Plans: check, draw, compile and simulate PNML or text plans.
     Plan {
@@ -125,6 +145,8 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             command: Some(ModulesCommand::Describe { type_name }),
         } => modules::describe(&registry, &type_name),
         Command::Plan { command } => plan::run(command),
+        Command::Get { url, via } => remote::run(&via, &url, remote::Request::Get),
+        Command::Set { url, value, via } => remote::run(&via, &url, remote::Request::Set(value)),
     }
 }
 

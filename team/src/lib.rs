@@ -14,16 +14,18 @@
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
 
 use parking_lot::Mutex;
-use petrel_actors::team::{RemoteLinks, TeamConfig, TeamEvent, TeamMembers, TEAM_MODULE};
+use petrel_actors::team::{
+    RemoteLinks, RemoteWriter, TeamConfig, TeamEvent, TeamMembers, TEAM_MODULE,
+};
 use petrel_actors::url::PropertyUrl;
 use petrel_actors::{Agent, Blackboard, PropertyType};
 use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 use zenoh::sample::SampleKind;
 
+mod client;
 mod export;
 mod import;
 pub mod keys;
@@ -35,6 +37,7 @@ mod session;
 pub mod tracker;
 pub mod wire;
 
+pub use client::{ron_encoding, Client, REQUEST_TIMEOUT};
 pub use session::zenoh_config;
 
 use keys::Keys;
@@ -68,7 +71,7 @@ pub enum TeamError {
         /// The team.
         team: String,
         /// How long we waited.
-        timeout: Duration,
+        timeout: std::time::Duration,
     },
 }
 
@@ -95,9 +98,6 @@ pub(crate) struct Ctx {
 /// Token events buffered between zenoh's callbacks and the tasks that apply them; beyond it
 /// events are dropped and counted (a peer flooding the team cannot grow memory).
 const EVENT_BUFFER: usize = 4096;
-
-/// How long a remote write waits for the owner's answer.
-pub const SET_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// An agent's membership of its team. Dropping it leaves the team.
 pub struct Team {
@@ -164,6 +164,7 @@ impl Team {
         let alive = ctx.keys.alive(&ctx.agent, &ctx.zid);
         let token = ctx.session.liveliness().declare_token(alive).await?;
         team.declared.push(Box::new(token));
+        blackboard.set_remote_writer(Some(Arc::new(Writer(ctx.clone()))));
         tracing::info!(agent = %ctx.agent, team = %config.name, zid = %ctx.zid, "joined the team");
         Ok(team)
     }
@@ -191,56 +192,23 @@ impl Team {
 
     /// [`set`](Self::set) with the value already in JSON (as tools have it).
     pub async fn set_json(&self, url: &PropertyUrl, json: Vec<u8>) -> Result<(), TeamError> {
-        let agent = url.agent().unwrap_or(&self.ctx.agent).to_string();
-        let key = self.ctx.keys.set(&agent, &url.key());
-        let replies = self
-            .ctx
-            .session
-            .get(key)
-            .payload(json)
-            .timeout(SET_TIMEOUT)
-            .await?;
-        match replies.recv_async().await {
-            Ok(reply) => match reply.result() {
-                Ok(_) => Ok(()),
-                Err(e) => Err(TeamError::Refused(
-                    String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
-                )),
-            },
-            Err(_) => Err(TeamError::NoAnswer {
-                agent,
-                team: self.ctx.config.name.clone(),
-                timeout: SET_TIMEOUT,
-            }),
-        }
+        let ctx = &self.ctx;
+        let encoding = zenoh::bytes::Encoding::APPLICATION_JSON;
+        client::set(
+            &ctx.session,
+            &ctx.keys,
+            &ctx.config.name,
+            url,
+            json,
+            encoding,
+        )
+        .await
     }
 
     /// The current value of another agent's property: its type name and JSON text.
     pub async fn get_json(&self, url: &PropertyUrl) -> Result<(String, Vec<u8>), TeamError> {
-        let agent = url.agent().unwrap_or(&self.ctx.agent).to_string();
-        let key = self.ctx.keys.data(keys::CANONICAL, &agent, &url.key());
-        let replies = self.ctx.session.get(key).timeout(SET_TIMEOUT).await?;
-        let reply = replies
-            .recv_async()
-            .await
-            .map_err(|_| TeamError::NoAnswer {
-                agent,
-                team: self.ctx.config.name.clone(),
-                timeout: SET_TIMEOUT,
-            })?;
-        match reply.result() {
-            Ok(sample) => {
-                let type_name = sample
-                    .attachment()
-                    .and_then(|a| wire::Attachment::decode(&a.to_bytes()).ok())
-                    .map(|a| a.type_name)
-                    .unwrap_or_default();
-                Ok((type_name, sample.payload().to_bytes().into_owned()))
-            }
-            Err(e) => Err(TeamError::Refused(
-                String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
-            )),
-        }
+        let ctx = &self.ctx;
+        client::get(&ctx.session, &ctx.keys, &ctx.config.name, url).await
     }
 
     /// [`get_json`](Self::get_json), decoded as a `T`.
@@ -265,6 +233,7 @@ impl Team {
     }
 
     fn stop(&mut self) {
+        self.ctx.blackboard.set_remote_writer(None);
         for task in self.tasks.drain(..) {
             task.abort();
         }
@@ -345,6 +314,32 @@ impl Team {
 impl Drop for Team {
     fn drop(&mut self) {
         self.stop();
+    }
+}
+
+/// Carries the agent's writes to other agents' properties (`Blackboard::set` on their URLs).
+struct Writer(Arc<Ctx>);
+
+impl RemoteWriter for Writer {
+    fn set_json(
+        &self,
+        url: PropertyUrl,
+        json: Vec<u8>,
+    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), String>> + Send>> {
+        let ctx = self.0.clone();
+        Box::pin(async move {
+            let encoding = zenoh::bytes::Encoding::APPLICATION_JSON;
+            client::set(
+                &ctx.session,
+                &ctx.keys,
+                &ctx.config.name,
+                &url,
+                json,
+                encoding,
+            )
+            .await
+            .map_err(|e| e.to_string())
+        })
     }
 }
 

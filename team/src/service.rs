@@ -64,7 +64,8 @@ pub(crate) async fn set(ctx: Arc<Ctx>, query: Query) {
         .payload()
         .map(|p| p.to_bytes().into_owned())
         .unwrap_or_default();
-    match apply_set(&ctx, &key, &payload).await {
+    let ron = query.encoding() == Some(&crate::client::ron_encoding());
+    match apply_set(&ctx, &key, &payload, ron).await {
         Ok(()) => {
             tracing::info!(property = %key, "remote write");
             let _ = query.reply(query.key_expr().clone(), "ok").await;
@@ -76,7 +77,7 @@ pub(crate) async fn set(ctx: Arc<Ctx>, query: Query) {
     }
 }
 
-async fn apply_set(ctx: &Ctx, key: &str, payload: &[u8]) -> Result<(), String> {
+async fn apply_set(ctx: &Ctx, key: &str, payload: &[u8], ron: bool) -> Result<(), String> {
     let (kind, type_info) = ctx
         .blackboard
         .kind_of(key)
@@ -101,6 +102,14 @@ async fn apply_set(ctx: &Ctx, key: &str, payload: &[u8]) -> Result<(), String> {
             "agent `{}` does not allow remote writes to `{key}`; allowed: {allowed}",
             ctx.agent
         ));
+    }
+    if ron {
+        let text = std::str::from_utf8(payload).map_err(|_| "the RON text is not UTF-8")?;
+        return ctx
+            .blackboard
+            .set_text(key, text)
+            .await
+            .map_err(|e| e.to_string());
     }
     let value = type_info
         .from_json(payload)

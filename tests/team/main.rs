@@ -1,6 +1,7 @@
 //! Teams over real zenoh sessions on loopback: agents in one process, each with its own
 //! session and its own free port. Waits are on property changes with deadlines, never sleeps.
 
+mod cli;
 mod links;
 mod membership;
 mod partition;

@@ -66,6 +66,19 @@ async fn remote_writes_go_where_the_owner_allows_and_are_refused_elsewhere() {
     let why = refused(b.team.set(&url("petrel://a/nope/params/x"), &1.0).await);
     assert!(why.contains("nope"), "{why}");
     assert_eq!(increment.value(), 5.0, "refused writes change nothing");
+
+    // Modules write through their blackboard: a full URL of another agent is a remote write.
+    let bb = b.agent.blackboard();
+    bb.set("petrel://a/count/params/increment", 6.0)
+        .await
+        .unwrap();
+    assert_eq!(increment.value(), 6.0);
+    let e = bb
+        .set("petrel://a/count/out/value", 1.0)
+        .await
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("only params/ and control/"), "{e}");
     b.stop().await;
     a.stop().await;
 }

@@ -164,7 +164,10 @@ impl Actor for BlackboardActor {
 #[derive(Clone)]
 pub struct Blackboard {
     actor: ActorRef<BlackboardMsg>,
+    agent: Arc<str>,
     remote: Arc<crate::team::RemoteLinks>,
+    /// Carries writes to other agents' properties, once the agent joined its team.
+    writer: Arc<parking_lot::RwLock<Option<Arc<dyn crate::team::RemoteWriter>>>>,
 }
 
 impl Blackboard {
@@ -173,10 +176,20 @@ impl Blackboard {
         registry: Registry,
     ) -> Result<(Blackboard, tokio::task::JoinHandle<()>), BlackboardError> {
         let remote = registry.remote_links();
+        let agent = Arc::from(registry.agent());
         let (actor, join) = Actor::spawn(None, BlackboardActor, registry)
             .await
             .map_err(|_| BlackboardError::Stopped)?;
-        Ok((Blackboard { actor, remote }, join))
+        let writer = Arc::default();
+        Ok((
+            Blackboard {
+                actor,
+                agent,
+                remote,
+                writer,
+            },
+            join,
+        ))
     }
 
     async fn call<T: Send + 'static>(
@@ -212,12 +225,17 @@ impl Blackboard {
             .await
     }
 
-    /// Sets a property (e.g. a parameter, or a module's `enabled`) to a typed value.
+    /// Sets a property (e.g. a parameter, or a module's `enabled`) to a typed value. A full
+    /// address naming another agent (`petrel://robot2/planner/params/speed`) is a remote
+    /// write, carried by the agent's team where the owner allows it.
     pub async fn set<T: PropertyType>(
         &self,
         address: &str,
         value: T,
     ) -> Result<(), BlackboardError> {
+        if let Some(url) = self.other_agent(address) {
+            return self.set_remote(url, &value).await;
+        }
         self.set_any(address, Arc::new(value), TypeInfo::of::<T>(), false)
             .await
     }

@@ -5,8 +5,9 @@ use std::sync::Arc;
 
 use super::{Blackboard, BlackboardMsg, Registry, Reply};
 use crate::ports::PropertyKind;
-use crate::team::{LinkTarget, RemoteLinks, Tap};
+use crate::team::{LinkTarget, RemoteLinks, RemoteWriter, Tap};
 use crate::types::PropertyType;
+use crate::url::PropertyUrl;
 use crate::value::TypeInfo;
 use crate::{BlackboardError, QueueWriter};
 
@@ -81,6 +82,44 @@ impl Blackboard {
             });
         }
         Ok(QueueWriter::new(core, Arc::default()))
+    }
+
+    /// The address, if it names another agent's property.
+    pub(super) fn other_agent(&self, address: &str) -> Option<PropertyUrl> {
+        let url = PropertyUrl::parse(address).ok()?;
+        url.agent()
+            .is_some_and(|a| a != &*self.agent)
+            .then_some(url)
+    }
+
+    /// Sends a write to another agent through the team.
+    pub(super) async fn set_remote<T: PropertyType>(
+        &self,
+        url: PropertyUrl,
+        value: &T,
+    ) -> Result<(), BlackboardError> {
+        let writer = self.writer.read().clone();
+        let Some(writer) = writer else {
+            return Err(BlackboardError::BadAddress(format!(
+                "`{url}` is another agent's property, and agent `{}` is not in a team (a `team:` section, joined)",
+                self.agent
+            )));
+        };
+        let json = serde_json::to_vec(value).map_err(|e| BlackboardError::BadValue {
+            key: url.to_string(),
+            expected: T::TYPE_NAME,
+            reason: e.to_string(),
+        })?;
+        writer
+            .set_json(url, json)
+            .await
+            .map_err(BlackboardError::BadAddress)
+    }
+
+    /// Installs (or, with `None`, removes) what carries writes to other agents: the team
+    /// transport does it when the agent joins and leaves.
+    pub fn set_remote_writer(&self, writer: Option<Arc<dyn RemoteWriter>>) {
+        *self.writer.write() = writer;
     }
 
     /// This agent's links to other agents, which a team transport feeds.

@@ -14,5 +14,6 @@ pub use config::{
 };
 pub use remote::{
     link_state, LinkStatus, QueueTap, RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue,
-    RemoteValue, StatusWriter, Tap, TeamEvent, TeamMember, TeamMembers, ValueTap, TEAM_MODULE,
+    RemoteValue, RemoteWriter, StatusWriter, Tap, TeamEvent, TeamMember, TeamMembers, ValueTap,
+    TEAM_MODULE,
 };

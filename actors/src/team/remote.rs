@@ -21,6 +21,19 @@ use crate::types::PropertyType;
 use crate::url::PropertyUrl;
 use crate::value::{AnyValue, TypeInfo};
 
+/// Carries writes to other agents' properties; the team transport installs one in the
+/// agent's [`Blackboard`](crate::Blackboard) (see `Blackboard::set_remote_writer`), so modules,
+/// contexts and tools write `petrel://other/...` with the ordinary `Blackboard::set`.
+pub trait RemoteWriter: Send + Sync {
+    /// Sets `url` (another agent's `params/` or `control/` property) to the JSON `value`;
+    /// the error says why the owner refused, or that nobody answered.
+    fn set_json(
+        &self,
+        url: PropertyUrl,
+        json: Vec<u8>,
+    ) -> std::pin::Pin<Box<dyn std::future::Future<Output = Result<(), String>> + Send>>;
+}
+
 /// The state of one remote link, as `stats/links/<input>` shows it.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -1,0 +1,83 @@
+//! `petrel get` and `petrel set` as real processes against agents of a running team.
+
+use std::process::Command;
+
+use crate::support::*;
+
+fn petrel(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(args)
+        .output()
+        .expect("petrel runs");
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    (
+        out.status.code().unwrap_or(-1),
+        text(&out.stdout),
+        text(&out.stderr),
+    )
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn get_and_set_reach_a_running_agent_and_refusals_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let team = team_name("cli");
+    let port = free_port();
+    let config = agent_config(
+        "filter",
+        &team,
+        port,
+        &[],
+        r#"remote_write: ["scale/params/*"]"#,
+        r#"
+        (name: "scale", type: "demo.scale", values: {"params/factor": 2.0}),"#,
+    );
+    let via = dir.path().join("filter.ron");
+    std::fs::write(&via, &config).unwrap();
+    let filter = start(&config).await;
+    let via = via.to_str().unwrap();
+
+    let (code, out, err) = petrel(&[
+        "set",
+        "petrel://filter/scale/params/factor",
+        "3.5",
+        "--via",
+        via,
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert_eq!(
+        filter.handle::<f64>("scale/params/factor").await.value(),
+        3.5
+    );
+
+    let (code, out, err) = petrel(&["get", "petrel://filter/scale/params/factor", "--via", via]);
+    assert_eq!((code, out.trim()), (0, "3.5 (f64)"), "{err}");
+
+    let (code, _, err) = petrel(&[
+        "set",
+        "petrel://filter/scale/out/value",
+        "1.0",
+        "--via",
+        via,
+    ]);
+    assert_eq!(code, 1);
+    assert!(
+        err.starts_with("error: ") && err.contains("only params/ and control/"),
+        "{err}"
+    );
+    let (code, _, err) = petrel(&[
+        "set",
+        "petrel://filter/scale/params/factor",
+        "(x: 1)",
+        "--via",
+        via,
+    ]);
+    assert_eq!(code, 1);
+    assert!(err.contains("scale/params/factor"), "{err}");
+    let (code, _, err) = petrel(&["set", "scale/params/factor", "1.0", "--via", via]);
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(
+        filter.handle::<f64>("scale/params/factor").await.value(),
+        3.5
+    );
+    filter.stop().await;
+}
