@@ -118,6 +118,18 @@ impl Keys {
     pub fn inbox(&self, agent: &str, module: &str) -> String {
         format!("{ROOT}/{}/@inbox/{agent}/{module}", self.team)
     }
+
+    /// Every inbox of `agent`.
+    pub fn inboxes_of(&self, agent: &str) -> String {
+        format!("{ROOT}/{}/@inbox/{agent}/*", self.team)
+    }
+
+    /// The module an inbox key of `agent`'s is for.
+    pub fn parse_inbox<'a>(&self, agent: &str, key: &'a str) -> Option<&'a str> {
+        let prefix = format!("{ROOT}/{}/@inbox/{agent}/", self.team);
+        key.strip_prefix(&prefix)
+            .filter(|m| !m.is_empty() && !m.contains('/'))
+    }
 }
 
 /// The variant of the canonical stream: every change, reliable, lossless.

@@ -30,6 +30,7 @@ mod export;
 mod import;
 pub mod keys;
 pub mod lossy;
+mod mail;
 mod members;
 pub mod membership;
 mod service;
@@ -93,6 +94,8 @@ pub(crate) struct Ctx {
     /// Incoming streams by id, for membership changes to reach their trackers.
     streams: Mutex<HashMap<String, Arc<import::Stream>>>,
     membership: Mutex<Membership>,
+    /// The last message number received from each sender, for dropping repeats.
+    seen: Mutex<mail::Seen>,
 }
 
 /// Token events buffered between zenoh's callbacks and the tasks that apply them; beyond it
@@ -137,6 +140,7 @@ impl Team {
             modules,
             streams: Mutex::default(),
             membership: Mutex::default(),
+            seen: Mutex::default(),
             session,
         });
         let mut team = Team {
@@ -160,6 +164,11 @@ impl Team {
             ctx.clone(),
             blackboard.remote_links(),
         )));
+        let outboxes = blackboard.outboxes().await.unwrap_or_default();
+        for (module, status) in outboxes {
+            let sender = mail::send_outbox(ctx.clone(), module, status);
+            team.tasks.push(tokio::spawn(sender));
+        }
         // Announced last: when others see the agent, it already answers.
         let alive = ctx.keys.alive(&ctx.agent, &ctx.zid);
         let token = ctx.session.liveliness().declare_token(alive).await?;
@@ -258,18 +267,23 @@ impl Team {
             })
             .await?;
         self.declared.push(Box::new(q));
-        for (key, is_set) in [
-            (ctx.keys.values_of(&ctx.agent), false),
-            (ctx.keys.sets_of(&ctx.agent), true),
+        for (key, kind) in [
+            (ctx.keys.values_of(&ctx.agent), Service::Get),
+            (ctx.keys.sets_of(&ctx.agent), Service::Set),
+            (ctx.keys.inboxes_of(&ctx.agent), Service::Inbox),
         ] {
             let (ctx, runtime) = (ctx.clone(), tokio::runtime::Handle::current());
             let q = self
                 .ctx
                 .session
                 .declare_queryable(key)
-                .callback(move |query| match is_set {
-                    true => drop(runtime.spawn(service::set(ctx.clone(), query))),
-                    false => drop(runtime.spawn(service::get(ctx.clone(), query))),
+                .callback(move |query| {
+                    let ctx = ctx.clone();
+                    drop(match kind {
+                        Service::Get => runtime.spawn(service::get(ctx, query)),
+                        Service::Set => runtime.spawn(service::set(ctx, query)),
+                        Service::Inbox => runtime.spawn(mail::receive(ctx, query)),
+                    })
                 })
                 .await?;
             self.declared.push(Box::new(q));
@@ -315,6 +329,14 @@ impl Drop for Team {
     fn drop(&mut self) {
         self.stop();
     }
+}
+
+/// The queries an agent answers besides `@info`.
+#[derive(Clone, Copy)]
+enum Service {
+    Get,
+    Set,
+    Inbox,
 }
 
 /// Carries the agent's writes to other agents' properties (`Blackboard::set` on their URLs).

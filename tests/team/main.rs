@@ -3,6 +3,7 @@
 
 mod cli;
 mod links;
+mod mail;
 mod membership;
 mod partition;
 mod processes;

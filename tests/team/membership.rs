@@ -59,9 +59,11 @@ async fn three_agents_see_each_other_and_a_departure_makes_links_stale_until_rej
         "{left:?}"
     );
 
-    // The same agent comes back (a restarted process): links resume with no manual step.
+    // The same agent comes back (a restarted process): links resume with no manual step. (On
+    // a fresh port: between the stop and the restart, a test running in parallel may have
+    // been given the old one; the processes test restarts on the same port.)
     let before = input.value();
-    let c = start(&agent_config("c", &team, pc, &[pa], "", counter)).await;
+    let c = start(&agent_config("c", &team, free_port(), &[pa], "", counter)).await;
     wait_for(&status, "the link live again", |s| s.state == "live").await;
     wait_for(&members, "c back in a's members", |l| {
         names(l) == ["a", "b", "c"]

@@ -60,8 +60,28 @@ async fn garbage_wrong_types_and_impostors_are_refused_and_counted() {
             Some("v=1;seq=101;stamp_ns=0;type=f64;zid=0badc0de".into()),
         ), // impostor
     ];
+    // Publish only once the rogue knows b's subscriber: samples sent before would go nowhere.
+    let publisher = rogue
+        .declare_publisher(key.clone())
+        .congestion_control(Block)
+        .await
+        .unwrap();
+    let matching = publisher.matching_listener().await.unwrap();
+    if !publisher.matching_status().await.unwrap().matching() {
+        let deadline = tokio::time::Instant::now() + DEADLINE;
+        loop {
+            let status = tokio::time::timeout_at(deadline, matching.recv_async()).await;
+            if status
+                .expect("the rogue never saw b's subscriber")
+                .unwrap()
+                .matching()
+            {
+                break;
+            }
+        }
+    }
     for (payload, attachment) in samples {
-        let put = rogue.put(&key, payload.to_vec()).congestion_control(Block);
+        let put = publisher.put(payload.to_vec());
         match attachment {
             Some(a) => put.attachment(a).await.unwrap(),
             None => put.await.unwrap(),
@@ -70,8 +90,7 @@ async fn garbage_wrong_types_and_impostors_are_refused_and_counted() {
     // A flood of garbage (sent reliably, so each one arrives): counted, bounded, and the link
     // stays usable.
     for i in 0..5000 {
-        let put = rogue.put(&key, format!("flood {i}"));
-        put.congestion_control(Block).await.unwrap();
+        publisher.put(format!("flood {i}")).await.unwrap();
     }
     let s = wait_for(&status, "every rogue sample rejected", |s| {
         s.rejected >= 5005

@@ -3,10 +3,10 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use petrel::actors::team::LinkStatus;
+use petrel::actors::team::{LinkStatus, Message};
 use petrel::actors::{
-    Agent, ConfigFile, Context, Input, Module, ModuleRegistry, Ports, PropertyHandle, PropertyType,
-    Schedule,
+    Agent, ConfigFile, Context, Input, Module, ModuleRegistry, Output, Ports, PropertyHandle,
+    PropertyType, QueueReader, QueueWriter, Schedule,
 };
 use petrel::team::Team;
 
@@ -53,7 +53,7 @@ pub fn agent_config(
 /// Built-in module types plus `test.probe`.
 pub fn registry() -> ModuleRegistry {
     let mut r = petrel::Petrel::new().registry().clone();
-    r.register::<Probe>();
+    r.register::<Probe>().register::<Mailer>();
     r
 }
 
@@ -77,6 +77,58 @@ impl Module for Probe {
         Schedule::new()
     }
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+/// `test.mailer`: when `in/send` changes to N, sends N messages (bodies 0, 1, ...) to
+/// `params/to`; counts what its inbox receives and how much of it came out of order.
+pub struct Mailer {
+    to: Input<String>,
+    send: Input<i64>,
+    outbox: QueueWriter<Message>,
+    inbox: QueueReader<Message>,
+    sent: i64,
+    received: Output<i64>,
+    out_of_order: Output<i64>,
+}
+
+impl Module for Mailer {
+    const TYPE: &'static str = "test.mailer";
+    const DESCRIPTION: &'static str = "Sends numbered messages and checks the ones it receives.";
+    fn declare(ports: &mut Ports) -> Self {
+        Mailer {
+            to: ports.param("params/to", String::new(), "recipient, agent/module"),
+            send: ports.input("in/send", 0, "messages to send"),
+            outbox: ports.queue_out("out/outbox", 1024, "messages out"),
+            inbox: ports.queue_in("in/inbox", "messages in"),
+            sent: 0,
+            received: ports.output("out/received", 0, "messages received"),
+            out_of_order: ports.output("out/out_of_order", 0, "messages not in order"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.send).on_items(&self.inbox)
+    }
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.cause().changed() && !ctx.cause().first() {
+            for _ in 0..self.send.value() {
+                let body = self.sent.to_string();
+                self.outbox.push(Message {
+                    to: (*self.to.get()).clone(),
+                    from: String::new(),
+                    body,
+                });
+                self.sent += 1;
+            }
+        }
+        for item in self.inbox.drain() {
+            let n = self.received.value();
+            if item.body != n.to_string() {
+                self.out_of_order.set(self.out_of_order.value() + 1);
+            }
+            self.received.set(n + 1);
+        }
         Ok(())
     }
 }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::{Blackboard, BlackboardMsg, Registry, Reply};
 use crate::ports::PropertyKind;
-use crate::team::{LinkTarget, RemoteLinks, RemoteWriter, Tap};
+use crate::team::{LinkTarget, OutboxWriter, RemoteLinks, RemoteQueue, RemoteWriter, Tap};
 use crate::types::PropertyType;
 use crate::url::PropertyUrl;
 use crate::value::TypeInfo;
@@ -16,6 +16,8 @@ pub(crate) enum TeamRequest {
     Tap(String, Reply<Tap>),
     KindOf(String, Reply<(PropertyKind, TypeInfo)>),
     Queue(String, Reply<Arc<crate::queue::QueueCore>>),
+    Outboxes(Reply<Vec<(String, OutboxWriter)>>),
+    Inbox(String, Reply<RemoteQueue>),
 }
 
 pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
@@ -36,6 +38,12 @@ pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
         }
         TeamRequest::KindOf(key, reply) => {
             let _ = reply.send(reg.kind_of(&key));
+        }
+        TeamRequest::Outboxes(reply) => {
+            let _ = reply.send(Ok(reg.outboxes()));
+        }
+        TeamRequest::Inbox(module, reply) => {
+            let _ = reply.send(reg.inbox(&module));
         }
         TeamRequest::Queue(key, reply) => {
             let _ = reply.send(reg.queue_out(&key));
@@ -120,6 +128,19 @@ impl Blackboard {
     /// transport does it when the agent joins and leaves.
     pub fn set_remote_writer(&self, writer: Option<Arc<dyn RemoteWriter>>) {
         *self.writer.write() = writer;
+    }
+
+    /// The modules with an `out/outbox` queue of messages, with the writers of their
+    /// `stats/outbox`.
+    pub async fn outboxes(&self) -> Result<Vec<(String, OutboxWriter)>, BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::Outboxes(r)))
+            .await
+    }
+
+    /// Where messages for `module` go (its `in/inbox`).
+    pub async fn inbox(&self, module: &str) -> Result<RemoteQueue, BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::Inbox(module.to_string(), r)))
+            .await
     }
 
     /// This agent's links to other agents, which a team transport feeds.

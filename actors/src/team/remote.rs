@@ -92,6 +92,47 @@ pub struct TeamEvent {
     pub unix_ms: u64,
 }
 
+/// A message between modules (OpenRDK's mailbox): a module pushes it to its `out/outbox`
+/// queue, addressed `agent/module`; it arrives in that module's `in/inbox` queue, in order, at
+/// least once (repeats after a lost acknowledgement are dropped by the receiver).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Message {
+    /// The recipient, `agent/module` (or `module` for one of the sender's own agent).
+    pub to: String,
+    /// The sender, `agent/module`; filled in by the runtime on the way.
+    #[serde(default)]
+    pub from: String,
+    /// What the message says: free text, often JSON or RON.
+    pub body: String,
+}
+
+/// How a module's outbox fares: `stats/outbox`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutboxStatus {
+    /// Messages the recipient acknowledged.
+    pub delivered: i64,
+    /// Messages the recipient refused (no such module, no inbox).
+    pub refused: i64,
+    /// Messages dropped because the recipient is not (or no longer) in the team.
+    pub dropped: i64,
+    /// Why the last message was refused or dropped.
+    pub detail: String,
+}
+
+/// The path of a module's outbox queue.
+pub const OUTBOX: &str = "out/outbox";
+/// The path of a module's inbox queue.
+pub const INBOX: &str = "in/inbox";
+
+impl PropertyType for Message {
+    const TYPE_NAME: &'static str = "Message";
+}
+impl PropertyType for OutboxStatus {
+    const TYPE_NAME: &'static str = "OutboxStatus";
+}
+
 impl PropertyType for LinkStatus {
     const TYPE_NAME: &'static str = "LinkStatus";
 }
@@ -150,6 +191,19 @@ impl RemoteQueue {
     pub fn push(&self, value: AnyValue, stamp: Instant) {
         debug_assert!(self.core.type_info.is_type_of(value.as_ref()));
         self.core.push(value, stamp);
+    }
+}
+
+/// Writes a module's `stats/outbox`.
+#[derive(Clone)]
+pub struct OutboxWriter {
+    pub(crate) ep: Arc<Endpoint>,
+}
+
+impl OutboxWriter {
+    /// Publishes the outbox's status.
+    pub fn set(&self, status: OutboxStatus) {
+        self.ep.write(Arc::new(status));
     }
 }
 

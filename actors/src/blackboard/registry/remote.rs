@@ -8,8 +8,9 @@ use crate::cell::Endpoint;
 use crate::ports::{Handle, PropertyDecl, PropertyKind};
 use crate::queue::{QueueCore, ReaderEndpoint};
 use crate::team::{
-    link_state, LinkStatus, LinkTarget, Qos, QueueTap, RemoteFeed, RemoteLink, RemoteLinks,
-    RemoteQueue, RemoteValue, StatusWriter, Tap, TeamEvent, TeamMembers, ValueTap, TEAM_MODULE,
+    link_state, LinkStatus, LinkTarget, Message, OutboxStatus, OutboxWriter, Qos, QueueTap,
+    RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue, RemoteValue, StatusWriter, Tap, TeamEvent,
+    TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
 };
 use crate::url::PropertyUrl;
 use crate::value::TypeInfo;
@@ -144,6 +145,64 @@ impl Registry {
         let key = self.key_of(address)?;
         let decl = &self.entries[&key].decl;
         Ok((decl.kind, decl.type_info))
+    }
+
+    /// The modules with an outbox (`out/outbox`, a queue of [`Message`]s), each with the
+    /// writer of its `stats/outbox` (declared here the first time).
+    pub(crate) fn outboxes(&mut self) -> Vec<(String, OutboxWriter)> {
+        let modules: Vec<String> = self
+            .order
+            .iter()
+            .filter(|m| {
+                self.entries.get(&format!("{m}/{OUTBOX}")).is_some_and(|e| {
+                    e.decl.kind == PropertyKind::QueueOut && e.decl.type_info.is::<Message>()
+                })
+            })
+            .cloned()
+            .collect();
+        modules
+            .into_iter()
+            .map(|m| {
+                let key = format!("{m}/stats/outbox");
+                let ep = match self.entries.get(&key).map(|e| &e.handle) {
+                    Some(Handle::Value(ep)) => ep.clone(),
+                    _ => {
+                        let decl = PropertyDecl {
+                            path: "stats/outbox".into(),
+                            kind: PropertyKind::Stats,
+                            type_info: TypeInfo::of::<OutboxStatus>(),
+                            default: None,
+                            doc: "messages of out/outbox delivered, refused and dropped".into(),
+                            capacity: None,
+                        };
+                        let ep =
+                            Endpoint::new(&key, decl.type_info, Arc::new(OutboxStatus::default()));
+                        self.insert_runtime(key, decl, Handle::Value(ep.clone()));
+                        ep
+                    }
+                };
+                (m, OutboxWriter { ep })
+            })
+            .collect()
+    }
+
+    /// Where messages for `module` go: its `in/inbox` (a queue of [`Message`]s), fed like a
+    /// remote queue when not linked.
+    pub(crate) fn inbox(&self, module: &str) -> Result<RemoteQueue, BlackboardError> {
+        let key = self.key_of(&format!("{module}/{INBOX}"))?;
+        let entry = &self.entries[&key];
+        match (&entry.own_queue, entry.decl.type_info.is::<Message>()) {
+            (Some(own), true) => Ok(RemoteQueue { core: own.clone() }),
+            _ => Err(BlackboardError::BadValue {
+                key,
+                expected: "a queue input of Message",
+                reason: format!(
+                    "it is a {} of {}",
+                    entry.decl.kind,
+                    entry.decl.type_info.name()
+                ),
+            }),
+        }
     }
 
     /// Declares `_team/members` and the `_team/events` queue (for agents that join a team).
