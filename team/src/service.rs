@@ -85,7 +85,7 @@ async fn apply_set(ctx: &Ctx, key: &str, payload: &[u8], ron: bool) -> Result<()
         .map_err(|e| e.to_string())?;
     if !matches!(kind, PropertyKind::Param | PropertyKind::Control) {
         return Err(format!(
-            "`{key}` is a {kind}: only params/ and control/ properties can be set from another agent"
+            "`{key}` ({kind}) cannot be set from another agent: only params/ and control/ properties can"
         ));
     }
     if !ctx

@@ -7,6 +7,7 @@ mod mail;
 mod membership;
 mod partition;
 mod processes;
+mod python;
 mod rogue;
 mod scale;
 mod support;

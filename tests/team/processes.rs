@@ -1,5 +1,5 @@
-//! The shipped demo team as real processes: one is killed with SIGKILL, the others see it
-//! leave and their links go stale; the restarted process rejoins and links are live again.
+//! The shipped demo team as three real processes: one is killed with SIGKILL, the others see
+//! it leave and their links go stale; the restarted process rejoins and links are live again.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -63,12 +63,14 @@ fn names(m: &TeamMembers) -> Vec<&str> {
 async fn a_killed_process_leaves_and_its_restart_rejoins_with_links_live_again() {
     let dir = tempfile::tempdir().unwrap();
     let team = team_name("processes");
-    let (ps, pf, po) = (free_port(), free_port(), free_port());
-    let ports = [(7450, ps), (7451, pf)];
+    let (ps, pf, pd, po) = (free_port(), free_port(), free_port(), free_port());
+    let ports = [(7450, ps), (7451, pf), (7452, pd)];
     let sensor = demo_config(dir.path(), "sensor", &team, &ports);
     let filter = demo_config(dir.path(), "filter", &team, &ports);
+    let display = demo_config(dir.path(), "display", &team, &ports);
     let sensor_process = Process::run(&sensor, &dir.path().join("sensor.log"));
     let _filter_process = Process::run(&filter, &dir.path().join("filter.log"));
+    let _display_process = Process::run(&display, &dir.path().join("display.log"));
 
     // This test's own agent watches the sensor's value and the filter's link to it.
     let observer = start(&agent_config(
@@ -84,10 +86,8 @@ async fn a_killed_process_leaves_and_its_restart_rejoins_with_links_live_again()
     ))
     .await;
     let members = observer.handle::<TeamMembers>("_team/members").await;
-    wait_for(&members, "the three agents", |l| {
-        names(l) == ["filter", "observer", "sensor"]
-    })
-    .await;
+    let all = ["display", "filter", "observer", "sensor"];
+    wait_for(&members, "the four agents", |l| names(l) == all).await;
     let own = observer
         .handle::<LinkStatus>("probe/stats/links/in/value")
         .await;
@@ -97,19 +97,14 @@ async fn a_killed_process_leaves_and_its_restart_rejoins_with_links_live_again()
 
     let killed = tokio::time::Instant::now();
     sensor_process.kill();
-    wait_for(&members, "the sensor gone", |l| {
-        names(l) == ["filter", "observer"]
-    })
-    .await;
+    let without = ["display", "filter", "observer"];
+    wait_for(&members, "the sensor gone", |l| names(l) == without).await;
     eprintln!("SIGKILL to `left` seen: {:?} (lease 1 s)", killed.elapsed());
     wait_for(&own, "the observer's link stale", |s| s.state == "stale").await;
     wait_for(&filters, "the filter's link stale", |s| s.state == "stale").await;
 
     let _sensor_again = Process::run(&sensor, &dir.path().join("sensor-again.log"));
-    wait_for(&members, "the sensor back", |l| {
-        names(l) == ["filter", "observer", "sensor"]
-    })
-    .await;
+    wait_for(&members, "the sensor back", |l| names(l) == all).await;
     wait_for(&own, "the observer's link live again", |s| {
         s.state == "live"
     })
