@@ -10,9 +10,9 @@ use tokio::sync::watch;
 
 use crate::support::*;
 
-/// Forwards connections from a free port to `target` until cut; cutting drops every
-/// connection and refuses new ones, with no FIN reaching either side's zenoh in time to
-/// matter (the sockets just go quiet, then closed), like a cable pulled out.
+/// Forwards connections from a free port to `target`. Cutting silences every connection
+/// (open, but nothing passes) and refuses new ones; healing closes the silenced ones and
+/// forwards again.
 struct Proxy {
     port: u16,
     cut: watch::Sender<bool>,
@@ -38,9 +38,14 @@ impl Proxy {
                         return;
                     };
                     tokio::select! {
-                        _ = copy_bidirectional(&mut inbound, &mut outbound) => {}
+                        _ = copy_bidirectional(&mut inbound, &mut outbound) => return,
                         _ = cut.wait_for(|c| *c) => {}
                     }
+                    // Cut: the sockets stay open but nothing passes (no FIN, no RST), like a
+                    // pulled cable; both sides can only notice through the lease. They are
+                    // closed when the cable is back.
+                    let _ = cut.wait_for(|c| !*c).await;
+                    drop((inbound, outbound));
                 });
             }
         });
@@ -86,9 +91,14 @@ async fn a_partition_is_seen_by_both_sides_counted_and_healed() {
         b.handle::<TeamMembers>("_team/members").await,
     );
 
+    let cut = tokio::time::Instant::now();
     proxy.set_cut(true);
     wait_for(&b_members, "b alone", |l| names(l) == ["b"]).await;
     wait_for(&a_members, "a alone", |l| names(l) == ["a"]).await;
+    eprintln!(
+        "partition to `left` seen on both sides: {:?} (lease 1 s)",
+        cut.elapsed()
+    );
     wait_for(&status, "a stale link", |s| s.state == "stale").await;
     // Nothing blocks on the unreachable peer: the producer keeps producing.
     let next = a.handle::<i64>("producer/state/next").await;
