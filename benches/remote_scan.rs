@@ -76,10 +76,13 @@ impl ScanPair {
     }
 
     /// Sends `n` scans at 1 kHz; returns the CPU time it took until the last one was read.
+    /// Like the floor's driver, this one does not wake for every scan: it waits out the
+    /// sending time, then for the last scans.
     async fn scans(&self, n: u64) -> Duration {
         let target = self.received.value() + n as i64;
         let cpu = process_cpu();
         self.remaining.set(n as i64);
+        tokio::time::sleep(Duration::from_millis(n)).await;
         while self.received.value() < target {
             self.received.changed().await;
         }

@@ -22,11 +22,11 @@ pub(crate) fn write(registry: &Registry) -> String {
         out,
         "// Run it with `petrel run FILE`, or lay it over a config with `--overlay FILE`."
     );
-    let _ = writeln!(
-        out,
-        "Agent(\n    name: {:?},\n    modules: [",
-        registry.agent()
-    );
+    let _ = writeln!(out, "Agent(\n    name: {:?},", registry.agent());
+    if let Some(team) = registry.team() {
+        let _ = writeln!(out, "    team: {},", team.to_ron());
+    }
+    let _ = writeln!(out, "    modules: [");
     for module in registry.modules() {
         let prefix = format!("{module}/");
         let mut values = Vec::new();

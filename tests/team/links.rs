@@ -151,3 +151,37 @@ async fn a_link_to_a_missing_property_says_so() {
     b.stop().await;
     a.stop().await;
 }
+
+#[tokio::test]
+async fn a_snapshot_keeps_the_team_and_remote_links_with_their_settings() {
+    use petrel::actors::team::{Mode, Reliability};
+    let text = agent_config(
+        "b",
+        "snap",
+        7000,
+        &[7001],
+        r#"remote_write: ["scale/params/*"]"#,
+        r#"
+        (name: "scale", type: "demo.scale",
+         links: {"in/value": (from: "petrel://a/count/out/value", mode: periodic(ms: 200), reliability: best_effort)}),"#,
+    );
+    let file = petrel::actors::ConfigFile::parse("b.ron", &text).unwrap();
+    let agent = petrel::actors::Agent::start(&file, &registry())
+        .await
+        .unwrap();
+    let snapshot = agent.snapshot().await.unwrap();
+    agent.stop(std::time::Duration::from_secs(1)).await;
+    let again = petrel::actors::ConfigFile::parse("snap.ron", &snapshot)
+        .unwrap_or_else(|e| panic!("{e}\n{snapshot}"));
+    assert_eq!(again.config.team, file.config.team, "{snapshot}");
+    let link = &again.config.modules[0].links["in/value"];
+    assert_eq!(link.url, "petrel://a/count/out/value");
+    let qos = link.qos.expect("the long form");
+    assert_eq!(
+        (qos.mode, qos.reliability),
+        (Mode::Periodic { ms: 200 }, Reliability::BestEffort)
+    );
+    again
+        .build(&registry())
+        .unwrap_or_else(|e| panic!("{e}\n{snapshot}"));
+}

@@ -221,7 +221,7 @@ impl ConfigFile {
         }
         registry.declare_events();
         if let Some(team) = &self.config.team {
-            registry.declare_team();
+            registry.declare_team(team);
             errors.extend(
                 crate::team::check(team)
                     .into_iter()

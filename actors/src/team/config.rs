@@ -43,6 +43,29 @@ pub struct TeamConfig {
     pub scouting: bool,
 }
 
+impl TeamConfig {
+    /// The section as config text (what a snapshot writes).
+    pub fn to_ron(&self) -> String {
+        let list = |v: &[String]| {
+            let items: Vec<String> = v.iter().map(|s| format!("{s:?}")).collect();
+            format!("[{}]", items.join(", "))
+        };
+        let mode = match self.mode {
+            SessionMode::Peer => "peer",
+            SessionMode::Client => "client",
+        };
+        format!(
+            "(name: {:?}, mode: {mode}, listen: {}, connect: {}, lease_ms: {}, remote_write: {}, scouting: {})",
+            self.name,
+            list(&self.listen),
+            list(&self.connect),
+            self.lease_ms,
+            list(&self.remote_write),
+            self.scouting
+        )
+    }
+}
+
 fn default_lease() -> u64 {
     DEFAULT_LEASE_MS
 }
@@ -344,6 +367,13 @@ mod tests {
         assert!(e.contains("fro"), "{e}");
         let e = target(r#"(from: "x", reliability: sometimes)"#).unwrap_err();
         assert!(e.contains("sometimes"), "{e}");
+    }
+
+    #[test]
+    fn team_sections_round_trip() {
+        let text = r#"(name: "r", mode: client, listen: ["tcp/127.0.0.1:1"], connect: ["tcp/127.0.0.1:2"], lease_ms: 500, remote_write: ["a/params/*"], scouting: true)"#;
+        let team: TeamConfig = ron::from_str(text).unwrap();
+        assert_eq!(ron::from_str::<TeamConfig>(&team.to_ron()).unwrap(), team);
     }
 
     #[test]

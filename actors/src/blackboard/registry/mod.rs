@@ -53,6 +53,8 @@ pub struct Registry {
     entries: BTreeMap<String, Entry>,
     /// Inputs linked to other agents, shared with the team transport.
     remote: Arc<RemoteLinks>,
+    /// The team the agent joins, for snapshots.
+    team: Option<crate::team::TeamConfig>,
 }
 
 impl Registry {
@@ -64,6 +66,7 @@ impl Registry {
             modules: HashMap::new(),
             entries: BTreeMap::new(),
             remote: Arc::default(),
+            team: None,
         }
     }
 

@@ -9,8 +9,8 @@ use crate::ports::{Handle, PropertyDecl, PropertyKind};
 use crate::queue::{QueueCore, ReaderEndpoint};
 use crate::team::{
     link_state, LinkStatus, LinkTarget, Message, OutboxStatus, OutboxWriter, Qos, QueueTap,
-    RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue, RemoteValue, StatusWriter, Tap, TeamEvent,
-    TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
+    RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue, RemoteValue, StatusWriter, Tap, TeamConfig,
+    TeamEvent, TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
 };
 use crate::url::PropertyUrl;
 use crate::value::TypeInfo;
@@ -205,8 +205,14 @@ impl Registry {
         }
     }
 
-    /// Declares `_team/members` and the `_team/events` queue (for agents that join a team).
-    pub(crate) fn declare_team(&mut self) {
+    /// The team section the agent was built with.
+    pub(crate) fn team(&self) -> Option<&TeamConfig> {
+        self.team.as_ref()
+    }
+
+    /// Declares `_team/members` and the `_team/events` queue (for agents that join `team`).
+    pub(crate) fn declare_team(&mut self, team: &TeamConfig) {
+        self.team = Some(team.clone());
         if self.modules.contains_key(TEAM_MODULE) {
             return;
         }
