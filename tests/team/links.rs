@@ -6,28 +6,20 @@ use crate::support::*;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_remote_value_feeds_an_input_like_a_local_link() {
-    let team = team_name("value");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config(
-        "a",
-        &team,
-        pa,
-        &[],
-        "",
-        r#"
+    let (a, b) = pair(
+        "value",
+        (
+            "",
+            r#"
         (name: "count", type: "demo.counter", values: {"params/period_ms": 5}),"#,
-    ))
-    .await;
-    let b = start(&agent_config(
-        "b",
-        &team,
-        pb,
-        &[pa],
-        "",
-        r#"
+        ),
+        (
+            "",
+            r#"
         (name: "scale", type: "demo.scale", values: {"params/factor": 2.0},
          links: {"in/value": "petrel://a/count/out/value"}),"#,
-    ))
+        ),
+    )
     .await;
     let out = b.handle::<f64>("scale/out/value").await;
     wait_for(&out, "twice a remote count of 10", |v| *v >= 20.0).await;
@@ -41,22 +33,11 @@ async fn a_remote_value_feeds_an_input_like_a_local_link() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_remote_queue_keeps_order_and_loses_nothing() {
-    let team = team_name("queue");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config(
-        "a",
-        &team,
-        pa,
-        &[],
-        "",
-        r#"
-        (name: "producer", type: "demo.producer",
-         values: {"params/period_ms": 2, "params/batch": 5, "enabled": false}),"#,
-    ))
-    .await;
-    let b = start(&agent_config("b", &team, pb, &[pa], "", r#"
-        (name: "consumer", type: "demo.consumer",
-         links: {"in/items": (from: "petrel://a/producer/out/items", mode: on_change, reliability: reliable)}),"#)).await;
+    let a_modules = r#"(name: "producer", type: "demo.producer",
+        values: {"params/period_ms": 2, "params/batch": 5, "enabled": false}),"#;
+    let b_modules = r#"(name: "consumer", type: "demo.consumer",
+        links: {"in/items": (from: "petrel://a/producer/out/items", mode: on_change, reliability: reliable)}),"#;
+    let (a, b) = pair("queue", ("", a_modules), ("", b_modules)).await;
     // The consumer counts gaps from item 0: produce only once the stream is open.
     let status = b
         .handle::<LinkStatus>("consumer/stats/links/in/items")
@@ -84,30 +65,11 @@ async fn a_remote_queue_keeps_order_and_loses_nothing() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_type_mismatch_breaks_the_link_and_keeps_the_default() {
-    let team = team_name("mismatch");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config(
-        "a",
-        &team,
-        pa,
-        &[],
-        "",
-        r#"
-        (name: "count", type: "demo.counter"),"#,
-    ))
-    .await;
     // `count/enabled` is a bool; the scale's input is an f64.
-    let b = start(&agent_config(
-        "b",
-        &team,
-        pb,
-        &[pa],
-        "",
-        r#"
-        (name: "scale", type: "demo.scale", values: {"in/value": 7.0},
-         links: {"in/value": "petrel://a/count/enabled"}),"#,
-    ))
-    .await;
+    let b_modules = r#"(name: "scale", type: "demo.scale", values: {"in/value": 7.0},
+        links: {"in/value": "petrel://a/count/enabled"}),"#;
+    let a_modules = r#"(name: "count", type: "demo.counter"),"#;
+    let (a, b) = pair("mismatch", ("", a_modules), ("", b_modules)).await;
     let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
     let s = wait_for(&status, "a broken link", |s| s.state == "broken").await;
     assert!(
@@ -123,27 +85,19 @@ async fn a_type_mismatch_breaks_the_link_and_keeps_the_default() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_link_to_a_missing_property_says_so() {
-    let team = team_name("missing");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config(
-        "a",
-        &team,
-        pa,
-        &[],
-        "",
-        r#"
+    let (a, b) = pair(
+        "missing",
+        (
+            "",
+            r#"
         (name: "count", type: "demo.counter"),"#,
-    ))
-    .await;
-    let b = start(&agent_config(
-        "b",
-        &team,
-        pb,
-        &[pa],
-        "",
-        r#"
+        ),
+        (
+            "",
+            r#"
         (name: "scale", type: "demo.scale", links: {"in/value": "petrel://a/count/out/nope"}),"#,
-    ))
+        ),
+    )
     .await;
     let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
     let s = wait_for(&status, "a refused link", |s| s.state == "broken").await;

@@ -6,27 +6,19 @@ use crate::support::*;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn messages_arrive_in_order_and_undeliverable_ones_are_counted() {
-    let team = team_name("mail");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config(
-        "a",
-        &team,
-        pa,
-        &[],
-        "",
-        r#"
+    let (a, b) = pair(
+        "mail",
+        (
+            "",
+            r#"
         (name: "m", type: "test.mailer", values: {"params/to": "b/m"}),"#,
-    ))
-    .await;
-    let b = start(&agent_config(
-        "b",
-        &team,
-        pb,
-        &[pa],
-        "",
-        r#"
+        ),
+        (
+            "",
+            r#"
         (name: "m", type: "test.mailer"),"#,
-    ))
+        ),
+    )
     .await;
     let members = a
         .handle::<petrel::actors::team::TeamMembers>("_team/members")

@@ -57,10 +57,6 @@ impl Proxy {
     }
 }
 
-fn names(m: &TeamMembers) -> Vec<&str> {
-    m.0.iter().map(|m| m.agent.as_str()).collect()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_partition_is_seen_by_both_sides_counted_and_healed() {
     let team = team_name("partition");

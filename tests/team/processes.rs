@@ -55,10 +55,6 @@ fn demo_config(dir: &Path, name: &str, team: &str, ports: &[(u16, u16)]) -> Path
     path
 }
 
-fn names(m: &TeamMembers) -> Vec<&str> {
-    m.0.iter().map(|m| m.agent.as_str()).collect()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_killed_process_leaves_and_its_restart_rejoins_with_links_live_again() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,7 +1,7 @@
 //! A rogue zenoh session on the team's keys: garbage, wrong types, a taken name, a flood.
 //! Everything is refused and counted; no cell is corrupted; the team goes on.
 
-use petrel::actors::team::{LinkStatus, Tap, TeamConfig, TeamEvent, TeamMembers};
+use petrel::actors::team::{LinkStatus, Tap, TeamConfig, TeamMembers};
 use petrel::team::zenoh_config;
 use zenoh::qos::CongestionControl::Block;
 
@@ -22,20 +22,12 @@ async fn rogue_session(team: &str, connect: u16) -> zenoh::Session {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn garbage_wrong_types_and_impostors_are_refused_and_counted() {
-    let team = team_name("rogue");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config("a", &team, pa, &[], "", r#"
-        (name: "count", type: "demo.counter", values: {"params/period_ms": 20, "params/start": 5.0, "params/increment": 0.0}),"#)).await;
-    let b = start(&agent_config(
-        "b",
-        &team,
-        pb,
-        &[pa],
-        "",
-        r#"
-        (name: "probe", type: "test.probe", links: {"in/value": "petrel://a/count/out/value"}),"#,
-    ))
-    .await;
+    let a_modules = r#"(name: "count", type: "demo.counter",
+        values: {"params/period_ms": 20, "params/start": 5.0, "params/increment": 0.0}),"#;
+    let b_modules = r#"(name: "probe", type: "test.probe",
+        links: {"in/value": "petrel://a/count/out/value"}),"#;
+    let (a, b) = pair("rogue", ("", a_modules), ("", b_modules)).await;
+    let (team, pa) = (a.team_name.clone(), a.port);
     let status = b.handle::<LinkStatus>("probe/stats/links/in/value").await;
     let input = b.handle::<f64>("probe/in/value").await;
     wait_for(&status, "a live link", |s| s.state == "live").await;
@@ -115,19 +107,8 @@ async fn garbage_wrong_types_and_impostors_are_refused_and_counted() {
         .declare_token(format!("petrel/{team}/@alive/a/0badc0de"))
         .await
         .unwrap();
-    let deadline = tokio::time::Instant::now() + DEADLINE;
-    let rejected = loop {
-        let seen: Vec<TeamEvent> = events
-            .take(64)
-            .into_iter()
-            .filter_map(|(_, _, v)| v.downcast_ref::<TeamEvent>().cloned())
-            .collect();
-        if let Some(e) = seen.into_iter().find(|e| e.kind == "rejected") {
-            break e;
-        }
-        let waited = tokio::time::timeout_at(deadline, events.changed()).await;
-        assert!(waited.is_ok(), "no `rejected` event for the impostor");
-    };
+    let seen = events_until(&mut events, |e| e.kind == "rejected").await;
+    let rejected = seen.iter().find(|e| e.kind == "rejected").unwrap();
     assert_eq!(rejected.agent, "a");
     let members = b.handle::<TeamMembers>("_team/members").await;
     assert_eq!(

@@ -7,16 +7,13 @@ use crate::support::*;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_thousand_remote_links_each_carry_their_own_value() {
     const N: usize = 1000;
-    let team = team_name("thousand");
-    let (pa, pb) = (free_port(), free_port());
     let counters: String = (0..N)
         .map(|i| format!(r#"(name: "c{i}", type: "demo.counter", values: {{"params/period_ms": 500, "params/start": {i}.0, "params/increment": 0.0}}),"#))
         .collect();
     let probes: String = (0..N)
         .map(|i| format!(r#"(name: "p{i}", type: "test.probe", links: {{"in/value": "petrel://a/c{i}/out/value"}}),"#))
         .collect();
-    let a = start(&agent_config("a", &team, pa, &[], "", &counters)).await;
-    let b = start(&agent_config("b", &team, pb, &[pa], "", &probes)).await;
+    let (a, b) = pair("thousand", ("", &counters), ("", &probes)).await;
     for i in (0..N).rev() {
         let input = b.handle::<f64>(&format!("p{i}/in/value")).await;
         wait_for(&input, &format!("probe {i} to read c{i}"), |v| {

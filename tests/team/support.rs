@@ -3,7 +3,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use petrel::actors::team::{LinkStatus, Message};
+use petrel::actors::team::{LinkStatus, Message, QueueTap, TeamEvent, TeamMembers};
 use petrel::actors::{
     Agent, ConfigFile, Context, Input, Module, ModuleRegistry, Output, Ports, PropertyHandle,
     PropertyType, QueueReader, QueueWriter, Schedule,
@@ -137,6 +137,48 @@ impl Module for Mailer {
 pub struct Member {
     pub agent: Agent,
     pub team: Team,
+    /// The team's name.
+    pub team_name: String,
+    /// The port the agent listens on.
+    pub port: u16,
+}
+
+/// Agents `a` and `b` on a fresh team named after `test`: `a` listens, `b` connects to it.
+/// Each is given as (its extra team fields, its modules).
+pub async fn pair(test: &str, a: (&str, &str), b: (&str, &str)) -> (Member, Member) {
+    let team = team_name(test);
+    let (pa, pb) = (free_port(), free_port());
+    let a = start(&agent_config("a", &team, pa, &[], a.0, a.1)).await;
+    let b = start(&agent_config("b", &team, pb, &[pa], b.0, b.1)).await;
+    (a, b)
+}
+
+/// The agent names of a member list.
+pub fn names(m: &TeamMembers) -> Vec<&str> {
+    m.0.iter().map(|m| m.agent.as_str()).collect()
+}
+
+/// Takes `_team/events` items from `tap` until one satisfies `pred` (failing the test after
+/// [`DEADLINE`]); returns every event taken.
+pub async fn events_until(tap: &mut QueueTap, pred: impl Fn(&TeamEvent) -> bool) -> Vec<TeamEvent> {
+    let deadline = tokio::time::Instant::now() + DEADLINE;
+    let mut seen = Vec::new();
+    loop {
+        seen.extend(
+            tap.take(64)
+                .into_iter()
+                .filter_map(|(_, _, v)| v.downcast_ref::<TeamEvent>().cloned()),
+        );
+        if seen.iter().any(&pred) {
+            return seen;
+        }
+        if tokio::time::timeout_at(deadline, tap.changed())
+            .await
+            .is_err()
+        {
+            panic!("timed out waiting for a team event; seen: {seen:?}");
+        }
+    }
 }
 
 /// Starts the agent of `config` and joins its team.
@@ -151,7 +193,17 @@ pub async fn start(config: &str) -> Member {
     let team = Team::join(&agent, &team_config)
         .await
         .unwrap_or_else(|e| panic!("agent should join:\n{e}"));
-    Member { agent, team }
+    let port = team_config.listen[0]
+        .rsplit(':')
+        .next()
+        .and_then(|p| p.parse().ok())
+        .unwrap_or(0);
+    Member {
+        agent,
+        team,
+        team_name: team_config.name,
+        port,
+    }
 }
 
 impl Member {

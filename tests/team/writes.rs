@@ -7,20 +7,15 @@ use crate::support::*;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn remote_writes_go_where_the_owner_allows_and_are_refused_elsewhere() {
-    let team = team_name("writes");
-    let (pa, pb) = (free_port(), free_port());
-    let a = start(&agent_config(
-        "a",
-        &team,
-        pa,
-        &[],
-        r#"remote_write: ["count/params/*"]"#,
-        r#"
+    let a_modules = r#"
         (name: "count", type: "demo.counter", values: {"params/period_ms": 1000}),
-        (name: "other", type: "demo.counter"),"#,
-    ))
+        (name: "other", type: "demo.counter"),"#;
+    let (a, b) = pair(
+        "writes",
+        (r#"remote_write: ["count/params/*"]"#, a_modules),
+        ("", ""),
+    )
     .await;
-    let b = start(&agent_config("b", &team, pb, &[pa], "", "")).await;
     let url = |s: &str| PropertyUrl::parse(s).unwrap();
 
     let increment = a.handle::<f64>("count/params/increment").await;
