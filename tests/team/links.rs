@@ -139,3 +139,23 @@ async fn a_snapshot_keeps_the_team_and_remote_links_with_their_settings() {
         .build(&registry())
         .unwrap_or_else(|e| panic!("{e}\n{snapshot}"));
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_lossy_link_gets_images_at_half_resolution_and_a_plain_one_gets_them_whole() {
+    use petrel::actors::Image;
+    let b_modules = r#"
+        (name: "lossy", type: "test.probe", links: {"in/image": (from: "petrel://a/probe/out/image", lossy: true)}),
+        (name: "whole", type: "test.probe", links: {"in/image": "petrel://a/probe/out/image"}),"#;
+    let a_modules = r#"(name: "probe", type: "test.probe"),"#;
+    let (a, b) = pair("lossy", ("", a_modules), ("", b_modules)).await;
+    let lossy = b.handle::<Image>("lossy/in/image").await;
+    let half = wait_for(&lossy, "a halved image", |i| i.width == 4).await;
+    assert_eq!((half.width, half.height, half.data.len()), (4, 2, 8));
+    // Each pixel is the mean of the four it stands for: (0 + 1 + 8 + 9) / 4 = 4.
+    assert_eq!(half.data[0], 4);
+    let whole = b.handle::<Image>("whole/in/image").await;
+    let full = wait_for(&whole, "the whole image", |i| i.width == 8).await;
+    assert_eq!(*full, test_image());
+    b.stop().await;
+    a.stop().await;
+}

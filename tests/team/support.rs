@@ -5,8 +5,8 @@ use std::time::Duration;
 
 use petrel::actors::team::{LinkStatus, Message, QueueTap, TeamEvent, TeamMembers};
 use petrel::actors::{
-    Agent, ConfigFile, Context, Input, Module, ModuleRegistry, Output, Ports, PropertyHandle,
-    PropertyType, QueueReader, QueueWriter, Schedule,
+    Agent, ConfigFile, Context, Image, Input, Module, ModuleRegistry, Output, Ports,
+    PropertyHandle, PropertyType, QueueReader, QueueWriter, Schedule,
 };
 use petrel::team::Team;
 
@@ -57,11 +57,23 @@ pub fn registry() -> ModuleRegistry {
     r
 }
 
+/// An 8x4 `mono8` image whose pixels count up from 0.
+pub fn test_image() -> Image {
+    Image {
+        width: 8,
+        height: 4,
+        encoding: "mono8".into(),
+        data: (0..32u8).collect::<Vec<u8>>().into(),
+    }
+}
+
 /// `test.probe`: inputs to link to other agents' properties, so a test can watch them
 /// (`in/status` for a link status, `in/value` for a number).
 pub struct Probe {
     _status: Input<LinkStatus>,
     _value: Input<f64>,
+    _image_in: Input<Image>,
+    _image_out: Output<Image>,
 }
 
 impl Module for Probe {
@@ -71,6 +83,8 @@ impl Module for Probe {
         Probe {
             _status: ports.input("in/status", LinkStatus::default(), "a link status"),
             _value: ports.input("in/value", 0.0, "a number"),
+            _image_in: ports.input("in/image", Image::default(), "an image"),
+            _image_out: ports.output("out/image", test_image(), "an 8x4 grey ramp"),
         }
     }
     fn schedule(&self) -> Schedule {
