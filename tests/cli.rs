@@ -1,13 +1,16 @@
 //! The `petrel` binary as a user runs it.
 
+#[path = "common/bounded.rs"]
+mod bounded;
+
 use std::process::{Command, Output};
 
 fn petrel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(args)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("petrel runs")
+    bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .env("RUST_LOG", "warn"),
+    )
 }
 
 fn text(bytes: &[u8]) -> String {
@@ -344,12 +347,12 @@ fn configs_work_from_any_directory() {
     let elsewhere = tempfile::tempdir().unwrap();
     let root = std::env::current_dir().unwrap();
     for config in ["mission-demo.ron", "contexts-demo.ron", "navigate.ron"] {
-        let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args(["check", root.join("configs").join(config).to_str().unwrap()])
-            .current_dir(elsewhere.path())
-            .env("RUST_LOG", "warn")
-            .output()
-            .expect("petrel runs");
+        let out = bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(["check", root.join("configs").join(config).to_str().unwrap()])
+                .current_dir(elsewhere.path())
+                .env("RUST_LOG", "warn"),
+        );
         assert!(out.status.success(), "{config}: {}", text(&out.stderr));
     }
 }

@@ -2,6 +2,9 @@
 //! localizer, mapper, planner, avoidance, goal sequencer, recorder) on tokio's paused clock,
 //! so simulated time runs as fast as the CPU allows and nothing sleeps on the wall clock.
 
+#[path = "common/bounded.rs"]
+mod bounded;
+
 use std::path::Path;
 use std::time::Duration;
 
@@ -172,10 +175,10 @@ fn every_shipped_config_checks() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         // Agent configs; `*.rules.ron` are context rules, checked with the config naming them.
         if name.ends_with(".ron") && !name.ends_with(".rules.ron") {
-            let out = std::process::Command::new(env!("CARGO_BIN_EXE_petrel"))
-                .args(["check", path.to_str().unwrap()])
-                .output()
-                .unwrap();
+            let out = bounded::output_within_deadline(
+                std::process::Command::new(env!("CARGO_BIN_EXE_petrel"))
+                    .args(["check", path.to_str().unwrap()]),
+            );
             assert!(
                 out.status.success(),
                 "{name}: {}",

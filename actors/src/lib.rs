@@ -30,7 +30,9 @@ pub mod url;
 mod value;
 
 pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT};
-pub use blackboard::{Blackboard, BlackboardError, Registry};
+pub use blackboard::{
+    AgentListing, Blackboard, BlackboardError, ModuleListing, PropertyListing, Registry,
+};
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{
     AnyHandle, Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,

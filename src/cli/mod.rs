@@ -1,9 +1,12 @@
-//! The `petrel` command line: `run`, `check`, `modules`.
+//! The `petrel` command line: `run`, `check`, `modules`, `plan`, and the tools that attach to
+//! running agents (`ls`, `get`, `set`).
 
 mod check;
+mod listing;
 mod logging;
 mod modules;
 mod plan;
+mod reach;
 mod remote;
 mod run;
 
@@ -48,24 +51,31 @@ enum Command {
         #[command(subcommand)]
         command: Option<ModulesCommand>,
     },
-    /// Prints a property of a running agent of a team (its JSON and type).
+    /// Lists the agents running on this machine, or with AGENT, its modules and properties
+    /// (kind, type, link).
+    Ls {
+        /// The agent to describe.
+        agent: Option<String>,
+        #[command(flatten)]
+        reach: remote::Reach,
+    },
+    /// Prints a property of a running agent (its JSON and type).
     Get {
         /// The property, `petrel://agent/module/path`.
         url: String,
-        /// The config of any agent of the team: its `team:` section says where to connect.
-        #[arg(long)]
-        via: PathBuf,
+        #[command(flatten)]
+        reach: remote::Reach,
     },
-    /// Sets a `params/` or `control/` property of a running agent of a team, where the owner's
-    /// `remote_write` allows it. The value is RON, as in a config (`2.5`, `(x: 1.0, y: 2.0, theta: 0.0)`).
+    /// Sets a `params/` or `control/` property of a running agent, where its owner allows it
+    /// (an agent in a team: its `remote_write` patterns; an agent without a `team:` section:
+    /// any). The value is RON, as in a config (`2.5`, `(x: 1.0, y: 2.0, theta: 0.0)`).
     Set {
         /// The property, `petrel://agent/module/path`.
         url: String,
         /// The new value (RON).
         value: String,
-        /// The config of any agent of the team: its `team:` section says where to connect.
-        #[arg(long)]
-        via: PathBuf,
+        #[command(flatten)]
+        reach: remote::Reach,
     },
     /// Petri Net Plans: check, draw, compile and simulate PNML or text plans.
     Plan {
@@ -145,8 +155,11 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             command: Some(ModulesCommand::Describe { type_name }),
         } => modules::describe(&registry, &type_name),
         Command::Plan { command } => plan::run(command),
-        Command::Get { url, via } => remote::run(&via, &url, remote::Request::Get),
-        Command::Set { url, value, via } => remote::run(&via, &url, remote::Request::Set(value)),
+        Command::Ls { agent, reach } => remote::list(&reach, agent.as_deref()),
+        Command::Get { url, reach } => remote::property(&reach, &url, remote::Request::Get),
+        Command::Set { url, value, reach } => {
+            remote::property(&reach, &url, remote::Request::Set(value))
+        }
     }
 }
 

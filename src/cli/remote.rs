@@ -1,9 +1,13 @@
-//! `petrel get` and `petrel set`: read and write properties of running agents over their team.
+//! `petrel ls`, `petrel get` and `petrel set`: list, read and write the properties of running
+//! agents. A tool finds an agent through the records every `petrel run` writes (see
+//! `petrel_team::discovery`), or through the `team:` section of a config given with `--via`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use petrel_actors::team::TeamConfig;
 use petrel_actors::{ConfigFile, PropertyUrl};
+use petrel_team::discovery;
 use petrel_team::{Client, TeamError};
 
 use super::{bad_input, EXIT_BAD_INPUT};
@@ -11,25 +15,26 @@ use super::{bad_input, EXIT_BAD_INPUT};
 /// Exit code when the agent refused or did not answer.
 const EXIT_REFUSED: u8 = 1;
 
+/// Where to look for an agent.
+#[derive(clap::Args)]
+pub(crate) struct Reach {
+    /// Reach the agent through the team of this config (any agent config of the team) instead
+    /// of the runs recorded on this machine.
+    #[arg(long)]
+    via: Option<PathBuf>,
+    /// Of the runs on this machine, the one with this process id (when several run the agent).
+    #[arg(long, conflicts_with = "via")]
+    pid: Option<u32>,
+}
+
 /// What to do once attached.
 pub(crate) enum Request {
     Get,
     Set(String),
 }
 
-/// Attaches to the team that `via`'s `team:` section names and carries out `request` on `url`.
-pub(crate) fn run(via: &PathBuf, url: &str, request: Request) -> ExitCode {
-    let file = match ConfigFile::load(via) {
-        Ok(f) => f,
-        Err(e) => return bad_input(&e),
-    };
-    let Some(team) = file.config.team.clone() else {
-        eprintln!(
-            "error: {} has no `team:` section: give the config of an agent of the team to reach",
-            via.display()
-        );
-        return ExitCode::from(EXIT_BAD_INPUT);
-    };
+/// Carries out `request` on `url`.
+pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
     let url = match PropertyUrl::parse(url) {
         Ok(u) if u.agent().is_some() => u,
         Ok(_) => {
@@ -41,6 +46,80 @@ pub(crate) fn run(via: &PathBuf, url: &str, request: Request) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    let team = match team_of(reach, url.agent().unwrap_or_default()) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    attached(&team, |client| async move {
+        match &request {
+            Request::Get => client.get_json(&url).await.map(|(type_name, json)| {
+                println!("{} ({type_name})", String::from_utf8_lossy(&json));
+            }),
+            Request::Set(value) => client.set_ron(&url, value).await.map(|()| {
+                println!("{url} = {value}");
+            }),
+        }
+    })
+}
+
+/// `petrel ls`: the agents running on this machine, or with `agent`, its modules and
+/// properties.
+pub(crate) fn list(reach: &Reach, agent: Option<&str>) -> ExitCode {
+    let Some(agent) = agent else {
+        return list_agents(reach);
+    };
+    let team = match team_of(reach, agent) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    attached(&team, |client| async move {
+        let info = client.info(agent).await?;
+        print!("{}", super::listing::agent(&info));
+        Ok(())
+    })
+}
+
+fn list_agents(reach: &Reach) -> ExitCode {
+    if reach.via.is_some() {
+        eprintln!("error: `petrel ls --via CONFIG` needs an AGENT: a team has no list of agents to ask before it is joined");
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let records: Vec<_> = discovery::running(&discovery::directory())
+        .into_iter()
+        .filter(|r| reach.pid.is_none_or(|p| p == r.pid))
+        .collect();
+    print!("{}", super::listing::agents(&records));
+    ExitCode::SUCCESS
+}
+
+/// The team section to reach `agent` with: the `--via` config's, or the recorded run's.
+fn team_of(reach: &Reach, agent: &str) -> Result<TeamConfig, ExitCode> {
+    let Some(via) = &reach.via else {
+        let records = discovery::running(&discovery::directory());
+        return match discovery::find(&records, agent, reach.pid) {
+            Ok(found) => Ok(found.tool_config()),
+            Err(e) => {
+                eprintln!("error: {e}");
+                Err(ExitCode::from(EXIT_REFUSED))
+            }
+        };
+    };
+    let file = ConfigFile::load(via).map_err(|e| bad_input(&e))?;
+    file.config.team.clone().ok_or_else(|| {
+        eprintln!(
+            "error: {} has no `team:` section: give the config of an agent of the team to reach",
+            via.display()
+        );
+        ExitCode::from(EXIT_BAD_INPUT)
+    })
+}
+
+/// Connects a client to `team`, runs `work` with it and closes it.
+fn attached<F, Fut>(team: &TeamConfig, work: F) -> ExitCode
+where
+    F: FnOnce(std::sync::Arc<Client>) -> Fut,
+    Fut: std::future::Future<Output = Result<(), TeamError>>,
+{
     let runtime = match tokio::runtime::Builder::new_multi_thread()
         .worker_threads(1)
         .enable_all()
@@ -53,19 +132,14 @@ pub(crate) fn run(via: &PathBuf, url: &str, request: Request) -> ExitCode {
         }
     };
     runtime.block_on(async {
-        let client = match Client::connect(&team).await {
-            Ok(c) => c,
+        let client = match Client::connect(team).await {
+            Ok(c) => std::sync::Arc::new(c),
             Err(e) => return failed(e),
         };
-        let result = match &request {
-            Request::Get => client.get_json(&url).await.map(|(type_name, json)| {
-                println!("{} ({type_name})", String::from_utf8_lossy(&json));
-            }),
-            Request::Set(value) => client.set_ron(&url, value).await.map(|()| {
-                println!("{url} = {value}");
-            }),
-        };
-        client.close().await;
+        let result = work(client.clone()).await;
+        if let Ok(client) = std::sync::Arc::try_unwrap(client) {
+            client.close().await;
+        }
         match result {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => failed(e),

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::task::Poll;
 
 use petrel_actors::{status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
+use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
 use super::check::{check_all, check_team};
@@ -55,13 +56,16 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let mut agents = Vec::new();
     let mut teams = Vec::new();
     let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
-    if let Err(code) = started {
-        stop_all(&agents, teams, args).await;
-        for agent in agents {
-            agent.shutdown().await;
+    let registration = match started {
+        Ok(registration) => registration,
+        Err(code) => {
+            stop_all(&agents, teams, args).await;
+            for agent in agents {
+                agent.shutdown().await;
+            }
+            return code;
         }
-        return code;
-    }
+    };
     let forever = std::future::pending::<()>();
     let (why, mut code) = tokio::select! {
         exit = first_exit(&agents) => (exit.reason, ExitCode::from(exit.code)),
@@ -74,6 +78,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             }
         } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), ExitCode::SUCCESS),
     };
+    // Tools stop finding the run before its agents stop answering.
+    drop(registration);
     for agent in &agents {
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }
@@ -113,14 +119,15 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     code
 }
 
-/// Starts every agent, then joins each to its team (unless `--no-remote`).
+/// Starts every agent, then joins each to its team or makes it reachable by tools (unless
+/// `--no-remote`); the registration makes the run findable while it is held.
 async fn start_all(
     registry: &ModuleRegistry,
     args: &RunArgs,
     files: &[ConfigFile],
     agents: &mut Vec<Agent>,
     teams: &mut Vec<Team>,
-) -> Result<(), ExitCode> {
+) -> Result<Option<Registration>, ExitCode> {
     for file in files {
         match Agent::start(file, registry).await {
             Ok(agent) => agents.push(agent),
@@ -132,25 +139,9 @@ async fn start_all(
         }
     }
     if args.no_remote {
-        return Ok(());
+        return Ok(None);
     }
-    for (agent, file) in agents.iter().zip(files) {
-        let Some(team) = &file.config.team else {
-            continue;
-        };
-        match Team::join(agent, team).await {
-            Ok(t) => teams.push(t),
-            Err(e) => {
-                eprintln!(
-                    "error: agent `{}` ({}): {e}",
-                    agent.name(),
-                    file.path().display()
-                );
-                return Err(ExitCode::FAILURE);
-            }
-        }
-    }
-    Ok(())
+    super::reach::join_all(agents, files, teams).await
 }
 
 /// Stops every agent's modules (last started first), then leaves the teams.

@@ -87,6 +87,47 @@ fn no_answer(agent: &str, team: &str) -> TeamError {
     }
 }
 
+/// What an agent says of itself (its `@info` answer).
+#[derive(Debug, Clone, serde::Deserialize)]
+pub struct AgentInfo {
+    /// Its name.
+    pub agent: String,
+    /// Its zenoh session id.
+    pub zid: String,
+    /// Its team.
+    pub team: String,
+    /// Its modules, in declaration order.
+    pub modules: Vec<String>,
+    /// The type of each module.
+    pub types: std::collections::BTreeMap<String, String>,
+    /// Its properties, in key order.
+    pub properties: Vec<petrel_actors::PropertyListing>,
+}
+
+/// Asks `agent` what it holds.
+pub(crate) async fn info(
+    session: &zenoh::Session,
+    keys: &Keys,
+    team: &str,
+    agent: &str,
+) -> Result<AgentInfo, TeamError> {
+    let replies = session
+        .get(keys.info(agent))
+        .timeout(REQUEST_TIMEOUT)
+        .await?;
+    let reply = replies
+        .recv_async()
+        .await
+        .map_err(|_| no_answer(agent, team))?;
+    match reply.result() {
+        Ok(sample) => serde_json::from_slice(&sample.payload().to_bytes())
+            .map_err(|e| TeamError::Refused(format!("agent `{agent}` answered nonsense: {e}"))),
+        Err(e) => Err(TeamError::Refused(
+            String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
+        )),
+    }
+}
+
 /// A tool's view of a team: it reaches the agents a team config names, without being a member.
 pub struct Client {
     session: zenoh::Session,
@@ -126,6 +167,12 @@ impl Client {
     /// The current value of another agent's property: its type name and JSON.
     pub async fn get_json(&self, url: &PropertyUrl) -> Result<(String, Vec<u8>), TeamError> {
         self.retry(|| get(&self.session, &self.keys, &self.team, url))
+            .await
+    }
+
+    /// What `agent` holds: its modules and properties.
+    pub async fn info(&self, agent: &str) -> Result<AgentInfo, TeamError> {
+        self.retry(|| info(&self.session, &self.keys, &self.team, agent))
             .await
     }
 

@@ -26,6 +26,7 @@ use tokio::task::JoinHandle;
 use zenoh::sample::SampleKind;
 
 mod client;
+pub mod discovery;
 mod export;
 mod import;
 pub mod keys;
@@ -38,7 +39,7 @@ mod session;
 pub mod tracker;
 pub mod wire;
 
-pub use client::{ron_encoding, Client, REQUEST_TIMEOUT};
+pub use client::{ron_encoding, AgentInfo, Client, REQUEST_TIMEOUT};
 pub use session::zenoh_config;
 
 use keys::Keys;
@@ -90,7 +91,6 @@ pub(crate) struct Ctx {
     zid: String,
     config: TeamConfig,
     blackboard: Blackboard,
-    modules: Vec<String>,
     /// Incoming streams by id, for membership changes to reach their trackers.
     streams: Mutex<HashMap<String, Arc<import::Stream>>>,
     membership: Mutex<Membership>,
@@ -113,7 +113,7 @@ pub struct Team {
 impl Team {
     /// Joins `agent` to the team `config` describes (the agent's config's `team:` section).
     pub async fn join(agent: &Agent, config: &TeamConfig) -> Result<Team, TeamError> {
-        let blackboard = agent.blackboard().clone();
+        let blackboard = agent.blackboard();
         let members = blackboard
             .handle::<TeamMembers>(&format!("{TEAM_MODULE}/members"))
             .await
@@ -122,22 +122,34 @@ impl Team {
             .queue_writer::<TeamEvent>(&format!("{TEAM_MODULE}/events"))
             .await
             .map_err(|_| TeamError::NotATeamAgent(agent.name().into()))?;
+        let team = Team::open(agent, config, Some(members::Board { members, events })).await?;
+        tracing::info!(agent = %agent.name(), team = %config.name, zid = %team.zid(), "joined the team");
+        Ok(team)
+    }
+
+    /// Makes an agent that is in no team reachable by tools (`petrel get`, `ls`, ...) on the
+    /// team `config` describes, usually [`discovery::private_team`]: it answers requests and
+    /// publishes what is asked for, but follows no members and has no remote links.
+    pub async fn reachable(agent: &Agent, config: &TeamConfig) -> Result<Team, TeamError> {
+        let team = Team::open(agent, config, None).await?;
+        tracing::debug!(agent = %agent.name(), reach = ?config.listen, "reachable by tools");
+        Ok(team)
+    }
+
+    async fn open(
+        agent: &Agent,
+        config: &TeamConfig,
+        board: Option<members::Board>,
+    ) -> Result<Team, TeamError> {
+        let blackboard = agent.blackboard().clone();
         let session = session::open(config).await?;
         let zid = session.zid().to_string();
-        let modules = agent
-            .summary()
-            .await
-            .modules
-            .into_iter()
-            .map(|m| m.name)
-            .collect();
         let ctx = Arc::new(Ctx {
             keys: Keys::new(&config.name),
             agent: agent.name().to_string(),
             zid,
             config: config.clone(),
             blackboard: blackboard.clone(),
-            modules,
             streams: Mutex::default(),
             membership: Mutex::default(),
             seen: Mutex::default(),
@@ -150,16 +162,18 @@ impl Team {
             overflow: Arc::default(),
         };
         team.serve().await?;
-        let (alive_tx, alive_rx) = mpsc::channel(EVENT_BUFFER);
-        team.watch_tokens(ctx.keys.all_alive(), alive_tx).await?;
-        let board = members::Board { members, events };
-        team.tasks
-            .push(tokio::spawn(members::run(ctx.clone(), board, alive_rx)));
         let (want_tx, want_rx) = mpsc::channel(EVENT_BUFFER);
         team.watch_tokens(ctx.keys.wants_of(&ctx.agent), want_tx)
             .await?;
         team.tasks
             .push(tokio::spawn(export::run(ctx.clone(), want_rx)));
+        let Some(board) = board else {
+            return Ok(team);
+        };
+        let (alive_tx, alive_rx) = mpsc::channel(EVENT_BUFFER);
+        team.watch_tokens(ctx.keys.all_alive(), alive_tx).await?;
+        team.tasks
+            .push(tokio::spawn(members::run(ctx.clone(), board, alive_rx)));
         team.tasks.push(tokio::spawn(import_links(
             ctx.clone(),
             blackboard.remote_links(),
@@ -174,7 +188,6 @@ impl Team {
         let token = ctx.session.liveliness().declare_token(alive).await?;
         team.declared.push(Box::new(token));
         blackboard.set_remote_writer(Some(Arc::new(Writer(ctx.clone()))));
-        tracing::info!(agent = %ctx.agent, team = %config.name, zid = %ctx.zid, "joined the team");
         Ok(team)
     }
 
@@ -253,21 +266,8 @@ impl Team {
     /// Declares the queryables this agent answers.
     async fn serve(&mut self) -> Result<(), TeamError> {
         let ctx = &self.ctx;
-        let runtime = tokio::runtime::Handle::current();
-        let info = service::info(ctx);
-        let key = ctx.keys.info(&ctx.agent);
-        let q = ctx
-            .session
-            .declare_queryable(key.clone())
-            .callback(move |query| {
-                let (info, key) = (info.clone(), key.clone());
-                runtime.spawn(async move {
-                    let _ = query.reply(key, info).await;
-                });
-            })
-            .await?;
-        self.declared.push(Box::new(q));
         for (key, kind) in [
+            (ctx.keys.info(&ctx.agent), Service::Info),
             (ctx.keys.values_of(&ctx.agent), Service::Get),
             (ctx.keys.sets_of(&ctx.agent), Service::Set),
             (ctx.keys.inboxes_of(&ctx.agent), Service::Inbox),
@@ -280,6 +280,7 @@ impl Team {
                 .callback(move |query| {
                     let ctx = ctx.clone();
                     drop(match kind {
+                        Service::Info => runtime.spawn(service::info(ctx, query)),
                         Service::Get => runtime.spawn(service::get(ctx, query)),
                         Service::Set => runtime.spawn(service::set(ctx, query)),
                         Service::Inbox => runtime.spawn(mail::receive(ctx, query)),
@@ -331,9 +332,10 @@ impl Drop for Team {
     }
 }
 
-/// The queries an agent answers besides `@info`.
+/// The queries an agent answers.
 #[derive(Clone, Copy)]
 enum Service {
+    Info,
     Get,
     Set,
     Inbox,

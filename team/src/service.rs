@@ -10,14 +10,33 @@ use zenoh::query::Query;
 use crate::wire::{Attachment, StampClock};
 use crate::Ctx;
 
-/// Answers an `@info` query: `{"agent": ..., "zid": ..., "modules": [...]}`.
-pub(crate) fn info(ctx: &Ctx) -> Vec<u8> {
-    serde_json::to_vec(&serde_json::json!({
+/// Answers an `@info` query: `{"agent", "zid", "team", "modules": [names], "types": {module:
+/// type}, "properties": [{"key", "kind", "type", "link"?}]}`, as the agent is now (modules
+/// added at run time included).
+pub(crate) async fn info(ctx: Arc<Ctx>, query: Query) {
+    let listing = match ctx.blackboard.listing().await {
+        Ok(l) => l,
+        Err(e) => {
+            let _ = query.reply_err(e.to_string()).await;
+            return;
+        }
+    };
+    let names: Vec<&str> = listing.modules.iter().map(|m| m.name.as_str()).collect();
+    let types: serde_json::Map<String, serde_json::Value> = listing
+        .modules
+        .iter()
+        .map(|m| (m.name.clone(), m.type_name.clone().into()))
+        .collect();
+    let info = serde_json::json!({
         "agent": ctx.agent,
         "zid": ctx.zid,
-        "modules": ctx.modules,
-    }))
-    .expect("JSON of strings")
+        "team": ctx.config.name,
+        "modules": names,
+        "types": types,
+        "properties": listing.properties,
+    });
+    let payload = serde_json::to_vec(&info).expect("JSON of strings");
+    let _ = query.reply(query.key_expr().clone(), payload).await;
 }
 
 /// Answers a query for the current value of one of this agent's properties.

@@ -5,10 +5,9 @@ use std::process::Command;
 use crate::support::*;
 
 fn petrel(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(args)
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel")).args(args),
+    );
     let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
     (
         out.status.code().unwrap_or(-1),

@@ -1,7 +1,10 @@
 //! Teams over real zenoh sessions on loopback: agents in one process, each with its own
 //! session and its own free port. Waits are on property changes with deadlines, never sleeps.
 
+#[path = "../common/bounded.rs"]
+mod bounded;
 mod cli;
+mod discovery;
 mod links;
 mod mail;
 mod membership;
@@ -9,6 +12,7 @@ mod partition;
 mod processes;
 mod python;
 mod rogue;
+mod router;
 mod scale;
 mod support;
 mod writes;

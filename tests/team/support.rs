@@ -207,9 +207,10 @@ pub async fn start(config: &str) -> Member {
     let team = Team::join(&agent, &team_config)
         .await
         .unwrap_or_else(|e| panic!("agent should join:\n{e}"));
-    let port = team_config.listen[0]
-        .rsplit(':')
-        .next()
+    let port = team_config
+        .listen
+        .first()
+        .and_then(|l| l.rsplit(':').next())
         .and_then(|p| p.parse().ok())
         .unwrap_or(0);
     Member {

@@ -23,6 +23,7 @@ use crate::value::{AnyValue, TypeInfo};
 
 pub use error::BlackboardError;
 pub use registry::Registry;
+pub use team::{AgentListing, ModuleListing, PropertyListing};
 
 /// What a (re)starting module instance needs from the blackboard.
 pub(crate) struct Binding {

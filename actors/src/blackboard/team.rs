@@ -18,6 +18,41 @@ pub(crate) enum TeamRequest {
     Queue(String, Reply<Arc<crate::queue::QueueCore>>),
     Outboxes(Reply<Vec<(String, OutboxWriter)>>),
     Inbox(String, Reply<RemoteQueue>),
+    Listing(Reply<AgentListing>),
+}
+
+/// What an agent holds, for tools that list it (`petrel ls`): its modules and properties.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct AgentListing {
+    /// Modules in declaration order, with their types.
+    pub modules: Vec<ModuleListing>,
+    /// Every property, in key order.
+    pub properties: Vec<PropertyListing>,
+}
+
+/// One module of an [`AgentListing`].
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct ModuleListing {
+    /// The module's name.
+    pub name: String,
+    /// Its type, e.g. `nav.planner`.
+    #[serde(rename = "type")]
+    pub type_name: String,
+}
+
+/// One property of an [`AgentListing`].
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct PropertyListing {
+    /// `module/path`.
+    pub key: String,
+    /// Its role, as [`PropertyKind`] displays it (`param`, `queue output`, ...).
+    pub kind: String,
+    /// Its value type (the item type for queues).
+    #[serde(rename = "type")]
+    pub type_name: String,
+    /// What it is linked to, if it is a linked input.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub link: Option<String>,
 }
 
 pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
@@ -48,6 +83,33 @@ pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
         TeamRequest::Queue(key, reply) => {
             let _ = reply.send(reg.queue_out(&key));
         }
+        TeamRequest::Listing(reply) => {
+            let _ = reply.send(Ok(listing(reg)));
+        }
+    }
+}
+
+fn listing(reg: &Registry) -> AgentListing {
+    let modules = reg
+        .modules()
+        .iter()
+        .map(|m| ModuleListing {
+            name: m.clone(),
+            type_name: reg.module_type(m).unwrap_or_default().to_string(),
+        })
+        .collect();
+    let properties = reg
+        .entries()
+        .map(|(key, entry)| PropertyListing {
+            key: key.clone(),
+            kind: entry.decl.kind.to_string(),
+            type_name: entry.decl.type_info.name().to_string(),
+            link: reg.link_of(key).map(str::to_string),
+        })
+        .collect();
+    AgentListing {
+        modules,
+        properties,
     }
 }
 
@@ -140,6 +202,12 @@ impl Blackboard {
     /// Where messages for `module` go (its `in/inbox`).
     pub async fn inbox(&self, module: &str) -> Result<RemoteQueue, BlackboardError> {
         self.call(|r| BlackboardMsg::Team(TeamRequest::Inbox(module.to_string(), r)))
+            .await
+    }
+
+    /// The agent's modules and properties, for tools that list them.
+    pub async fn listing(&self) -> Result<AgentListing, BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::Listing(r)))
             .await
     }
 

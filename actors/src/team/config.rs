@@ -43,6 +43,21 @@ pub struct TeamConfig {
     pub scouting: bool,
 }
 
+impl Default for TeamConfig {
+    /// What a section that gives only its name means (the serde defaults).
+    fn default() -> Self {
+        TeamConfig {
+            name: String::new(),
+            mode: SessionMode::default(),
+            listen: Vec::new(),
+            connect: Vec::new(),
+            lease_ms: DEFAULT_LEASE_MS,
+            remote_write: Vec::new(),
+            scouting: false,
+        }
+    }
+}
+
 impl TeamConfig {
     /// The section as config text (what a snapshot writes).
     pub fn to_ron(&self) -> String {
@@ -243,10 +258,16 @@ impl<'de> Deserialize<'de> for Mode {
         match raw.into_rust::<ModeArgs>() {
             Ok(ModeArgs::OnChange { min_interval_ms }) => Ok(Mode::OnChange { min_interval_ms }),
             Ok(ModeArgs::Periodic { ms }) => Ok(Mode::Periodic { ms }),
-            Err(e) => Err(de::Error::custom(format!(
-                "link mode `{text}`: expected `on_change`, `on_change(min_interval_ms: N)` or `periodic(ms: N)` ({})",
-                e.code
-            ))),
+            Err(e) => {
+                // An unknown variant would name the private helper enum: say nothing more.
+                let detail = match e.code {
+                    ron::Error::NoSuchEnumVariant { .. } => String::new(),
+                    other => format!(" ({other})"),
+                };
+                Err(de::Error::custom(format!(
+                    "link mode `{text}`: expected `on_change`, `on_change(min_interval_ms: N)` or `periodic(ms: N)`{detail}"
+                )))
+            }
         }
     }
 }

@@ -14,6 +14,6 @@ pub use config::{
 };
 pub use remote::{
     link_state, LinkStatus, Message, OutboxStatus, OutboxWriter, QueueTap, RemoteFeed, RemoteLink,
-    RemoteLinks, RemoteQueue, RemoteValue, RemoteWriter, StatusWriter, Tap, TeamEvent, TeamMember,
-    TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
+    RemoteLinks, RemoteQueue, RemoteValue, RemoteWriter, StatWriter, StatusWriter, Tap, TeamEvent,
+    TeamMember, TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
 };

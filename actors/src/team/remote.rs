@@ -7,6 +7,7 @@
 //! so modules cannot tell local from remote.
 
 use std::collections::BTreeMap;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 use parking_lot::Mutex;
@@ -194,40 +195,50 @@ impl RemoteQueue {
     }
 }
 
-/// Writes a module's `stats/outbox`.
-#[derive(Clone)]
-pub struct OutboxWriter {
+/// Writes one status property owned by the team transport: a link's `stats/links/<input>`
+/// ([`StatusWriter`]) or a module's `stats/outbox` ([`OutboxWriter`]).
+pub struct StatWriter<T> {
     pub(crate) ep: Arc<Endpoint>,
+    _status: PhantomData<fn(T)>,
 }
 
-impl OutboxWriter {
-    /// Publishes the outbox's status.
-    pub fn set(&self, status: OutboxStatus) {
-        self.ep.write(Arc::new(status));
+impl<T> StatWriter<T> {
+    pub(crate) fn new(ep: Arc<Endpoint>) -> Self {
+        StatWriter {
+            ep,
+            _status: PhantomData,
+        }
     }
 }
 
-/// Writes one link's `stats/links/<input>`.
-#[derive(Clone)]
-pub struct StatusWriter {
-    pub(crate) ep: Arc<Endpoint>,
+// Derived `Clone` would ask `T: Clone` for nothing: only the endpoint is cloned.
+impl<T> Clone for StatWriter<T> {
+    fn clone(&self) -> Self {
+        StatWriter::new(self.ep.clone())
+    }
 }
 
-impl StatusWriter {
-    /// Publishes the link's status.
-    pub fn set(&self, status: LinkStatus) {
+impl<T: Clone + Default + Send + Sync + 'static> StatWriter<T> {
+    /// Publishes the status.
+    pub fn set(&self, status: T) {
         self.ep.write(Arc::new(status));
     }
 
     /// The status as last published.
-    pub fn get(&self) -> LinkStatus {
+    pub fn get(&self) -> T {
         self.ep
             .value()
-            .downcast_ref::<LinkStatus>()
+            .downcast_ref::<T>()
             .cloned()
             .unwrap_or_default()
     }
 }
+
+/// Writes one link's `stats/links/<input>`.
+pub type StatusWriter = StatWriter<LinkStatus>;
+
+/// Writes a module's `stats/outbox`.
+pub type OutboxWriter = StatWriter<OutboxStatus>;
 
 /// One input of this agent linked to another agent's property.
 #[derive(Clone)]

@@ -73,7 +73,7 @@ impl Registry {
                 ep
             }
         };
-        let status = StatusWriter { ep: status };
+        let status = StatusWriter::new(status);
         status.set(LinkStatus {
             state: link_state::WAITING.into(),
             source: source.to_string(),
@@ -181,7 +181,7 @@ impl Registry {
                         ep
                     }
                 };
-                (m, OutboxWriter { ep })
+                (m, OutboxWriter::new(ep))
             })
             .collect()
     }
