@@ -58,7 +58,7 @@ pub(crate) fn agent(info: &AgentInfo) -> String {
 
 /// Columns padded to their widest cell; a header row unless every heading is empty; no
 /// trailing spaces.
-fn table<const N: usize>(headings: [&str; N], rows: &[[String; N]]) -> String {
+pub(crate) fn table<const N: usize>(headings: [&str; N], rows: &[[String; N]]) -> String {
     let mut widths = headings.map(str::len);
     for row in rows {
         for (w, cell) in widths.iter_mut().zip(row) {

@@ -2,13 +2,16 @@
 //! running agents (`ls`, `get`, `set`).
 
 mod check;
+mod follow;
 mod listing;
 mod logging;
 mod modules;
 mod plan;
+mod rate;
 mod reach;
 mod remote;
 mod run;
+mod top;
 
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -74,6 +77,56 @@ enum Command {
         url: String,
         /// The new value (RON).
         value: String,
+        #[command(flatten)]
+        reach: remote::Reach,
+    },
+    /// Prints a property's values (the current one first) or a queue's items as they come,
+    /// until Ctrl-C or `--count`.
+    Echo {
+        /// The property, `petrel://agent/module/path`.
+        url: String,
+        /// Stop after this many.
+        #[arg(short = 'n', long)]
+        count: Option<u64>,
+        /// One JSON object per line: `{"seq", "stamp_ns", "type", "value"}`.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        reach: remote::Reach,
+    },
+    /// Measures how often a property changes (rate, interval mean/min/max, jitter), from its
+    /// owner's write stamps: once a second until Ctrl-C, or once after `--count` changes.
+    Hz {
+        /// The property, `petrel://agent/module/path`.
+        url: String,
+        /// Figures over the last this many changes.
+        #[arg(short, long, default_value_t = follow::DEFAULT_WINDOW)]
+        window: usize,
+        /// Report once after this many changes, and exit.
+        #[arg(short = 'n', long)]
+        count: Option<usize>,
+        #[command(flatten)]
+        reach: remote::Reach,
+    },
+    /// Every module of every agent running here (or of AGENT): status, steps, steps/s, step
+    /// times, restarts, failures, queue drops; refreshed each second until Ctrl-C.
+    Top {
+        /// Only this agent.
+        agent: Option<String>,
+        /// Print once and exit (for scripts).
+        #[arg(long)]
+        once: bool,
+        #[command(flatten)]
+        reach: remote::Reach,
+    },
+    /// Prints supervisor, team, context and plan events of every agent running here (or of
+    /// AGENT) as they happen, until Ctrl-C or `--count`.
+    Events {
+        /// Only this agent.
+        agent: Option<String>,
+        /// Stop after this many.
+        #[arg(short = 'n', long)]
+        count: Option<u64>,
         #[command(flatten)]
         reach: remote::Reach,
     },
@@ -155,6 +208,24 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             command: Some(ModulesCommand::Describe { type_name }),
         } => modules::describe(&registry, &type_name),
         Command::Plan { command } => plan::run(command),
+        Command::Echo {
+            url,
+            count,
+            json,
+            reach,
+        } => follow::echo(&reach, &url, count, json),
+        Command::Hz {
+            url,
+            window,
+            count,
+            reach,
+        } => follow::hz(&reach, &url, window, count),
+        Command::Top { agent, once, reach } => top::run(&reach, agent.as_deref(), once),
+        Command::Events {
+            agent,
+            count,
+            reach,
+        } => follow::events(&reach, agent.as_deref(), count),
         Command::Ls { agent, reach } => remote::list(&reach, agent.as_deref()),
         Command::Get { url, reach } => remote::property(&reach, &url, remote::Request::Get),
         Command::Set { url, value, reach } => {

@@ -21,10 +21,10 @@ pub(crate) struct Reach {
     /// Reach the agent through the team of this config (any agent config of the team) instead
     /// of the runs recorded on this machine.
     #[arg(long)]
-    via: Option<PathBuf>,
+    pub(crate) via: Option<PathBuf>,
     /// Of the runs on this machine, the one with this process id (when several run the agent).
     #[arg(long, conflicts_with = "via")]
-    pid: Option<u32>,
+    pub(crate) pid: Option<u32>,
 }
 
 /// What to do once attached.
@@ -35,18 +35,7 @@ pub(crate) enum Request {
 
 /// Carries out `request` on `url`.
 pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
-    let url = match PropertyUrl::parse(url) {
-        Ok(u) if u.agent().is_some() => u,
-        Ok(_) => {
-            eprintln!("error: `{url}` names no agent: write it `petrel://agent/module/path`");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-    };
-    let team = match team_of(reach, url.agent().unwrap_or_default()) {
+    let (url, team) = match target(reach, url) {
         Ok(t) => t,
         Err(code) => return code,
     };
@@ -60,6 +49,23 @@ pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
             }),
         }
     })
+}
+
+/// The property `url` names (which must name its agent) and the team to reach it on.
+pub(crate) fn target(reach: &Reach, url: &str) -> Result<(PropertyUrl, TeamConfig), ExitCode> {
+    let url = match PropertyUrl::parse(url) {
+        Ok(u) if u.agent().is_some() => u,
+        Ok(_) => {
+            eprintln!("error: `{url}` names no agent: write it `petrel://agent/module/path`");
+            return Err(ExitCode::from(EXIT_BAD_INPUT));
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Err(ExitCode::from(EXIT_BAD_INPUT));
+        }
+    };
+    let team = team_of(reach, url.agent().unwrap_or_default())?;
+    Ok((url, team))
 }
 
 /// `petrel ls`: the agents running on this machine, or with `agent`, its modules and
@@ -93,7 +99,7 @@ fn list_agents(reach: &Reach) -> ExitCode {
 }
 
 /// The team section to reach `agent` with: the `--via` config's, or the recorded run's.
-fn team_of(reach: &Reach, agent: &str) -> Result<TeamConfig, ExitCode> {
+pub(crate) fn team_of(reach: &Reach, agent: &str) -> Result<TeamConfig, ExitCode> {
     let Some(via) = &reach.via else {
         let records = discovery::running(&discovery::directory());
         return match discovery::find(&records, agent, reach.pid) {
@@ -115,7 +121,7 @@ fn team_of(reach: &Reach, agent: &str) -> Result<TeamConfig, ExitCode> {
 }
 
 /// Connects a client to `team`, runs `work` with it and closes it.
-fn attached<F, Fut>(team: &TeamConfig, work: F) -> ExitCode
+pub(crate) fn attached<F, Fut>(team: &TeamConfig, work: F) -> ExitCode
 where
     F: FnOnce(std::sync::Arc<Client>) -> Fut,
     Fut: std::future::Future<Output = Result<(), TeamError>>,
@@ -147,7 +153,7 @@ where
     })
 }
 
-fn failed(e: TeamError) -> ExitCode {
+pub(crate) fn failed(e: TeamError) -> ExitCode {
     eprintln!("error: {e}");
     ExitCode::from(EXIT_REFUSED)
 }

@@ -130,8 +130,8 @@ pub(crate) async fn info(
 
 /// A tool's view of a team: it reaches the agents a team config names, without being a member.
 pub struct Client {
-    session: zenoh::Session,
-    keys: Keys,
+    pub(crate) session: zenoh::Session,
+    pub(crate) keys: Keys,
     team: String,
 }
 
@@ -168,6 +168,41 @@ impl Client {
     pub async fn get_json(&self, url: &PropertyUrl) -> Result<(String, Vec<u8>), TeamError> {
         self.retry(|| get(&self.session, &self.keys, &self.team, url))
             .await
+    }
+
+    /// The current values of `agent`'s value properties whose `module/path` matches
+    /// `pattern` (`*` one segment, `**` any): (key, type name, JSON) in key order.
+    pub async fn get_matching(
+        &self,
+        agent: &str,
+        pattern: &str,
+    ) -> Result<Vec<(String, String, Vec<u8>)>, TeamError> {
+        let replies = self
+            .session
+            .get(self.keys.data(CANONICAL, agent, pattern))
+            .timeout(REQUEST_TIMEOUT)
+            .await?;
+        let mut values = Vec::new();
+        while let Ok(reply) = replies.recv_async().await {
+            let Ok(sample) = reply.result() else {
+                continue;
+            };
+            let Some(key) = self.keys.parse_value(agent, sample.key_expr().as_str()) else {
+                continue;
+            };
+            let type_name = sample
+                .attachment()
+                .and_then(|a| Attachment::decode(&a.to_bytes()).ok())
+                .map(|a| a.type_name)
+                .unwrap_or_default();
+            values.push((
+                key.to_string(),
+                type_name,
+                sample.payload().to_bytes().into_owned(),
+            ));
+        }
+        values.sort();
+        Ok(values)
     }
 
     /// What `agent` holds: its modules and properties.

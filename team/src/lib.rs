@@ -37,10 +37,12 @@ pub mod membership;
 mod service;
 mod session;
 pub mod tracker;
+mod watch;
 pub mod wire;
 
 pub use client::{ron_encoding, AgentInfo, Client, REQUEST_TIMEOUT};
 pub use session::zenoh_config;
+pub use watch::{Update, Watch, WatchEvent};
 
 use keys::Keys;
 use membership::Membership;
@@ -178,11 +180,8 @@ impl Team {
             ctx.clone(),
             blackboard.remote_links(),
         )));
-        let outboxes = blackboard.outboxes().await.unwrap_or_default();
-        for (module, status) in outboxes {
-            let sender = mail::send_outbox(ctx.clone(), module, status);
-            team.tasks.push(tokio::spawn(sender));
-        }
+        team.tasks
+            .push(tokio::spawn(mail::follow_outboxes(ctx.clone())));
         // Announced last: when others see the agent, it already answers.
         let alive = ctx.keys.alive(&ctx.agent, &ctx.zid);
         let token = ctx.session.liveliness().declare_token(alive).await?;

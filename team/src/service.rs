@@ -39,19 +39,52 @@ pub(crate) async fn info(ctx: Arc<Ctx>, query: Query) {
     let _ = query.reply(query.key_expr().clone(), payload).await;
 }
 
-/// Answers a query for the current value of one of this agent's properties.
+/// Answers a query for the current value of one of this agent's properties, or, for a
+/// key with `*` (one segment) or `**` (any), of every value property it matches, each
+/// reply under the property's own key. Queues have no current value and are left out.
 pub(crate) async fn get(ctx: Arc<Ctx>, query: Query) {
     let Some(key) = ctx.keys.parse_value(&ctx.agent, query.key_expr().as_str()) else {
         return;
     };
     let key = key.to_string();
-    let handle = match ctx.blackboard.any_handle(&key).await {
-        Ok(h) => h,
+    if !key.contains('*') {
+        match ctx.blackboard.any_handle(&key).await {
+            Ok(handle) => reply_value(&ctx, &query, query.key_expr().as_str(), &key, &handle).await,
+            Err(e) => {
+                let _ = query.reply_err(e.to_string()).await;
+            }
+        }
+        return;
+    }
+    let listing = match ctx.blackboard.listing().await {
+        Ok(l) => l,
         Err(e) => {
             let _ = query.reply_err(e.to_string()).await;
             return;
         }
     };
+    for property in listing
+        .properties
+        .iter()
+        .filter(|p| pattern_matches(&key, &p.key))
+    {
+        // Queues and properties removed since the listing have no value to give.
+        if let Ok(handle) = ctx.blackboard.any_handle(&property.key).await {
+            let reply_key = ctx
+                .keys
+                .data(crate::keys::CANONICAL, &ctx.agent, &property.key);
+            reply_value(&ctx, &query, &reply_key, &property.key, &handle).await;
+        }
+    }
+}
+
+async fn reply_value(
+    ctx: &Ctx,
+    query: &Query,
+    reply_key: &str,
+    key: &str,
+    handle: &petrel_actors::AnyHandle,
+) {
     let sample = handle.read();
     let type_info = handle.type_info();
     match type_info.to_json(&sample.value) {
@@ -63,7 +96,7 @@ pub(crate) async fn get(ctx: Arc<Ctx>, query: Query) {
                 zid: ctx.zid.clone(),
             };
             let _ = query
-                .reply(query.key_expr().clone(), payload)
+                .reply(reply_key.to_string(), payload)
                 .attachment(attachment.encode())
                 .await;
         }

@@ -1,7 +1,7 @@
 //! Running a process from a test with a deadline: a tool that hangs fails its test with
 //! what it printed so far instead of stalling the whole suite.
 
-use std::process::{Command, Output, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -19,6 +19,13 @@ pub fn output_within_deadline(cmd: &mut Command) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap_or_else(|e| panic!("cannot start {cmd:?}: {e}"));
+    wait_within_deadline(child, &format!("{cmd:?}"))
+}
+
+/// Waits for a started `child` (named `what` in failures) and returns what is left of its
+/// output, as [`output_within_deadline`] does.
+#[allow(dead_code)] // Not every test binary that includes this file waits on its own children.
+pub fn wait_within_deadline(child: Child, what: &str) -> Output {
     let pid = child.id() as libc::pid_t;
     let (done, finished) = mpsc::channel();
     std::thread::spawn(move || {
@@ -32,7 +39,7 @@ pub fn output_within_deadline(cmd: &mut Command) -> Output {
             let out = finished
                 .recv_timeout(PROCESS_DEADLINE)
                 .map(|o| o.map(|o| String::from_utf8_lossy(&o.stderr).into_owned()));
-            panic!("{cmd:?} still ran after {PROCESS_DEADLINE:?}; killed. stderr: {out:?}");
+            panic!("{what} still ran after {PROCESS_DEADLINE:?}; killed. stderr: {out:?}");
         }
     }
 }

@@ -50,3 +50,41 @@ async fn messages_arrive_in_order_and_undeliverable_ones_are_counted() {
     b.stop().await;
     a.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_module_added_while_the_agent_runs_can_send_messages() {
+    let (a, b) = pair(
+        "mail-added",
+        ("", r#"(name: "early", type: "demo.counter"),"#),
+        ("", r#"(name: "m", type: "test.mailer"),"#),
+    )
+    .await;
+    let members = a
+        .handle::<petrel::actors::team::TeamMembers>("_team/members")
+        .await;
+    wait_for(&members, "b in a's team", |l| l.0.len() == 2).await;
+    let late = petrel::actors::ModuleConfig {
+        name: "late".into(),
+        type_name: "test.mailer".into(),
+        values: [("params/to".to_string(), ron::Value::String("b/m".into()))].into(),
+        ..Default::default()
+    };
+    a.agent
+        .modules()
+        .add(late)
+        .await
+        .expect("the module is added");
+    // Sent at once: the outbox is tapped when the module is declared, before the transport
+    // has even heard of the module, so nothing is lost in between.
+    let outbox = a.handle::<OutboxStatus>("late/stats/outbox").await;
+    a.agent
+        .blackboard()
+        .set("late/in/send", 5_i64)
+        .await
+        .unwrap();
+    let received = b.handle::<i64>("m/out/received").await;
+    wait_for(&received, "5 messages from the late module", |n| *n == 5).await;
+    wait_for(&outbox, "5 acknowledged", |s| s.delivered == 5).await;
+    b.stop().await;
+    a.stop().await;
+}

@@ -4,7 +4,6 @@
 #[path = "../common/bounded.rs"]
 mod bounded;
 mod cli;
-mod discovery;
 mod links;
 mod mail;
 mod membership;
@@ -15,4 +14,5 @@ mod rogue;
 mod router;
 mod scale;
 mod support;
+mod tools;
 mod writes;

@@ -103,6 +103,8 @@ pub struct Mailer {
     outbox: QueueWriter<Message>,
     inbox: QueueReader<Message>,
     sent: i64,
+    /// The last `in/send` value acted on.
+    handled: i64,
     received: Output<i64>,
     out_of_order: Output<i64>,
 }
@@ -117,6 +119,7 @@ impl Module for Mailer {
             outbox: ports.queue_out("out/outbox", 1024, "messages out"),
             inbox: ports.queue_in("in/inbox", "messages in"),
             sent: 0,
+            handled: 0,
             received: ports.output("out/received", 0, "messages received"),
             out_of_order: ports.output("out/out_of_order", 0, "messages not in order"),
         }
@@ -124,8 +127,10 @@ impl Module for Mailer {
     fn schedule(&self) -> Schedule {
         Schedule::new().on_change(&self.send).on_items(&self.inbox)
     }
-    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        if ctx.cause().changed() && !ctx.cause().first() {
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        // A new `in/send` value, whether it came before the first step or after.
+        if self.send.value() != self.handled {
+            self.handled = self.send.value();
             for _ in 0..self.send.value() {
                 let body = self.sent.to_string();
                 self.outbox.push(Message {

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::{Blackboard, BlackboardMsg, Registry, Reply};
 use crate::ports::PropertyKind;
-use crate::team::{LinkTarget, OutboxWriter, RemoteLinks, RemoteQueue, RemoteWriter, Tap};
+use crate::team::{LinkTarget, Outbox, RemoteLinks, RemoteQueue, RemoteWriter, Tap};
 use crate::types::PropertyType;
 use crate::url::PropertyUrl;
 use crate::value::TypeInfo;
@@ -16,7 +16,7 @@ pub(crate) enum TeamRequest {
     Tap(String, Reply<Tap>),
     KindOf(String, Reply<(PropertyKind, TypeInfo)>),
     Queue(String, Reply<Arc<crate::queue::QueueCore>>),
-    Outboxes(Reply<Vec<(String, OutboxWriter)>>),
+    Outboxes(Reply<Vec<Outbox>>),
     Inbox(String, Reply<RemoteQueue>),
     Listing(Reply<AgentListing>),
 }
@@ -192,9 +192,9 @@ impl Blackboard {
         *self.writer.write() = writer;
     }
 
-    /// The modules with an `out/outbox` queue of messages, with the writers of their
-    /// `stats/outbox`.
-    pub async fn outboxes(&self) -> Result<Vec<(String, OutboxWriter)>, BlackboardError> {
+    /// The outboxes (`out/outbox` queues of messages) not yet handed out, each tapped since
+    /// its module was declared, with the writer of its `stats/outbox`. Each is handed out once.
+    pub async fn outboxes(&self) -> Result<Vec<Outbox>, BlackboardError> {
         self.call(|r| BlackboardMsg::Team(TeamRequest::Outboxes(r)))
             .await
     }

@@ -13,7 +13,7 @@ pub use config::{
     TeamConfig, DEFAULT_LEASE_MS, MAX_LEASE_MS, MIN_LEASE_MS,
 };
 pub use remote::{
-    link_state, LinkStatus, Message, OutboxStatus, OutboxWriter, QueueTap, RemoteFeed, RemoteLink,
-    RemoteLinks, RemoteQueue, RemoteValue, RemoteWriter, StatWriter, StatusWriter, Tap, TeamEvent,
-    TeamMember, TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
+    link_state, LinkStatus, Message, Outbox, OutboxStatus, OutboxWriter, QueueTap, RemoteFeed,
+    RemoteLink, RemoteLinks, RemoteQueue, RemoteValue, RemoteWriter, StatWriter, StatusWriter, Tap,
+    TeamEvent, TeamMember, TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
 };

@@ -240,6 +240,18 @@ pub type StatusWriter = StatWriter<LinkStatus>;
 /// Writes a module's `stats/outbox`.
 pub type OutboxWriter = StatWriter<OutboxStatus>;
 
+/// A module's outbox as the team transport sends it: the tap on its `out/outbox` (attached as
+/// soon as the module is declared on an agent with a team, so nothing pushed before the
+/// transport starts is missed) and the writer of its `stats/outbox`.
+pub struct Outbox {
+    /// The module.
+    pub module: String,
+    /// Its `stats/outbox`.
+    pub status: OutboxWriter,
+    /// Its `out/outbox` items.
+    pub tap: QueueTap,
+}
+
 /// One input of this agent linked to another agent's property.
 #[derive(Clone)]
 pub struct RemoteLink {

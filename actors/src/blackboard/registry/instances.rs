@@ -109,6 +109,7 @@ impl Registry {
         }
         self.entries.retain(|k, _| !k.starts_with(&prefix));
         self.remote.remove_module(module);
+        self.forget_outbox(module);
         self.order.retain(|m| m != module);
         self.modules.remove(module);
         Ok(())

@@ -55,6 +55,10 @@ pub struct Registry {
     remote: Arc<RemoteLinks>,
     /// The team the agent joins, for snapshots.
     team: Option<crate::team::TeamConfig>,
+    /// Outboxes tapped but not yet handed to the team transport, and the modules whose
+    /// outbox was tapped (each is tapped once).
+    pending_outboxes: Vec<crate::team::Outbox>,
+    tapped_outboxes: std::collections::HashSet<String>,
 }
 
 impl Registry {
@@ -67,6 +71,8 @@ impl Registry {
             entries: BTreeMap::new(),
             remote: Arc::default(),
             team: None,
+            pending_outboxes: Vec::new(),
+            tapped_outboxes: Default::default(),
         }
     }
 
@@ -141,6 +147,9 @@ impl Registry {
             signal: Arc::default(),
         };
         self.modules.insert(module.to_string(), entry);
+        if self.team.is_some() {
+            self.tap_outbox(module);
+        }
         Ok(())
     }
 

@@ -8,7 +8,7 @@ use crate::cell::Endpoint;
 use crate::ports::{Handle, PropertyDecl, PropertyKind};
 use crate::queue::{QueueCore, ReaderEndpoint};
 use crate::team::{
-    link_state, LinkStatus, LinkTarget, Message, OutboxStatus, OutboxWriter, Qos, QueueTap,
+    link_state, LinkStatus, LinkTarget, Message, Outbox, OutboxStatus, OutboxWriter, Qos, QueueTap,
     RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue, RemoteValue, StatusWriter, Tap, TeamConfig,
     TeamEvent, TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
 };
@@ -147,43 +147,58 @@ impl Registry {
         Ok((decl.kind, decl.type_info))
     }
 
-    /// The modules with an outbox (`out/outbox`, a queue of [`Message`]s), each with the
-    /// writer of its `stats/outbox` (declared here the first time).
-    pub(crate) fn outboxes(&mut self) -> Vec<(String, OutboxWriter)> {
-        let modules: Vec<String> = self
-            .order
-            .iter()
-            .filter(|m| {
-                self.entries.get(&format!("{m}/{OUTBOX}")).is_some_and(|e| {
-                    e.decl.kind == PropertyKind::QueueOut && e.decl.type_info.is::<Message>()
-                })
-            })
-            .cloned()
-            .collect();
-        modules
-            .into_iter()
-            .map(|m| {
-                let key = format!("{m}/stats/outbox");
-                let ep = match self.entries.get(&key).map(|e| &e.handle) {
-                    Some(Handle::Value(ep)) => ep.clone(),
-                    _ => {
-                        let decl = PropertyDecl {
-                            path: "stats/outbox".into(),
-                            kind: PropertyKind::Stats,
-                            type_info: TypeInfo::of::<OutboxStatus>(),
-                            default: None,
-                            doc: "messages of out/outbox delivered, refused and dropped".into(),
-                            capacity: None,
-                        };
-                        let ep =
-                            Endpoint::new(&key, decl.type_info, Arc::new(OutboxStatus::default()));
-                        self.insert_runtime(key, decl, Handle::Value(ep.clone()));
-                        ep
-                    }
+    /// The outboxes (`out/outbox`, a queue of [`Message`]s) not yet handed to the transport,
+    /// each with its tap and the writer of its `stats/outbox`.
+    pub(crate) fn outboxes(&mut self) -> Vec<Outbox> {
+        for module in self.order.clone() {
+            self.tap_outbox(&module);
+        }
+        std::mem::take(&mut self.pending_outboxes)
+    }
+
+    /// Taps `module`'s outbox, if it has one not yet tapped, and declares its `stats/outbox`.
+    pub(crate) fn tap_outbox(&mut self, module: &str) {
+        let key = format!("{module}/{OUTBOX}");
+        let core = match self.entries.get(&key) {
+            Some(Entry {
+                decl,
+                handle: Handle::QueueOut(core),
+                ..
+            }) if decl.type_info.is::<Message>() => core.clone(),
+            _ => return,
+        };
+        if !self.tapped_outboxes.insert(module.to_string()) {
+            return;
+        }
+        let tap = QueueTap::new(queue_tap(&key, &core));
+        let key = format!("{module}/stats/outbox");
+        let ep = match self.entries.get(&key).map(|e| &e.handle) {
+            Some(Handle::Value(ep)) => ep.clone(),
+            _ => {
+                let decl = PropertyDecl {
+                    path: "stats/outbox".into(),
+                    kind: PropertyKind::Stats,
+                    type_info: TypeInfo::of::<OutboxStatus>(),
+                    default: None,
+                    doc: "messages of out/outbox delivered, refused and dropped".into(),
+                    capacity: None,
                 };
-                (m, OutboxWriter::new(ep))
-            })
-            .collect()
+                let ep = Endpoint::new(&key, decl.type_info, Arc::new(OutboxStatus::default()));
+                self.insert_runtime(key, decl, Handle::Value(ep.clone()));
+                ep
+            }
+        };
+        self.pending_outboxes.push(Outbox {
+            module: module.to_string(),
+            status: OutboxWriter::new(ep),
+            tap,
+        });
+    }
+
+    /// Forgets the outbox of a removed module (one added again under its name is tapped anew).
+    pub(crate) fn forget_outbox(&mut self, module: &str) {
+        self.tapped_outboxes.remove(module);
+        self.pending_outboxes.retain(|o| o.module != module);
     }
 
     /// Where messages for `module` go: its `in/inbox` (a queue of [`Message`]s), fed like a
@@ -213,6 +228,9 @@ impl Registry {
     /// Declares `_team/members` and the `_team/events` queue (for agents that join `team`).
     pub(crate) fn declare_team(&mut self, team: &TeamConfig) {
         self.team = Some(team.clone());
+        for module in self.order.clone() {
+            self.tap_outbox(&module);
+        }
         if self.modules.contains_key(TEAM_MODULE) {
             return;
         }

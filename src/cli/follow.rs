@@ -1,0 +1,196 @@
+//! `petrel echo` and `petrel hz`: follow a property of a running agent as it changes.
+
+use std::collections::VecDeque;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use petrel_team::{TeamError, Update, Watch, WatchEvent};
+
+use super::rate::rate;
+use super::remote::{attached, target, Reach};
+
+/// Stamps `hz` keeps by default: its figures are over the last this many changes.
+pub(crate) const DEFAULT_WINDOW: usize = 100;
+
+/// Prints each value or queue item of `url` as it comes, `count` of them or until Ctrl-C.
+pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> ExitCode {
+    let (url, team) = match target(reach, url) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    attached(&team, |client| async move {
+        let mut watch = client.watch(&url).await?;
+        let mut printed = 0;
+        while count.is_none_or(|n| printed < n) {
+            let update = tokio::select! {
+                update = next_update(&mut watch) => update?,
+                _ = tokio::signal::ctrl_c() => break,
+            };
+            println!("{}", line(&update, json));
+            printed += 1;
+        }
+        if watch.dropped() > 0 {
+            eprintln!(
+                "{} updates dropped: they came faster than this terminal took them",
+                watch.dropped()
+            );
+        }
+        Ok(())
+    })
+}
+
+/// Reports how often `url` changes: after `count` changes, or once a second until Ctrl-C,
+/// over the last `window` changes.
+pub(crate) fn hz(reach: &Reach, url: &str, window: usize, count: Option<usize>) -> ExitCode {
+    let (url, team) = match target(reach, url) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    let window = window.max(2);
+    attached(&team, |client| async move {
+        let mut watch = client.watch(&url).await?;
+        // The first update is the current value, written whenever: not a change to time.
+        next_update(&mut watch).await?;
+        let mut stamps = VecDeque::with_capacity(window);
+        let mut report = tokio::time::interval(Duration::from_secs(1));
+        report.tick().await;
+        let mut seen = 0;
+        loop {
+            tokio::select! {
+                update = next_update(&mut watch) => {
+                    let update = update?;
+                    if stamps.len() == window {
+                        stamps.pop_front();
+                    }
+                    stamps.push_back(update.stamp_ns);
+                    seen += 1;
+                    if count == Some(seen) {
+                        break;
+                    }
+                }
+                _ = report.tick(), if count.is_none() => print_rate(stamps.make_contiguous()),
+                _ = tokio::signal::ctrl_c() => break,
+            }
+        }
+        print_rate(stamps.make_contiguous());
+        Ok(())
+    })
+}
+
+fn print_rate(stamps: &[u64]) {
+    match rate(stamps) {
+        Some(r) => println!("{r}"),
+        None => println!("no change yet"),
+    }
+}
+
+/// The next value or item of `watch`.
+async fn next_update(watch: &mut Watch) -> Result<Update, TeamError> {
+    loop {
+        match watch.next().await {
+            Some(WatchEvent::Update(u)) => return Ok(u),
+            Some(WatchEvent::Opened) => continue,
+            Some(WatchEvent::Refused(why)) => return Err(TeamError::Refused(why)),
+            None => return Err(TeamError::Transport("the session closed".into())),
+        }
+    }
+}
+
+/// One printed update: the JSON value, or with `json` an object with its sequence number,
+/// write stamp and type.
+fn line(update: &Update, json: bool) -> String {
+    let value = String::from_utf8_lossy(&update.json);
+    match json {
+        false => value.into_owned(),
+        true => format!(
+            r#"{{"seq":{},"stamp_ns":{},"type":{},"value":{value}}}"#,
+            update.seq,
+            update.stamp_ns,
+            serde_json::Value::from(update.type_name.as_str())
+        ),
+    }
+}
+
+/// Whether the queue `key` is an event stream `petrel events` follows: supervisor and team
+/// events, context changes (`out/changes`), plan firings (`out/firings`).
+pub(crate) fn is_event_queue(key: &str) -> bool {
+    matches!(key, "_supervisor/events" | "_team/events")
+        || key.ends_with("/out/changes")
+        || key.ends_with("/out/firings")
+}
+
+/// Prints the events of `agent` (or of every agent running here) as they happen: `count` of
+/// them, or until Ctrl-C.
+pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> ExitCode {
+    let targets = match super::top::targets(reach, agent) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    super::top::with_clients(&targets, |clients| async move {
+        let (tx, mut rx) = tokio::sync::mpsc::channel(1024);
+        let (opened_tx, mut opened) = tokio::sync::mpsc::channel(64);
+        let mut watches = Vec::new();
+        for (agent, client) in clients.iter() {
+            let info = client.info(agent).await?;
+            for p in &info.properties {
+                if p.kind != "queue output" || !is_event_queue(&p.key) {
+                    continue;
+                }
+                let url = petrel_actors::PropertyUrl::parse(&format!("petrel://{agent}/{}", p.key))
+                    .map_err(|e| TeamError::Refused(e.to_string()))?;
+                let mut watch = client.watch(&url).await?;
+                let (tx, opened, source) =
+                    (tx.clone(), opened_tx.clone(), format!("{agent}/{}", p.key));
+                watches.push(tokio::spawn(async move {
+                    while let Some(event) = watch.next().await {
+                        let update = match event {
+                            WatchEvent::Update(u) => u,
+                            WatchEvent::Opened => {
+                                // Later opens (another reader came) need no one to hear them.
+                                let _ = opened.try_send(source.clone());
+                                continue;
+                            }
+                            WatchEvent::Refused(_) => return,
+                        };
+                        if tx.send((source.clone(), update)).await.is_err() {
+                            return;
+                        }
+                    }
+                }));
+            }
+        }
+        // Say when every stream is open, so a person (or a test) knows nothing is missed from
+        // then on.
+        drop(opened_tx);
+        let streams = watches.len();
+        let mut open = std::collections::BTreeSet::new();
+        while open.len() < streams {
+            match opened.recv().await {
+                Some(source) => open.insert(source),
+                None => break,
+            };
+        }
+        let names: Vec<&str> = open.iter().map(String::as_str).collect();
+        let plural = if streams == 1 { "" } else { "s" };
+        eprintln!(
+            "following {streams} event stream{plural}: {}",
+            names.join(", ")
+        );
+        drop(tx);
+        let mut printed = 0;
+        while count.is_none_or(|n| printed < n) {
+            tokio::select! {
+                event = rx.recv() => match event {
+                    Some((source, u)) => println!("{source}  {}", String::from_utf8_lossy(&u.json)),
+                    None => break,
+                },
+                _ = tokio::signal::ctrl_c() => break,
+            }
+            printed += 1;
+        }
+        for w in watches {
+            w.abort();
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,103 @@
+//! What `petrel hz` reports, computed from write stamps alone (pure, so it is tested without
+//! a clock): the rate, and the intervals' mean, extremes and spread (jitter).
+
+/// Figures over a window of stamps.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Rate {
+    /// Samples in the window.
+    pub samples: usize,
+    /// Changes per second.
+    pub hz: f64,
+    /// Mean interval, s.
+    pub mean_s: f64,
+    /// Shortest interval, s.
+    pub min_s: f64,
+    /// Longest interval, s.
+    pub max_s: f64,
+    /// Standard deviation of the intervals, s.
+    pub jitter_s: f64,
+}
+
+/// The figures of `stamps_ns` (in arrival order); `None` under two samples. Intervals that go
+/// backwards (a restarted owner, a clock step) are left out rather than counted negative.
+pub(crate) fn rate(stamps_ns: &[u64]) -> Option<Rate> {
+    let intervals: Vec<f64> = stamps_ns
+        .windows(2)
+        .filter(|w| w[1] >= w[0])
+        .map(|w| (w[1] - w[0]) as f64 / 1e9)
+        .collect();
+    if intervals.is_empty() {
+        return None;
+    }
+    let n = intervals.len() as f64;
+    let mean_s = intervals.iter().sum::<f64>() / n;
+    let variance = intervals.iter().map(|i| (i - mean_s).powi(2)).sum::<f64>() / n;
+    Some(Rate {
+        samples: stamps_ns.len(),
+        hz: if mean_s > 0.0 {
+            1.0 / mean_s
+        } else {
+            f64::INFINITY
+        },
+        mean_s,
+        min_s: intervals.iter().copied().fold(f64::INFINITY, f64::min),
+        max_s: intervals.iter().copied().fold(0.0, f64::max),
+        jitter_s: variance.sqrt(),
+    })
+}
+
+impl std::fmt::Display for Rate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let ms = |s: f64| s * 1e3;
+        write!(
+            f,
+            "rate {:.3} Hz over {} samples: interval mean {:.3} ms, min {:.3} ms, max {:.3} ms, jitter {:.3} ms",
+            self.hz,
+            self.samples,
+            ms(self.mean_s),
+            ms(self.min_s),
+            ms(self.max_s),
+            ms(self.jitter_s)
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_steady_stream_has_its_rate_and_no_jitter() {
+        let stamps: Vec<u64> = (0..11).map(|i| 1_000 + i * 20_000_000).collect();
+        let r = rate(&stamps).unwrap();
+        assert_eq!(r.samples, 11);
+        assert!((r.hz - 50.0).abs() < 1e-9, "{r:?}");
+        assert_eq!((r.min_s, r.max_s), (0.02, 0.02));
+        assert!(r.jitter_s < 1e-12, "{r:?}");
+        assert_eq!(
+            r.to_string(),
+            "rate 50.000 Hz over 11 samples: interval mean 20.000 ms, min 20.000 ms, max 20.000 ms, jitter 0.000 ms"
+        );
+    }
+
+    #[test]
+    fn uneven_intervals_show_as_extremes_and_jitter() {
+        // Intervals 10 ms and 30 ms alternating: mean 20 ms, deviation 10 ms.
+        let stamps = [0, 10_000_000, 40_000_000, 50_000_000, 80_000_000];
+        let r = rate(&stamps).unwrap();
+        assert!(
+            (r.mean_s - 0.02).abs() < 1e-12 && (r.jitter_s - 0.01).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert_eq!((r.min_s, r.max_s), (0.01, 0.03));
+    }
+
+    #[test]
+    fn too_few_samples_or_backward_steps_give_nothing_wrong() {
+        assert_eq!(rate(&[]), None);
+        assert_eq!(rate(&[5]), None);
+        assert_eq!(rate(&[10, 5]), None);
+        let r = rate(&[0, 10, 5, 15]).unwrap();
+        assert_eq!((r.min_s, r.max_s), (1e-8, 1e-8));
+    }
+}

@@ -1,0 +1,251 @@
+//! `petrel top`: every module of every running agent with its status and step figures,
+//! refreshed each second like `top`, or printed once with `--once`.
+
+use std::process::ExitCode;
+use std::time::Duration;
+
+use petrel_team::discovery::{self, Reachable};
+use petrel_team::{Client, TeamError};
+
+use super::remote::{failed, team_of, Reach};
+use super::EXIT_BAD_INPUT;
+
+/// One row: a module's figures, from its `stats/` properties.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub(crate) struct ModuleRow {
+    pub agent: String,
+    pub module: String,
+    pub type_name: String,
+    pub status: String,
+    pub steps: i64,
+    pub mean_interval_ms: f64,
+    pub mean_step_us: f64,
+    pub last_step_us: f64,
+    pub restarts: i64,
+    pub failures: i64,
+    /// Items its queue inputs lost by lagging (`stats/dropped/...`, summed).
+    pub dropped: i64,
+}
+
+/// The rows of one agent from its module types and its `*/stats/**` values (key, JSON).
+pub(crate) fn rows(
+    agent: &str,
+    modules: &[(String, String)],
+    stats: &[(String, Vec<u8>)],
+) -> Vec<ModuleRow> {
+    modules
+        .iter()
+        .filter(|(name, _)| !name.starts_with('_'))
+        .map(|(name, type_name)| {
+            let mut row = ModuleRow {
+                agent: agent.to_string(),
+                module: name.clone(),
+                type_name: type_name.clone(),
+                ..ModuleRow::default()
+            };
+            let prefix = format!("{name}/stats/");
+            for (key, json) in stats {
+                let Some(stat) = key.strip_prefix(&prefix) else {
+                    continue;
+                };
+                let value: serde_json::Value = serde_json::from_slice(json).unwrap_or_default();
+                let int = value.as_i64().unwrap_or(0);
+                let float = value.as_f64().unwrap_or(0.0);
+                match stat {
+                    "status" => row.status = value.as_str().unwrap_or_default().to_string(),
+                    "steps" => row.steps = int,
+                    "mean_interval_ms" => row.mean_interval_ms = float,
+                    "mean_step_us" => row.mean_step_us = float,
+                    "last_step_us" => row.last_step_us = float,
+                    "restarts" => row.restarts = int,
+                    "failures" => row.failures = int,
+                    s if s.starts_with("dropped/") => row.dropped += int,
+                    _ => {}
+                }
+            }
+            row
+        })
+        .collect()
+}
+
+/// The table of `rows`.
+pub(crate) fn table(rows: &[ModuleRow]) -> String {
+    let cells: Vec<[String; 11]> = rows
+        .iter()
+        .map(|r| {
+            let rate = match r.mean_interval_ms > 0.0 {
+                true => format!("{:.1}", 1000.0 / r.mean_interval_ms),
+                false => "-".into(),
+            };
+            [
+                r.agent.clone(),
+                r.module.clone(),
+                r.type_name.clone(),
+                r.status.clone(),
+                r.steps.to_string(),
+                rate,
+                format!("{:.1}", r.mean_step_us),
+                format!("{:.1}", r.last_step_us),
+                r.restarts.to_string(),
+                r.failures.to_string(),
+                r.dropped.to_string(),
+            ]
+        })
+        .collect();
+    super::listing::table(
+        [
+            "AGENT", "MODULE", "TYPE", "STATUS", "STEPS", "STEPS/S", "MEAN_US", "LAST_US",
+            "RESTARTS", "FAILURES", "DROPPED",
+        ],
+        &cells,
+    )
+}
+
+/// The agents a tool looks at: `agent`, or every agent running here.
+pub(crate) fn targets(reach: &Reach, agent: Option<&str>) -> Result<Vec<Reachable>, ExitCode> {
+    match agent {
+        Some(agent) => team_of(reach, agent).map(|team| {
+            vec![Reachable {
+                agent: agent.to_string(),
+                team: team.name.clone(),
+                connect: discovery::endpoints_of(&team),
+            }]
+        }),
+        None if reach.via.is_some() => {
+            eprintln!("error: with --via CONFIG, name the AGENT");
+            Err(ExitCode::from(EXIT_BAD_INPUT))
+        }
+        None => Ok(discovery::running(&discovery::directory())
+            .into_iter()
+            .filter(|r| reach.pid.is_none_or(|p| p == r.pid))
+            .flat_map(|r| r.agents)
+            .collect()),
+    }
+}
+
+/// Connects a client to each target's team and runs `work` with (agent, client) pairs.
+pub(crate) fn with_clients<F, Fut>(targets: &[Reachable], work: F) -> ExitCode
+where
+    F: FnOnce(std::sync::Arc<Vec<(String, Client)>>) -> Fut,
+    Fut: std::future::Future<Output = Result<(), TeamError>>,
+{
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .enable_all()
+        .build()
+    {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("error: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    runtime.block_on(async {
+        let mut clients = Vec::new();
+        for target in targets {
+            match Client::connect(&target.tool_config()).await {
+                Ok(c) => clients.push((target.agent.clone(), c)),
+                Err(e) => return failed(e),
+            }
+        }
+        let clients = std::sync::Arc::new(clients);
+        let result = work(clients.clone()).await;
+        if let Ok(clients) = std::sync::Arc::try_unwrap(clients) {
+            for (_, client) in clients {
+                client.close().await;
+            }
+        }
+        match result {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => failed(e),
+        }
+    })
+}
+
+/// Shows `agent` (or every agent running here), once or every second until Ctrl-C.
+pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
+    let targets = match targets(reach, agent) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    with_clients(&targets, |clients| async move {
+        let mut tick = tokio::time::interval(Duration::from_secs(1));
+        loop {
+            let rows = collect(&clients).await?;
+            if once {
+                print!("{}", table(&rows));
+                return Ok(());
+            }
+            // Clear the screen and go home, as `top` does.
+            print!("\x1b[2J\x1b[H{}", table(&rows));
+            tokio::select! {
+                _ = tick.tick() => {}
+                _ = tokio::signal::ctrl_c() => return Ok(()),
+            }
+        }
+    })
+}
+
+async fn collect(clients: &[(String, Client)]) -> Result<Vec<ModuleRow>, TeamError> {
+    let mut all = Vec::new();
+    for (agent, client) in clients {
+        let info = client.info(agent).await?;
+        let modules: Vec<(String, String)> = info
+            .modules
+            .iter()
+            .map(|m| (m.clone(), info.types.get(m).cloned().unwrap_or_default()))
+            .collect();
+        let stats: Vec<(String, Vec<u8>)> = client
+            .get_matching(agent, "*/stats/**")
+            .await?
+            .into_iter()
+            .map(|(key, _, json)| (key, json))
+            .collect();
+        all.extend(rows(agent, &modules, &stats));
+    }
+    Ok(all)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_row_gathers_a_modules_stats_and_sums_its_queue_drops() {
+        let json = |v: &str| v.as_bytes().to_vec();
+        let stats = [
+            ("scale/stats/status".to_string(), json("\"running\"")),
+            ("scale/stats/steps".to_string(), json("42")),
+            ("scale/stats/mean_interval_ms".to_string(), json("20.0")),
+            ("scale/stats/mean_step_us".to_string(), json("3.5")),
+            ("scale/stats/last_step_us".to_string(), json("4.0")),
+            ("scale/stats/restarts".to_string(), json("1")),
+            ("scale/stats/failures".to_string(), json("2")),
+            ("scale/stats/dropped/in/a".to_string(), json("3")),
+            ("scale/stats/dropped/in/b".to_string(), json("4")),
+            ("scaler/stats/steps".to_string(), json("7")),
+        ];
+        let modules = [
+            ("scale".to_string(), "demo.scale".to_string()),
+            ("_team".to_string(), "runtime.team".to_string()),
+        ];
+        let rows = rows("a", &modules, &stats);
+        assert_eq!(rows.len(), 1, "runtime modules are left out");
+        let r = &rows[0];
+        assert_eq!(
+            (
+                r.status.as_str(),
+                r.steps,
+                r.restarts,
+                r.failures,
+                r.dropped
+            ),
+            ("running", 42, 1, 2, 7)
+        );
+        assert_eq!(
+            table(&rows),
+            "AGENT  MODULE  TYPE        STATUS   STEPS  STEPS/S  MEAN_US  LAST_US  RESTARTS  FAILURES  DROPPED\n\
+             a      scale   demo.scale  running  42     50.0     3.5      4.0      1         2         7\n"
+        );
+    }
+}

@@ -1,0 +1,261 @@
+//! Every `petrel run` is reachable from the same machine: `petrel ls|get|set|echo|hz` find an
+//! agent that has no `team:` section through the run's record, with no config to point at.
+
+use std::io::{BufRead, BufReader, Lines};
+use std::path::Path;
+use std::process::{Child, ChildStderr, Command, Stdio};
+
+/// A `petrel run` whose log the test reads; killed (SIGKILL) when dropped.
+struct Run {
+    child: Child,
+    log: Lines<BufReader<ChildStderr>>,
+}
+
+impl Run {
+    fn start(config: &Path, records: &Path) -> Run {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .arg("run")
+            .arg(config)
+            .args(["--for", "120s"])
+            .env("PETREL_RUNTIME_DIR", records)
+            .env("RUST_LOG", "info")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("petrel starts");
+        let log = BufReader::new(child.stderr.take().unwrap()).lines();
+        Run { child, log }
+    }
+
+    /// Reads the log up to a line containing `needle` (the run ends by itself after `--for`,
+    /// which bounds the wait).
+    fn wait_for(&mut self, needle: &str) {
+        for line in self.log.by_ref() {
+            if line.expect("the log is text").contains(needle) {
+                return;
+            }
+        }
+        panic!("the log ended without `{needle}`");
+    }
+
+    fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Run {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+fn petrel(records: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .env("PETREL_RUNTIME_DIR", records),
+    );
+    let text = |b: &[u8]| String::from_utf8_lossy(b).into_owned();
+    (
+        out.status.code().unwrap_or(-1),
+        text(&out.stdout),
+        text(&out.stderr),
+    )
+}
+
+/// Starts a run of agent `lonely` (no `team:` section) recording itself in `dir/records`.
+fn lonely(dir: &Path) -> (Run, std::path::PathBuf) {
+    let records = dir.join("records");
+    let config = dir.join("lonely.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "lonely", modules: [
+            (name: "signal", type: "demo.signal", values: {"params/sample_ms": 5}),
+            (name: "scale", type: "demo.scale", values: {"params/factor": 2.0},
+             links: {"in/value": "signal/out/value"}),
+            (name: "producer", type: "demo.producer", values: {"params/period_ms": 5, "params/batch": 3}),
+        ])"#,
+    )
+    .unwrap();
+    let mut run = Run::start(&config, &records);
+    run.wait_for("reachable by tools");
+    (run, records)
+}
+
+#[test]
+fn tools_find_a_run_without_a_team_section_and_forget_it_once_killed() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut run, records) = lonely(dir.path());
+    let pid = run.child.id().to_string();
+
+    let (code, out, err) = petrel(&records, &["ls"]);
+    assert_eq!(code, 0, "{err}");
+    let row = out.lines().nth(1).unwrap_or_default();
+    let cells: Vec<&str> = row.split_whitespace().collect();
+    assert_eq!(cells[0], "lonely", "{out}");
+    assert_eq!(cells[2], pid, "{out}");
+    assert!(cells[3].starts_with("tcp/127.0.0.1:"), "{out}");
+
+    let (code, out, err) = petrel(&records, &["ls", "lonely"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("\nscale (demo.scale)\n"), "{out}");
+    assert!(
+        out.lines().any(|l| l.split_whitespace().collect::<Vec<_>>()
+            == ["in/value", "input", "f64", "<-", "signal/out/value"]),
+        "{out}"
+    );
+
+    let url = "petrel://lonely/scale/params/factor";
+    let (code, out, err) = petrel(&records, &["get", url]);
+    assert_eq!((code, out.trim()), (0, "2.0 (f64)"), "{err}");
+    let (code, _, err) = petrel(&records, &["set", url, "4.5"]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = petrel(&records, &["get", url]);
+    assert_eq!((code, out.trim()), (0, "4.5 (f64)"), "{err}");
+    let (code, _, err) = petrel(&records, &["set", "petrel://lonely/scale/out/value", "1.0"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("only params/ and control/"), "{err}");
+    let (code, _, err) = petrel(&records, &["get", "petrel://lonley/scale/params/factor"]);
+    assert_eq!(code, 1);
+    assert_eq!(
+        err.trim(),
+        "error: no running agent `lonley`; running: `lonely` (nearest: `lonely`)"
+    );
+
+    run.kill();
+    let (code, out, _) = petrel(&records, &["ls"]);
+    assert_eq!(code, 0);
+    assert!(out.starts_with("no `petrel run` is running"), "{out}");
+    let (code, _, err) = petrel(&records, &["get", url]);
+    assert_eq!(code, 1);
+    assert!(err.contains("no running agent `lonely`"), "{err}");
+}
+
+#[test]
+fn echo_follows_values_and_queue_items_and_hz_reports_a_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_run, records) = lonely(dir.path());
+
+    let (code, out, err) = petrel(
+        &records,
+        &[
+            "echo",
+            "petrel://lonely/signal/out/value",
+            "-n",
+            "3",
+            "--json",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect();
+    assert_eq!(lines.len(), 3, "{out}");
+    for pair in lines.windows(2) {
+        assert!(pair[1]["seq"].as_u64() > pair[0]["seq"].as_u64(), "{out}");
+        assert!(
+            pair[1]["stamp_ns"].as_u64() >= pair[0]["stamp_ns"].as_u64(),
+            "{out}"
+        );
+    }
+    assert!(
+        lines
+            .iter()
+            .all(|l| l["type"] == "f64" && l["value"].is_f64()),
+        "{out}"
+    );
+
+    // Queue items come in order, none skipped: consecutive numbers.
+    let (code, out, err) = petrel(
+        &records,
+        &["echo", "petrel://lonely/producer/out/items", "-n", "12"],
+    );
+    assert_eq!(code, 0, "{err}");
+    let items: Vec<i64> = out.lines().map(|l| l.parse().expect("a number")).collect();
+    assert_eq!(items.len(), 12, "{out}");
+    assert!(items.windows(2).all(|w| w[1] == w[0] + 1), "{items:?}");
+
+    let (code, out, err) = petrel(
+        &records,
+        &["hz", "petrel://lonely/signal/out/value", "-n", "20"],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.starts_with("rate ") && out.contains(" Hz over 20 samples: interval mean "),
+        "{out}"
+    );
+
+    // Every module once, with its stats: the producer has stepped, so its row says so.
+    let (code, out, err) = petrel(&records, &["top", "--once"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.starts_with("AGENT   MODULE    TYPE"), "{out}");
+    let producer: Vec<&str> = out
+        .lines()
+        .find(|l| l.contains(" producer "))
+        .unwrap_or_else(|| panic!("no producer row: {out}"))
+        .split_whitespace()
+        .collect();
+    assert_eq!(
+        producer[..4],
+        ["lonely", "producer", "demo.producer", "running"],
+        "{out}"
+    );
+    assert!(producer[4].parse::<i64>().unwrap() > 0, "{out}");
+    assert_eq!(out.lines().count(), 4, "a header and 3 modules: {out}");
+
+    let (code, _, err) = petrel(
+        &records,
+        &["echo", "petrel://lonely/signal/out/nope", "-n", "1"],
+    );
+    assert_eq!(code, 1);
+    assert!(err.contains("has no property `out/nope`"), "{err}");
+}
+
+#[test]
+fn events_show_a_fault_and_the_restart_that_follows() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_run, records) = lonely(dir.path());
+    let mut events = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(["events", "lonely", "-n", "2"])
+        .env("PETREL_RUNTIME_DIR", &records)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("petrel events starts");
+    // Its streams are open once it says so: nothing that happens later can be missed.
+    let mut said = String::new();
+    BufReader::new(events.stderr.take().unwrap())
+        .read_line(&mut said)
+        .unwrap();
+    assert_eq!(
+        said.trim(),
+        "following 1 event stream: lonely/_supervisor/events"
+    );
+    let (code, _, err) = petrel(
+        &records,
+        &["set", "petrel://lonely/scale/control/fault", "\"error\""],
+    );
+    assert_eq!(code, 0, "{err}");
+    let out = crate::bounded::wait_within_deadline(events, "petrel events");
+    assert!(out.status.success());
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| {
+            let json = l
+                .strip_prefix("lonely/_supervisor/events  ")
+                .expect("the source first");
+            serde_json::from_str(json).expect("an event as JSON")
+        })
+        .collect();
+    let kinds: Vec<(&str, &str)> = lines
+        .iter()
+        .map(|e| (e["module"].as_str().unwrap(), e["kind"].as_str().unwrap()))
+        .collect();
+    assert_eq!(kinds, [("scale", "failed"), ("scale", "restarted")]);
+    assert!(
+        lines[0]["reason"].as_str().unwrap().contains("error"),
+        "{lines:?}"
+    );
+}
