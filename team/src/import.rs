@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use parking_lot::Mutex;
-use petrel_actors::team::{LinkStatus, RemoteFeed, RemoteLink, StatusWriter};
+use petrel_actors::team::{LinkStatus, RemoteFeed, RemoteLink, RemoteLinks, StatusWriter};
 use petrel_actors::url::PropertyUrl;
 use petrel_actors::TypeInfo;
 use tokio::time::Instant;
@@ -195,4 +195,17 @@ async fn subscribe(ctx: &Arc<Ctx>, id: &str, group: &[RemoteLink]) -> zenoh::Res
         _subscriber: subscriber,
         _token: token,
     })
+}
+
+/// Keeps the subscriptions equal to the agent's remote links, as links change.
+pub(crate) async fn follow_links(ctx: Arc<Ctx>, links: Arc<RemoteLinks>) {
+    let mut changes = links.watch();
+    let mut importer = Importer::default();
+    loop {
+        changes.borrow_and_update();
+        importer.sync(&ctx, links.links()).await;
+        if changes.changed().await.is_err() {
+            return;
+        }
+    }
 }

@@ -16,9 +16,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use parking_lot::Mutex;
-use petrel_actors::team::{
-    RemoteLinks, RemoteWriter, TeamConfig, TeamEvent, TeamMembers, TEAM_MODULE,
-};
+use petrel_actors::team::{RemoteWriter, TeamConfig, TeamEvent, TeamMembers, TEAM_MODULE};
 use petrel_actors::url::PropertyUrl;
 use petrel_actors::{Agent, Blackboard, PropertyType};
 use tokio::sync::mpsc;
@@ -172,16 +170,27 @@ impl Team {
         let Some(board) = board else {
             return Ok(team);
         };
+        let board = Arc::new(board);
         let (alive_tx, alive_rx) = mpsc::channel(EVENT_BUFFER);
         team.watch_tokens(ctx.keys.all_alive(), alive_tx).await?;
-        team.tasks
-            .push(tokio::spawn(members::run(ctx.clone(), board, alive_rx)));
-        team.tasks.push(tokio::spawn(import_links(
+        team.tasks.push(tokio::spawn(members::run(
+            ctx.clone(),
+            board.clone(),
+            alive_rx,
+        )));
+        let (info_tx, info_rx) = mpsc::channel(EVENT_BUFFER);
+        team.watch_samples(ctx.keys.info("*"), info_tx).await?;
+        team.tasks.push(tokio::spawn(members::follow_announcements(
+            ctx.clone(),
+            board,
+            info_rx,
+        )));
+        team.tasks.push(tokio::spawn(import::follow_links(
             ctx.clone(),
             blackboard.remote_links(),
         )));
         team.tasks
-            .push(tokio::spawn(mail::follow_outboxes(ctx.clone())));
+            .push(tokio::spawn(members::follow_modules(ctx.clone())));
         // Announced last: when others see the agent, it already answers.
         let alive = ctx.keys.alive(&ctx.agent, &ctx.zid);
         let token = ctx.session.liveliness().declare_token(alive).await?;
@@ -291,6 +300,32 @@ impl Team {
         Ok(())
     }
 
+    /// Sends samples put under `key` (key, payload) to `tx`; beyond its capacity they are
+    /// dropped and counted.
+    async fn watch_samples(
+        &mut self,
+        key: String,
+        tx: mpsc::Sender<(String, Vec<u8>)>,
+    ) -> Result<(), TeamError> {
+        let overflow = self.overflow.clone();
+        let sub = self
+            .ctx
+            .session
+            .declare_subscriber(key)
+            .callback(move |sample| {
+                let item = (
+                    sample.key_expr().to_string(),
+                    sample.payload().to_bytes().into_owned(),
+                );
+                if tx.try_send(item).is_err() {
+                    overflow.fetch_add(1, Ordering::Relaxed);
+                }
+            })
+            .await?;
+        self.declared.push(Box::new(sub));
+        Ok(())
+    }
+
     /// Sends liveliness tokens under `key` (those alive now, then changes) to `tx`.
     async fn watch_tokens(
         &mut self,
@@ -363,18 +398,5 @@ impl RemoteWriter for Writer {
             .await
             .map_err(|e| e.to_string())
         })
-    }
-}
-
-/// Keeps the subscriptions equal to the agent's remote links, as links change.
-async fn import_links(ctx: Arc<Ctx>, links: Arc<RemoteLinks>) {
-    let mut changes = links.watch();
-    let mut importer = import::Importer::default();
-    loop {
-        changes.borrow_and_update();
-        importer.sync(&ctx, links.links()).await;
-        if changes.changed().await.is_err() {
-            return;
-        }
     }
 }

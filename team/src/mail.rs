@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use petrel_actors::team::{Message, Outbox, OutboxStatus, Tap};
+use petrel_actors::team::{Message, Outbox, OutboxStatus};
 use tokio::time::Instant;
 use zenoh::query::Query;
 
@@ -29,42 +29,8 @@ enum Failure {
     Gone(String),
 }
 
-/// Sends the outbox of every module with one, including modules added while the agent runs
-/// (seen in `_supervisor/events`), until the task is aborted (which aborts the senders too).
-pub(crate) async fn follow_outboxes(ctx: Arc<Ctx>) {
-    use petrel_actors::supervision::{SupervisorEvent, EVENTS_MODULE, EVENTS_PATH};
-    // Watched before the first listing, so a module added in between is not missed.
-    let events = ctx
-        .blackboard
-        .tap(&format!("{EVENTS_MODULE}/{EVENTS_PATH}"))
-        .await;
-    let mut senders = tokio::task::JoinSet::new();
-    let mut events = match events {
-        Ok(Tap::Queue(tap)) => Some(tap),
-        _ => None,
-    };
-    loop {
-        for outbox in ctx.blackboard.outboxes().await.unwrap_or_default() {
-            senders.spawn(send_outbox(ctx.clone(), outbox));
-        }
-        let Some(tap) = events.as_mut() else {
-            return std::future::pending().await;
-        };
-        loop {
-            tap.changed().await;
-            let added = tap.take(64).iter().any(|(_, _, e)| {
-                e.downcast_ref::<SupervisorEvent>()
-                    .is_some_and(|e| e.kind == "added")
-            });
-            if added {
-                break;
-            }
-        }
-    }
-}
-
 /// Sends every message a module pushes to its outbox, until the task is aborted.
-async fn send_outbox(ctx: Arc<Ctx>, outbox: Outbox) {
+pub(crate) async fn send_outbox(ctx: Arc<Ctx>, outbox: Outbox) {
     let Outbox {
         module,
         status,

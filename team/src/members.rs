@@ -23,8 +23,7 @@ pub(crate) struct Board {
 }
 
 /// Applies token events until the channel closes.
-pub(crate) async fn run(ctx: Arc<Ctx>, board: Board, mut alive: mpsc::Receiver<AliveEvent>) {
-    let board = Arc::new(board);
+pub(crate) async fn run(ctx: Arc<Ctx>, board: Arc<Board>, mut alive: mpsc::Receiver<AliveEvent>) {
     while let Some((token, up)) = alive.recv().await {
         let Some((agent, zid)) = ctx.keys.parse_alive(&token) else {
             continue;
@@ -79,11 +78,90 @@ fn apply(ctx: &Ctx, board: &Board, change: &Change) {
     board.members.set(ctx.membership.lock().members());
 }
 
-/// Asks a member for its modules and lists them in `_team/members`.
-async fn ask_modules(ctx: Arc<Ctx>, board: Arc<Board>, agent: String) {
-    let Some(zid) = ctx.membership.lock().zid_of(&agent).map(str::to_string) else {
+/// Follows this agent's modules as they are added and removed (`_supervisor/events`): sends
+/// the outbox of each new module, and tells the team the new module list (a put on its `@info`
+/// key, which members subscribe to), until the task is aborted (which aborts the senders too).
+pub(crate) async fn follow_modules(ctx: Arc<Ctx>) {
+    use petrel_actors::supervision::{SupervisorEvent, EVENTS_MODULE, EVENTS_PATH};
+    use petrel_actors::team::Tap;
+    // Watched before the first listing, so a module added in between is not missed.
+    let events = ctx
+        .blackboard
+        .tap(&format!("{EVENTS_MODULE}/{EVENTS_PATH}"))
+        .await;
+    let mut events = match events {
+        Ok(Tap::Queue(tap)) => Some(tap),
+        _ => None,
+    };
+    let mut senders = tokio::task::JoinSet::new();
+    let mut first = true;
+    loop {
+        for outbox in ctx.blackboard.outboxes().await.unwrap_or_default() {
+            senders.spawn(crate::mail::send_outbox(ctx.clone(), outbox));
+        }
+        if !first {
+            if let Ok(info) = crate::service::info_json(&ctx).await {
+                let _ = ctx.session.put(ctx.keys.info(&ctx.agent), info).await;
+            }
+        }
+        first = false;
+        let Some(tap) = events.as_mut() else {
+            return std::future::pending().await;
+        };
+        loop {
+            tap.changed().await;
+            let changed = tap.take(64).iter().any(|(_, _, e)| {
+                e.downcast_ref::<SupervisorEvent>()
+                    .is_some_and(|e| e.kind == "added" || e.kind == "removed")
+            });
+            if changed {
+                break;
+            }
+        }
+    }
+}
+
+/// Applies the module lists members announce (puts on their `@info` keys) until the channel
+/// closes.
+pub(crate) async fn follow_announcements(
+    ctx: Arc<Ctx>,
+    board: Arc<Board>,
+    mut announced: mpsc::Receiver<(String, Vec<u8>)>,
+) {
+    while let Some((key, payload)) = announced.recv().await {
+        let Some(agent) = key.rsplit('/').next() else {
+            continue;
+        };
+        take_modules(&ctx, &board, agent, &payload);
+    }
+}
+
+/// Lists a member's modules from its `@info` JSON, if it comes from the member's session.
+fn take_modules(ctx: &Ctx, board: &Board, agent: &str, payload: &[u8]) {
+    let Some(zid) = ctx.membership.lock().zid_of(agent).map(str::to_string) else {
         return;
     };
+    let Ok(info) = serde_json::from_slice::<serde_json::Value>(payload) else {
+        return;
+    };
+    if info["zid"].as_str() != Some(zid.as_str()) {
+        return;
+    }
+    let modules = info["modules"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|m| m.as_str().map(str::to_string))
+                .collect()
+        })
+        .unwrap_or_default();
+    if ctx.membership.lock().set_modules(agent, &zid, modules) {
+        board.members.set(ctx.membership.lock().members());
+    }
+}
+
+/// Asks a member for its modules and lists them in `_team/members`.
+async fn ask_modules(ctx: Arc<Ctx>, board: Arc<Board>, agent: String) {
     let Ok(replies) = ctx
         .session
         .get(ctx.keys.info(&agent))
@@ -93,24 +171,8 @@ async fn ask_modules(ctx: Arc<Ctx>, board: Arc<Board>, agent: String) {
         return;
     };
     while let Ok(reply) = replies.recv_async().await {
-        let Ok(sample) = reply.result() else { continue };
-        let Ok(info) = serde_json::from_slice::<serde_json::Value>(&sample.payload().to_bytes())
-        else {
-            continue;
-        };
-        if info["zid"].as_str() != Some(zid.as_str()) {
-            continue;
-        }
-        let modules = info["modules"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|m| m.as_str().map(str::to_string))
-                    .collect()
-            })
-            .unwrap_or_default();
-        if ctx.membership.lock().set_modules(&agent, &zid, modules) {
-            board.members.set(ctx.membership.lock().members());
+        if let Ok(sample) = reply.result() {
+            take_modules(&ctx, &board, &agent, &sample.payload().to_bytes());
         }
     }
 }

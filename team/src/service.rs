@@ -14,13 +14,19 @@ use crate::Ctx;
 /// type}, "properties": [{"key", "kind", "type", "link"?}]}`, as the agent is now (modules
 /// added at run time included).
 pub(crate) async fn info(ctx: Arc<Ctx>, query: Query) {
-    let listing = match ctx.blackboard.listing().await {
-        Ok(l) => l,
-        Err(e) => {
-            let _ = query.reply_err(e.to_string()).await;
-            return;
+    match info_json(&ctx).await {
+        Ok(payload) => {
+            let _ = query.reply(query.key_expr().clone(), payload).await;
         }
-    };
+        Err(e) => {
+            let _ = query.reply_err(e).await;
+        }
+    }
+}
+
+/// The `@info` JSON of this agent as it is now.
+pub(crate) async fn info_json(ctx: &Ctx) -> Result<Vec<u8>, String> {
+    let listing = ctx.blackboard.listing().await.map_err(|e| e.to_string())?;
     let names: Vec<&str> = listing.modules.iter().map(|m| m.name.as_str()).collect();
     let types: serde_json::Map<String, serde_json::Value> = listing
         .modules
@@ -35,8 +41,7 @@ pub(crate) async fn info(ctx: Arc<Ctx>, query: Query) {
         "types": types,
         "properties": listing.properties,
     });
-    let payload = serde_json::to_vec(&info).expect("JSON of strings");
-    let _ = query.reply(query.key_expr().clone(), payload).await;
+    Ok(serde_json::to_vec(&info).expect("JSON of strings"))
 }
 
 /// Answers a query for the current value of one of this agent's properties, or, for a

@@ -92,3 +92,36 @@ async fn teams_with_different_names_never_see_each_other() {
         m.stop().await;
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn members_see_modules_added_and_removed_while_an_agent_runs() {
+    let (a, b) = pair(
+        "modules",
+        ("", r#"(name: "count", type: "demo.counter"),"#),
+        ("", r#"(name: "scale", type: "demo.scale"),"#),
+    )
+    .await;
+    let members = b.handle::<TeamMembers>("_team/members").await;
+    let modules_of_a = |l: &TeamMembers| {
+        l.0.iter()
+            .find(|m| m.agent == "a")
+            .map(|m| m.modules.clone())
+            .unwrap_or_default()
+    };
+    wait_for(&members, "a with its module", |l| modules_of_a(l) == ["count"]).await;
+    let extra = petrel::actors::ModuleConfig {
+        name: "extra".into(),
+        type_name: "demo.signal".into(),
+        ..Default::default()
+    };
+    let control = a.agent.modules();
+    control.add(extra).await.expect("the module is added");
+    wait_for(&members, "a's new module", |l| {
+        modules_of_a(l) == ["count", "extra"]
+    })
+    .await;
+    control.remove("extra").await.expect("the module is removed");
+    wait_for(&members, "a without it", |l| modules_of_a(l) == ["count"]).await;
+    b.stop().await;
+    a.stop().await;
+}
