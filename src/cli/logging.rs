@@ -1,12 +1,21 @@
-//! Tracing setup: `RUST_LOG`-style filtering (default `info`), pretty or JSON lines on stderr.
+//! Tracing setup: `RUST_LOG`-style filtering (default `info`), pretty or JSON lines on stderr,
+//! and the timeline trace of `--trace-out` (which sees steps and info events whatever `RUST_LOG`
+//! says).
 
 use std::io::IsTerminal;
 
-use tracing_subscriber::EnvFilter;
+use tracing_subscriber::layer::SubscriberExt;
+use tracing_subscriber::util::SubscriberInitExt;
+use tracing_subscriber::{fmt, EnvFilter, Layer};
 
 use super::LogFormat;
 
-pub(crate) fn init(format: LogFormat) {
+/// Sets up logging, and with `trace_out` the timeline trace (whose guard finishes the file
+/// when dropped).
+pub(crate) fn init(
+    format: LogFormat,
+    trace_out: Option<&std::path::Path>,
+) -> std::io::Result<Option<super::trace::TraceGuard>> {
     let (filter, problem) = match std::env::var("RUST_LOG") {
         Ok(spec) => match EnvFilter::try_new(&spec) {
             Ok(filter) => (filter, None),
@@ -19,17 +28,37 @@ pub(crate) fn init(format: LogFormat) {
         },
         Err(_) => (EnvFilter::new("info"), None),
     };
-    let builder = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        // Colours only for a person at a terminal, not in files and pipes.
-        .with_ansi(std::io::stderr().is_terminal());
-    // A second initialisation (e.g. in tests running several commands) keeps the first subscriber.
-    let _ = match format {
-        LogFormat::Pretty => builder.compact().try_init(),
-        LogFormat::Json => builder.json().try_init(),
+    let (trace, guard) = match trace_out {
+        Some(path) => {
+            let (layer, guard) = super::trace::open(path)?;
+            (
+                Some(layer.with_filter(super::trace::interest())),
+                Some(guard),
+            )
+        }
+        None => (None, None),
     };
+    // Colours only for a person at a terminal, not in files and pipes.
+    let ansi = std::io::stderr().is_terminal();
+    let log = match format {
+        LogFormat::Pretty => fmt::layer()
+            .compact()
+            .with_ansi(ansi)
+            .with_writer(std::io::stderr)
+            .boxed(),
+        LogFormat::Json => fmt::layer()
+            .json()
+            .with_ansi(ansi)
+            .with_writer(std::io::stderr)
+            .boxed(),
+    };
+    // A second initialisation (e.g. in tests running several commands) keeps the first subscriber.
+    let _ = tracing_subscriber::registry()
+        .with(log.with_filter(filter))
+        .with(trace)
+        .try_init();
     if let Some(problem) = problem {
         tracing::warn!("{problem}");
     }
+    Ok(guard)
 }

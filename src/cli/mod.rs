@@ -2,6 +2,7 @@
 //! running agents (`ls`, `get`, `set`).
 
 mod check;
+mod chrome;
 mod follow;
 mod listing;
 mod logging;
@@ -12,6 +13,7 @@ mod reach;
 mod remote;
 mod run;
 mod top;
+mod trace;
 
 use std::ffi::OsString;
 use std::path::PathBuf;
@@ -173,9 +175,15 @@ pub(crate) struct RunArgs {
     /// modules on one core, where a hand-over between modules costs no thread wake-up.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     workers: Option<u16>,
-    /// Do not join the teams the configs name: links to other agents stay `waiting`.
+    /// Do not join the teams the configs name (links to other agents stay `waiting`), and
+    /// do not answer tools (`petrel ls|get|set|echo|hz|top|events`).
     #[arg(long)]
     no_remote: bool,
+    /// Write a timeline of the run here (Chrome trace JSON, for Perfetto or chrome://tracing):
+    /// each module a track, each step a span, restarts, context switches and plan steps as
+    /// instants.
+    #[arg(long)]
+    trace_out: Option<PathBuf>,
 }
 
 /// How logs are written.

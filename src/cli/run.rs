@@ -14,7 +14,17 @@ use super::check::{check_all, check_team};
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
-    logging::init(args.log_format);
+    let _trace = match logging::init(args.log_format, args.trace_out.as_deref()) {
+        Ok(guard) => guard,
+        Err(e) => {
+            let path = args
+                .trace_out
+                .as_deref()
+                .unwrap_or(std::path::Path::new(""));
+            eprintln!("error: cannot write the trace to {}: {e}", path.display());
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
     if args.configs.len() > 1 && (!args.overlay.is_empty() || args.snapshot_out.is_some()) {
         eprintln!("error: --overlay and --snapshot-out take one agent; run each agent with its own `petrel run` to use them");
         return ExitCode::from(EXIT_BAD_INPUT);

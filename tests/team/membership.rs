@@ -108,7 +108,10 @@ async fn members_see_modules_added_and_removed_while_an_agent_runs() {
             .map(|m| m.modules.clone())
             .unwrap_or_default()
     };
-    wait_for(&members, "a with its module", |l| modules_of_a(l) == ["count"]).await;
+    wait_for(&members, "a with its module", |l| {
+        modules_of_a(l) == ["count"]
+    })
+    .await;
     let extra = petrel::actors::ModuleConfig {
         name: "extra".into(),
         type_name: "demo.signal".into(),
@@ -120,7 +123,10 @@ async fn members_see_modules_added_and_removed_while_an_agent_runs() {
         modules_of_a(l) == ["count", "extra"]
     })
     .await;
-    control.remove("extra").await.expect("the module is removed");
+    control
+        .remove("extra")
+        .await
+        .expect("the module is removed");
     wait_for(&members, "a without it", |l| modules_of_a(l) == ["count"]).await;
     b.stop().await;
     a.stop().await;

@@ -7,16 +7,22 @@ use std::process::{Child, ChildStderr, Command, Stdio};
 
 /// A `petrel run` whose log the test reads; killed (SIGKILL) when dropped.
 struct Run {
-    child: Child,
+    /// Taken when the run is waited for.
+    child: Option<Child>,
     log: Lines<BufReader<ChildStderr>>,
 }
 
 impl Run {
     fn start(config: &Path, records: &Path) -> Run {
+        Run::start_with(config, records, &[])
+    }
+
+    fn start_with(config: &Path, records: &Path, args: &[&str]) -> Run {
         let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
             .arg("run")
             .arg(config)
             .args(["--for", "120s"])
+            .args(args)
             .env("PETREL_RUNTIME_DIR", records)
             .env("RUST_LOG", "info")
             .stdout(Stdio::null())
@@ -24,7 +30,10 @@ impl Run {
             .spawn()
             .expect("petrel starts");
         let log = BufReader::new(child.stderr.take().unwrap()).lines();
-        Run { child, log }
+        Run {
+            child: Some(child),
+            log,
+        }
     }
 
     /// Reads the log up to a line containing `needle` (the run ends by itself after `--for`,
@@ -38,9 +47,25 @@ impl Run {
         panic!("the log ended without `{needle}`");
     }
 
+    /// Ctrl-C, then waits (bounded) for the run to end cleanly.
+    fn interrupt(mut self) {
+        let child = self.child.take().expect("a running child");
+        unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+        // The log must be read to its end, or the run could block writing it.
+        for _ in self.log.by_ref() {}
+        let out = crate::bounded::wait_within_deadline(child, "petrel run");
+        assert!(out.status.success(), "{:?}", out.status);
+    }
+
     fn kill(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        if let Some(mut child) = self.child.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+
+    fn pid(&self) -> u32 {
+        self.child.as_ref().map_or(0, Child::id)
     }
 }
 
@@ -87,7 +112,7 @@ fn lonely(dir: &Path) -> (Run, std::path::PathBuf) {
 fn tools_find_a_run_without_a_team_section_and_forget_it_once_killed() {
     let dir = tempfile::tempdir().unwrap();
     let (mut run, records) = lonely(dir.path());
-    let pid = run.child.id().to_string();
+    let pid = run.pid().to_string();
 
     let (code, out, err) = petrel(&records, &["ls"]);
     assert_eq!(code, 0, "{err}");
@@ -257,5 +282,64 @@ fn events_show_a_fault_and_the_restart_that_follows() {
     assert!(
         lines[0]["reason"].as_str().unwrap().contains("error"),
         "{lines:?}"
+    );
+}
+
+#[test]
+fn a_trace_has_a_track_per_module_with_its_steps_and_the_failure_and_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let records = dir.path().join("records");
+    let config = dir.path().join("traced.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "traced", modules: [
+            (name: "signal", type: "demo.signal", values: {"params/sample_ms": 5}),
+            (name: "scale", type: "demo.scale", links: {"in/value": "signal/out/value"}),
+        ])"#,
+    )
+    .unwrap();
+    let trace = dir.path().join("run.json");
+    let mut run = Run::start_with(&config, &records, &["--trace-out", trace.to_str().unwrap()]);
+    run.wait_for("reachable by tools");
+    let (code, _, err) = petrel(
+        &records,
+        &["set", "petrel://traced/scale/control/fault", "\"error\""],
+    );
+    assert_eq!(code, 0, "{err}");
+    run.wait_for("restarting module");
+    run.interrupt();
+
+    let text = std::fs::read_to_string(&trace).unwrap();
+    let events: Vec<serde_json::Value> = serde_json::from_str(&text).expect("a JSON array");
+    let track = |name: &str| {
+        events
+            .iter()
+            .find(|e| e["ph"] == "M" && e["args"]["name"] == name)
+            .and_then(|e| e["tid"].as_u64())
+            .unwrap_or_else(|| panic!("no track {name}"))
+    };
+    let (signal, scale) = (track("traced/signal"), track("traced/scale"));
+    let on = |tid: u64, ph: &str| -> Vec<&serde_json::Value> {
+        events
+            .iter()
+            .filter(|e| e["tid"] == tid && e["ph"] == ph)
+            .collect()
+    };
+    for tid in [signal, scale] {
+        let steps = on(tid, "X");
+        assert!(!steps.is_empty(), "no steps on track {tid}");
+        assert!(steps
+            .iter()
+            .all(|s| s["name"] == "step" && s["dur"].as_f64().unwrap() >= 0.0));
+    }
+    let instants: Vec<&str> = on(scale, "i")
+        .iter()
+        .filter_map(|e| e["name"].as_str())
+        .collect();
+    let failed = instants.iter().position(|n| *n == "module failed");
+    let restarted = instants.iter().position(|n| *n == "restarting module");
+    assert!(
+        matches!((failed, restarted), (Some(f), Some(r)) if f < r),
+        "{instants:?}"
     );
 }

@@ -291,7 +291,11 @@ impl<M: Module> Running<M> {
             Some(t) => self.ctx.clock.begin_at(t),
             None => self.ctx.clock.begin(),
         }
-        let result = self.run_step().await;
+        // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
+        let result = self
+            .run_step()
+            .instrument(tracing::trace_span!("step"))
+            .await;
         if result.is_ok() {
             // The step is done with what it took from its queues.
             for reader in &self.readers {
