@@ -409,3 +409,31 @@ fn plan_check_stops_at_max_states_and_says_how_to_go_further() {
         text(&full.stdout)
     );
 }
+
+#[test]
+fn graph_draws_modules_and_links_as_dot() {
+    let out = petrel(&["graph", "configs/team/filter.ron"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let dot = text(&out.stdout);
+    assert!(dot.starts_with("digraph \"filter\" {"), "{dot}");
+    // One box per module, one dashed box per module of another agent that a link reads.
+    assert!(dot.contains("[ label = \"scale\\ndemo.scale\"]"), "{dot}");
+    assert!(
+        dot.contains("[ label = \"sensor/producer\", style = dashed]"),
+        "{dot}"
+    );
+    // A remote queue link is bold (a queue) and dashed (remote).
+    assert!(
+        dot.contains("label = \"out/items → in/items\", style = \"bold,dashed\""),
+        "{dot}"
+    );
+    assert_eq!(dot.matches(" -> ").count(), 2, "{dot}");
+
+    let local = text(&petrel(&["graph", "configs/pipeline.ron"]).stdout);
+    assert_eq!(local.matches(" -> ").count(), 3, "3 links: {local}");
+    assert!(!local.contains("dashed"), "no remote link: {local}");
+
+    let out = petrel(&["graph", "configs/does-not-exist.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("does-not-exist.ron"));
+}

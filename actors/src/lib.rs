@@ -31,7 +31,8 @@ mod value;
 
 pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{
-    AgentListing, Blackboard, BlackboardError, ModuleListing, PropertyListing, Registry,
+    AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph, ModuleListing,
+    PropertyListing, Registry,
 };
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{

@@ -4,6 +4,7 @@
 mod check;
 mod chrome;
 mod follow;
+mod graph;
 mod listing;
 mod logging;
 mod modules;
@@ -47,6 +48,15 @@ enum Command {
         /// The agent configs (RON).
         #[arg(required = true)]
         configs: Vec<PathBuf>,
+        /// Configs or snapshots laid over CONFIG, in order.
+        #[arg(long)]
+        overlay: Vec<PathBuf>,
+    },
+    /// Prints an agent's modules and links as a Graphviz DOT graph (`| dot -Tsvg > g.svg`):
+    /// a box per module, an edge per link; queues bold, links to other agents dashed.
+    Graph {
+        /// The agent config (RON).
+        config: PathBuf,
         /// Configs or snapshots laid over CONFIG, in order.
         #[arg(long)]
         overlay: Vec<PathBuf>,
@@ -211,6 +221,7 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
     match cli.command {
         Command::Run(args) => run::run(&registry, args),
         Command::Check { configs, overlay } => check::check(&registry, &configs, &overlay),
+        Command::Graph { config, overlay } => graph::graph(&registry, &config, &overlay),
         Command::Modules { command: None } => modules::list(&registry),
         Command::Modules {
             command: Some(ModulesCommand::Describe { type_name }),
