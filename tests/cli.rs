@@ -437,3 +437,66 @@ fn graph_draws_modules_and_links_as_dot() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("does-not-exist.ron"));
 }
+
+#[test]
+fn a_module_panic_is_one_error_event_in_its_span_and_nothing_beside_the_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("panics.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r", modules: [
+    (name: "c", type: "demo.counter", restart: temporary, values: {"params/period_ms": 10}),
+    (name: "chaos", type: "demo.chaos",
+     values: {"params/targets": "c", "params/faults": "panic", "params/mean_interval_ms": 20}),
+])"#,
+    )
+    .unwrap();
+    let out = bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", config.to_str().unwrap(), "--for", "3s"])
+            .args(["--log-format", "json", "--no-remote"])
+            .env("RUST_LOG", "info")
+            .env("RUST_BACKTRACE", "1"),
+    );
+    // `c` is temporary: it stays failed, and the run says so with exit code 1.
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    let lines: Vec<serde_json::Value> = text(&out.stderr)
+        .lines()
+        .map(|l| {
+            serde_json::from_str(l).unwrap_or_else(|e| panic!("not a JSON log line ({e}): {l}"))
+        })
+        .collect();
+    let panics: Vec<&serde_json::Value> = lines
+        .iter()
+        .filter(|l| {
+            l["fields"]["message"]
+                .as_str()
+                .is_some_and(|m| m.starts_with("panicked: "))
+        })
+        .collect();
+    assert_eq!(panics.len(), 1, "one report for one panic: {panics:?}");
+    let panic = panics[0];
+    assert_eq!(panic["level"], "ERROR");
+    assert_eq!(panic["span"]["module"], "c", "{panic}");
+    assert_eq!(
+        panic["fields"]["message"],
+        "panicked: fault injected through control/fault: panic"
+    );
+    let location = panic["fields"]["panic.location"].as_str().unwrap();
+    assert!(location.contains("module_actor"), "{location}");
+    assert!(
+        panic["fields"]["backtrace"]
+            .as_str()
+            .is_some_and(|b| !b.is_empty()),
+        "RUST_BACKTRACE asks for a backtrace field: {panic}"
+    );
+    let failed = lines
+        .iter()
+        .find(|l| l["fields"]["message"] == "module failed")
+        .expect("the supervisor reports the failure");
+    let error = failed["fields"]["error"].as_str().unwrap();
+    assert!(
+        error.starts_with(&format!("panicked at {location}: ")),
+        "the failure names where the panic was: {error}"
+    );
+}

@@ -17,6 +17,7 @@ mod handle;
 mod module;
 mod module_actor;
 mod module_types;
+mod panic_report;
 mod ports;
 mod queue;
 mod snapshot;

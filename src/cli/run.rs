@@ -123,7 +123,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         .flat_map(|s| &s.modules)
         .any(|m| m.status == status::FAILED);
     if failed {
-        eprintln!("some modules failed: see the summary above and the log");
+        // A log event, so `--log-format json` consumers see it too.
+        tracing::error!("some modules failed: see the summary and the log");
         code = ExitCode::FAILURE;
     }
     code
