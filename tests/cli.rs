@@ -500,3 +500,36 @@ fn a_module_panic_is_one_error_event_in_its_span_and_nothing_beside_the_log() {
         "the failure names where the panic was: {error}"
     );
 }
+
+#[test]
+fn a_world_file_that_does_not_parse_is_refused_by_check_and_run_before_anything_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("broken.txt"), "#####\n#R Z#\n#####\n").unwrap();
+    let config = dir.path().join("robot.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r", modules: [
+    (name: "robot", type: "sim.world", values: {"params/world": "broken.txt"}),
+])"#,
+    )
+    .unwrap();
+    for command in ["check", "run"] {
+        let out = petrel(&[command, config.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{command}");
+        let err = text(&out.stderr);
+        let at = format!("{}:2:", config.display());
+        assert!(
+            err.starts_with(&at),
+            "{command}: located in the config: {err}"
+        );
+        assert!(
+            err.contains("`params/world`: ")
+                && err.contains("broken.txt:2: unexpected character 'Z'"),
+            "{command}: names the world file's line: {err}"
+        );
+        assert!(
+            err.ends_with("1 error found; nothing was started\n"),
+            "{err}"
+        );
+    }
+}

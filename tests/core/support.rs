@@ -115,7 +115,11 @@ impl Module for Faulty {
     const DESCRIPTION: &'static str = "Fails on purpose.";
     fn declare(ports: &mut Ports) -> Self {
         Faulty {
-            mode: ports.param("params/mode", "panic".to_string(), "panic, error or init"),
+            mode: ports.param(
+                "params/mode",
+                "panic".to_string(),
+                "panic, error, init or bad_file",
+            ),
             fail_at: ports.param("params/fail_at", 3, "step that fails"),
             steps: ports.state("state/steps", 0, "steps so far"),
         }
@@ -125,6 +129,10 @@ impl Module for Faulty {
     }
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         anyhow::ensure!(*self.mode.get() != "init", "no such device /dev/laser0");
+        if *self.mode.get() == "bad_file" {
+            let why = "calibration.yaml:3:1: expected a number";
+            return Err(petrel::actors::Unrecoverable(why.into()).into());
+        }
         Ok(())
     }
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {

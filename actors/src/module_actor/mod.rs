@@ -17,7 +17,7 @@ use tracing::Instrument;
 use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
-use crate::module::{Cause, Context, Module, Schedule, WatchTarget};
+use crate::module::{Cause, Context, Module, Schedule, Unrecoverable, WatchTarget};
 use crate::panic_report::catching;
 use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
@@ -145,9 +145,15 @@ impl<M: Module> Actor for ModuleActor<M> {
             ports.clock.clone(),
         );
         let init = catching(module.init(&mut ctx).instrument(span.clone())).await;
+        let unrecoverable =
+            matches!(&init, Ok(Err(e)) if e.downcast_ref::<Unrecoverable>().is_some());
         if let Some(reason) = failure(init) {
             builtins.status.set(status::FAILED.into());
-            return Err(format!("init failed: {reason}").into());
+            let reason = format!("init failed: {reason}");
+            return Err(match unrecoverable {
+                true => Box::new(Unrecoverable(reason)),
+                false => reason.into(),
+            });
         }
         span.in_scope(|| tracing::info!("initialized"));
         let fault_seen = builtins.fault.read().version;
