@@ -232,6 +232,11 @@ impl<M: Module> Running<M> {
             if enabled {
                 if let Some(causes) = pending.take() {
                     self.step(causes).await?;
+                    // A module that wakes itself (an input linked to its own output, a busy
+                    // producer) finds its signal already raised, so its waits never suspend:
+                    // spend tokio's cooperative budget, so that every so many steps it yields
+                    // to the other modules and to the stop path, on any number of workers.
+                    tokio::task::consume_budget().await;
                     if timeout.is_some() {
                         last_step = Instant::now();
                     }
