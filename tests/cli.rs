@@ -571,3 +571,63 @@ fn a_module_that_wakes_itself_starves_neither_the_others_nor_the_stop_on_one_wor
         "the periodic module ran beside it: {summary}"
     );
 }
+
+/// Runs petrel with its standard output a pipe whose reading end is already closed, so every
+/// write to it fails (as `petrel … | head -1` after `head` has exited).
+fn petrel_into_a_closed_pipe(args: &[&str]) -> Output {
+    use std::os::fd::{FromRawFd, OwnedFd};
+    let mut fds = [0; 2];
+    // SAFETY: `pipe` fills two fresh descriptors; the reading one is closed at once and the
+    // writing one is owned by the `Stdio` handed to the child.
+    let stdout = unsafe {
+        assert_eq!(libc::pipe(fds.as_mut_ptr()), 0, "pipe");
+        libc::close(fds[0]);
+        std::process::Stdio::from(OwnedFd::from_raw_fd(fds[1]))
+    };
+    let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(args)
+        .env("RUST_LOG", "info")
+        .stdin(std::process::Stdio::null())
+        .stdout(stdout)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    bounded::wait_within_deadline(child, &format!("petrel {args:?}"))
+}
+
+#[test]
+fn a_closed_standard_output_ends_tools_quietly_and_a_run_goes_on() {
+    use std::os::unix::process::ExitStatusExt;
+    for args in [
+        &["check", "configs/pipeline.ron"][..],
+        &["plan", "dot", "plans/tests/fixtures/delivery.plan"],
+        &["plan", "check", "plans/tests/fixtures/delivery.plan"],
+        &["graph", "configs/navigate.ron"],
+        &["modules"],
+    ] {
+        let out = petrel_into_a_closed_pipe(args);
+        let err = text(&out.stderr);
+        assert_eq!(
+            out.status.signal(),
+            Some(libc::SIGPIPE),
+            "{args:?} ends by SIGPIPE like other Unix tools: {:?} {err}",
+            out.status
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    // A run keeps going to its end (cleanup, summary attempt) with its printer quiet.
+    let out =
+        petrel_into_a_closed_pipe(&["run", "configs/pipeline.ron", "--for", "1s", "--no-remote"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert_eq!(
+        err.matches("standard output was closed: nothing more is printed")
+            .count(),
+        1,
+        "said once: {err}"
+    );
+    assert!(
+        !err.contains("panicked") && !err.contains("module failed"),
+        "{err}"
+    );
+}

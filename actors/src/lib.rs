@@ -21,6 +21,7 @@ mod panic_report;
 mod ports;
 mod queue;
 mod snapshot;
+pub mod stdout;
 mod step_clock;
 mod summary;
 pub mod supervision;

@@ -218,6 +218,9 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             };
         }
     };
+    if !matches!(cli.command, Command::Run(_)) {
+        stop_quietly_on_a_closed_pipe();
+    }
     match cli.command {
         Command::Run(args) => run::run(&registry, args),
         Command::Check { configs, overlay } => check::check(&registry, &configs, &overlay),
@@ -250,6 +253,19 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
         Command::Set { url, value, reach } => {
             remote::property(&reach, &url, remote::Request::Set(value))
         }
+    }
+}
+
+/// Lets a closed standard output (`petrel plan dot x.plan | head -1`) end the command as it
+/// ends other Unix tools, by SIGPIPE (exit status 141 in a shell), instead of a panic in
+/// `println!`. Not for `run`: a run keeps going and stops cleanly (cleanup, snapshot); its
+/// printing goes through `outln!`, which stops printing on a closed pipe.
+fn stop_quietly_on_a_closed_pipe() {
+    // SAFETY: restores the default disposition of one signal before any thread that could
+    // race on it exists; no handler is installed.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

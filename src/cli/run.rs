@@ -6,7 +6,7 @@ use std::pin::Pin;
 use std::process::ExitCode;
 use std::task::Poll;
 
-use petrel_actors::{status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
+use petrel_actors::{outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
@@ -101,7 +101,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             .map_err(|e| e.to_string())
             .and_then(|s| std::fs::write(path, s).map_err(|e| e.to_string()))
         {
-            Ok(()) => println!("snapshot written to {}", path.display()),
+            Ok(()) => outln!("snapshot written to {}", path.display()),
             Err(e) => {
                 eprintln!(
                     "error: could not write the snapshot to {}: {e}",
@@ -114,9 +114,9 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     for agent in agents {
         agent.shutdown().await;
     }
-    println!("\n{why}");
+    outln!("\n{why}");
     for summary in &summaries {
-        println!("{summary}");
+        outln!("{summary}");
     }
     let failed = summaries
         .iter()
