@@ -379,11 +379,28 @@ fn check_reports_a_missing_file_where_the_config_names_it() {
 
 #[test]
 fn a_mission_runs_to_its_goal_on_one_worker_thread() {
-    let out = petrel(&["run", "configs/mission-demo.ron", "--workers", "1"]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let refused = petrel(&["run", "configs/mission-demo.ron", "--workers", "0"]);
-    assert_eq!(refused.status.code(), Some(2));
-    assert!(text(&refused.stderr).contains("'--workers <WORKERS>'"));
+    let out = bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                "configs/mission-demo.ron",
+                "--workers",
+                "1",
+                "--no-remote",
+            ])
+            .env("RUST_LOG", "petrel=info"),
+    );
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("modules run on 1 worker thread(s)"),
+        "the worker count in effect: {err}"
+    );
+    for bad in ["0", "257", "3000"] {
+        let refused = petrel(&["run", "configs/mission-demo.ron", "--workers", bad]);
+        assert_eq!(refused.status.code(), Some(2), "--workers {bad}");
+        assert!(text(&refused.stderr).contains("'--workers <WORKERS>'"));
+    }
 }
 
 #[test]

@@ -183,7 +183,7 @@ pub(crate) struct RunArgs {
     log_format: LogFormat,
     /// Worker threads the modules run on (default: one per core). One keeps a serial chain of
     /// modules on one core, where a hand-over between modules costs no thread wake-up.
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=MAX_WORKERS as i64))]
     workers: Option<u16>,
     /// Do not join the teams the configs name (links to other agents stay `waiting`), and
     /// do not answer tools (`petrel ls|get|set|echo|hz|top|events`).
@@ -195,6 +195,10 @@ pub(crate) struct RunArgs {
     #[arg(long)]
     trace_out: Option<PathBuf>,
 }
+
+/// The most worker threads `--workers` takes (more threads than this only cost memory on any
+/// machine a robot carries).
+const MAX_WORKERS: u16 = 256;
 
 /// How logs are written.
 #[derive(Clone, Copy, ValueEnum)]

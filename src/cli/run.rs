@@ -63,6 +63,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     // Listen before the agents start, so a SIGHUP sent as soon as the rules are loaded is a
     // reload, not the default "terminate".
     let hangups = Hangups::listen();
+    let workers = tokio::runtime::Handle::current().metrics().num_workers();
+    tracing::info!(workers, "modules run on {workers} worker thread(s)");
     let mut agents = Vec::new();
     let mut teams = Vec::new();
     let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
