@@ -217,33 +217,48 @@ fn check_validates_context_rules_with_the_config() {
 #[cfg(unix)]
 struct Running {
     child: std::process::Child,
-    log: std::io::Lines<std::io::BufReader<std::process::ChildStderr>>,
+    /// Log lines, read on their own thread so that waiting for one has a deadline.
+    log: std::sync::mpsc::Receiver<String>,
 }
 
 #[cfg(unix)]
 impl Running {
-    fn start(config: &std::path::Path) -> Self {
+    /// Starts `petrel run CONFIG`, reachable by tools through the discovery records in `records`.
+    fn start(config: &std::path::Path, records: &std::path::Path) -> Self {
         use std::io::BufRead;
         let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
             .args(["run", config.to_str().unwrap(), "--for", "120s"])
             .env("RUST_LOG", "info")
+            .env("PETREL_RUNTIME_DIR", records)
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .expect("petrel runs");
-        let log = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let (send, log) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in stderr.lines().map_while(Result::ok) {
+                if send.send(line).is_err() {
+                    break;
+                }
+            }
+        });
         Running { child, log }
     }
 
-    /// Reads the log up to the first line containing `needle` and returns it.
-    fn wait_for(&mut self, needle: &str) -> String {
-        for line in self.log.by_ref() {
-            let line = line.expect("the log is text");
-            if line.contains(needle) {
-                return line;
+    /// Reads the log up to the first line containing `needle` and returns it with the lines
+    /// before it; fails if none comes within the process deadline.
+    fn wait_for(&mut self, needle: &str) -> (String, Vec<String>) {
+        let deadline = std::time::Instant::now() + bounded::PROCESS_DEADLINE;
+        let mut before = Vec::new();
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            match self.log.recv_timeout(left) {
+                Ok(line) if line.contains(needle) => return (line, before),
+                Ok(line) => before.push(line),
+                Err(e) => panic!("no `{needle}` in petrel's log ({e}); before: {before:#?}"),
             }
         }
-        panic!("petrel's log ended without `{needle}`");
     }
 
     fn signal(&self, name: &str) {
@@ -252,6 +267,17 @@ impl Running {
             .status()
             .expect("kill runs");
         assert!(sent.success());
+    }
+}
+
+#[cfg(unix)]
+impl Drop for Running {
+    /// A failed test leaves no process behind.
+    fn drop(&mut self) {
+        if self.child.try_wait().ok().flatten().is_none() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
     }
 }
 
@@ -266,19 +292,25 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
         r#"Agent(name: "r1", contexts: "rules.ron", modules: [(name: "s", type: "demo.signal"), (name: "c", type: "demo.camera")])"#,
     )
     .unwrap();
-    let fast = |threshold: &str| {
+    // Always true (the signal stays within ±1), so a context is active from the start.
+    let rule = |name: &str, when: &str, deblur: bool| {
         format!(
-            "Contexts(contexts: [\n  (name: \"fast\", when: \"s/out/value > {threshold}\", set: {{\"c/params/deblur\": \"true\"}}),\n])"
+            "Contexts(contexts: [\n  (name: \"{name}\", when: \"{when}\", set: {{\"c/params/deblur\": \"{deblur}\"}}),\n])"
         )
     };
-    std::fs::write(&rules, fast("0.5")).unwrap();
-    let mut petrel = Running::start(&config);
+    std::fs::write(&rules, rule("fast", "s/out/value > -1000", true)).unwrap();
+    let mut petrel = Running::start(&config, dir.path());
     petrel.wait_for("context rules loaded");
+    let (set, _) = petrel.wait_for("context sets");
+    assert!(
+        set.contains("context=fast") && set.contains("new=true"),
+        "{set}"
+    );
 
-    std::fs::write(&rules, fast("")).unwrap();
+    std::fs::write(&rules, rule("fast", "s/out/value > ", true)).unwrap();
     petrel.signal("HUP");
     petrel.wait_for("context rules not reloaded; the running rules stay");
-    let error = petrel.wait_for("error:");
+    let (error, _) = petrel.wait_for("error:");
     assert!(
         error.contains(&format!(
             "{}:2:39: error: context `fast`: in `s/out/value > `: expected a value",
@@ -287,9 +319,30 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
         "{error}"
     );
 
-    std::fs::write(&rules, fast("0.9")).unwrap();
+    // The running rules still act: `fast` is still the active context.
+    let active = || {
+        let out = bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(["get", "petrel://r1/contexts/out/active"])
+                .env("PETREL_RUNTIME_DIR", dir.path()),
+        );
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        text(&out.stdout)
+    };
+    assert!(active().contains("fast"), "{}", active());
+
+    // The new rules are in force: `fast` ends (its setting restored), `slow` is active.
+    std::fs::write(&rules, rule("slow", "s/out/value > -1000", false)).unwrap();
     petrel.signal("HUP");
-    petrel.wait_for("context rules reloaded");
+    let (_, before) = petrel.wait_for("context activated context=slow");
+    for needle in ["context rules reloaded", "context deactivated context=fast"] {
+        assert!(
+            before.iter().any(|l| l.contains(needle)),
+            "{needle}: {before:#?}"
+        );
+    }
+    let now = active();
+    assert!(now.contains("slow") && !now.contains("fast"), "{now}");
 
     petrel.signal("INT");
     petrel.wait_for("stopping: interrupted");
