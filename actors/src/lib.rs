@@ -13,6 +13,7 @@ mod blackboard;
 mod cell;
 pub mod config;
 pub mod expr;
+pub mod files;
 mod handle;
 mod module;
 mod module_actor;

@@ -16,14 +16,13 @@ pub const MAX_DEPTH: usize = 256;
 /// rules file or a simulation script.
 #[derive(Debug, thiserror::Error)]
 pub enum PlanError {
-    /// The file could not be read.
-    #[error("{}: cannot read: {source}", path.display())]
+    /// The file could not be read (missing, not a regular file, too large...).
+    #[error("{}: {message}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// The underlying I/O error.
-        #[source]
-        source: std::io::Error,
+        /// What is wrong with it.
+        message: String,
     },
     /// The PNML file is not well-formed XML.
     #[error("{file}:{line}:{column}: malformed XML: {message}")]

@@ -1,6 +1,7 @@
 //! Loading plan files: PNML or text plans, with sub-plans resolved next to
 //! the file (`subplan.exec` -> `subplan.pnml` in the same directory).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -18,15 +19,19 @@ pub struct LoadedPlan {
     pub path: PathBuf,
 }
 
-/// Reads a file as text; PNML files are often ISO-8859-1, so bytes that are
-/// not UTF-8 are read as Latin-1.
+/// Reads a plan, rules or script file as text (a regular file within
+/// [`petrel_actors::files::limits::PLAN`], byte-order mark dropped); PNML files are often
+/// ISO-8859-1, so bytes that are not UTF-8 are read as Latin-1.
 pub(crate) fn read_text(path: &Path) -> Result<String, PlanError> {
-    let bytes = std::fs::read(path).map_err(|source| PlanError::Io {
-        path: path.to_path_buf(),
-        source,
+    use petrel_actors::files;
+    let bytes = files::read_bytes(path, "plan file", files::limits::PLAN).map_err(|message| {
+        PlanError::Io {
+            path: path.to_path_buf(),
+            message,
+        }
     })?;
     Ok(match String::from_utf8(bytes) {
-        Ok(s) => s,
+        Ok(s) => files::strip_bom(&s).to_string(),
         Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
     })
 }
@@ -66,7 +71,7 @@ pub fn load_plan(path: &Path, rules: Option<&Path>) -> Result<LoadedPlan, PlanEr
         compile_file(path, rules)?
     };
     let mut chain = vec![stem(path)];
-    let plan = attach_subplans(plan, path, &mut chain)?;
+    let plan = attach_subplans(plan, path, &mut chain, &mut HashMap::new())?;
     Ok(LoadedPlan {
         plan: Arc::new(plan),
         path: path.to_path_buf(),
@@ -86,10 +91,14 @@ fn compile_file(path: &Path, rules: Option<&Path>) -> Result<Plan, PlanError> {
     )
 }
 
+/// Loads the sub-plans of `plan` (a `name.pnml` beside `path` for each action `name`), and
+/// theirs. Each file is read once per load (`loaded`): a sub-plan shared by many plans of a
+/// deep hierarchy is parsed once, not once per path to it.
 fn attach_subplans(
     mut plan: Plan,
     path: &Path,
     chain: &mut Vec<String>,
+    loaded: &mut HashMap<PathBuf, Arc<Plan>>,
 ) -> Result<Plan, PlanError> {
     let dir = path.parent().unwrap_or(Path::new("."));
     for e in 0..plan.executables().len() {
@@ -106,11 +115,18 @@ fn attach_subplans(
                 chain: chain.join(" -> "),
             });
         }
-        chain.push(name.clone());
-        let sub = parse_pnml(&read_text(&file)?, &file.display().to_string(), &name)?;
-        let sub = attach_subplans(sub, &file, chain)?;
-        chain.pop();
-        plan.set_subplan(e, Arc::new(sub));
+        let sub = match loaded.get(&file) {
+            Some(sub) => sub.clone(),
+            None => {
+                chain.push(name.clone());
+                let sub = parse_pnml(&read_text(&file)?, &file.display().to_string(), &name)?;
+                let sub = Arc::new(attach_subplans(sub, &file, chain, loaded)?);
+                chain.pop();
+                loaded.insert(file, sub.clone());
+                sub
+            }
+        };
+        plan.set_subplan(e, sub);
     }
     Ok(plan)
 }

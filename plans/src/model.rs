@@ -178,4 +178,13 @@ impl Plan {
     pub(crate) fn set_subplan(&mut self, exec: usize, plan: Arc<Plan>) {
         self.executables[exec].subplan = Some(plan);
     }
+
+    /// This plan with its sub-plans turned into plain actions (for checking it on its own).
+    pub(crate) fn without_subplans(&self) -> Plan {
+        let mut plan = self.clone();
+        for e in &mut plan.executables {
+            e.subplan = None;
+        }
+        plan
+    }
 }

@@ -205,3 +205,55 @@ fn the_budget_stops_wide_plans_with_a_message() {
         .iter()
         .any(|w| w.code == "dead-transition" || w.code == "livelock"));
 }
+
+/// A hierarchy 30 levels deep where every level runs the next one twice (`L0` → `L1; L1` →
+/// ...): 2^30 paths through the sub-plans, 31 distinct files.
+fn shared_subplan_dag(dir: &std::path::Path, levels: usize) {
+    for i in 0..levels {
+        let text = format!("L{0}; L{0}\n", i + 1);
+        let plan = compile_text(&text, "dag.plan", &format!("L{i}"), None).unwrap();
+        std::fs::write(
+            dir.join(format!("L{i}.pnml")),
+            petrel_plans::write_pnml(&plan),
+        )
+        .unwrap();
+    }
+    let leaf = compile_text("leaf\n", "leaf.plan", &format!("L{levels}"), None).unwrap();
+    std::fs::write(
+        dir.join(format!("L{levels}.pnml")),
+        petrel_plans::write_pnml(&leaf),
+    )
+    .unwrap();
+}
+
+#[test]
+fn a_shared_subplan_is_loaded_and_checked_once_however_many_paths_reach_it() {
+    let dir = tempfile::tempdir().unwrap();
+    shared_subplan_dag(dir.path(), 30);
+    let l = load_plan(&dir.path().join("L0.pnml"), None).unwrap();
+    let r = check(&l.plan);
+    assert!(r.complete && r.is_ok(), "{r}");
+    // Each plan is explored with its sub-plan as one action: a handful of markings, not the
+    // 2^30 of every nested state (which the budget would cut short as "incomplete").
+    assert!(r.states < 10, "{r}");
+    assert_eq!(r.subplans, ["L1"]);
+
+    // A leaf that can never reach its goal (its only place waits forever) makes every
+    // parent's goal unreachable, level after level: the outcome travels up, checked once.
+    std::fs::write(
+        dir.path().join("L30.pnml"),
+        r#"<pnml><net id="n"><place id="p"><name><value>stuck</value></name>
+<initialMarking><value>1</value></initialMarking></place>
+<place id="g"><name><value>goal</value></name></place></net></pnml>"#,
+    )
+    .unwrap();
+    let l = load_plan(&dir.path().join("L0.pnml"), None).unwrap();
+    let r = check(&l.plan);
+    assert!(r.complete, "{r}");
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.code == "goal-unreachable" && !w.message.starts_with("sub-plan")),
+        "L0 itself can never reach its goal: {r}"
+    );
+}

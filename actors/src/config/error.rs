@@ -86,9 +86,14 @@ impl fmt::Display for ConfigErrors {
 impl std::error::Error for ConfigErrors {}
 
 /// Reads a text file; `what` names it in the error ("config", "context rules").
+/// Only a regular file is read, within the size limit of its kind
+/// ([`crate::files::limits`]), its UTF-8 byte-order mark dropped.
 pub fn read_text(path: &Path, what: &str) -> Result<String, ConfigError> {
-    std::fs::read_to_string(path)
-        .map_err(|e| ConfigError::in_file(path, format!("cannot read {what}: {e}")))
+    let limit = match what {
+        "context rules" => crate::files::limits::RULES,
+        _ => crate::files::limits::CONFIG,
+    };
+    crate::files::read_text(path, what, limit).map_err(|e| ConfigError::in_file(path, e))
 }
 
 /// Parses RON text as petrel writes its files: optional fields are written plainly

@@ -113,32 +113,44 @@ enum Mode {
     All,
 }
 
+/// What a sub-plan, checked on its own, can come to: whether it can reach its goal (its
+/// action ends) and its fail marking (its action fails). A plan is explored with its sub-plans
+/// as plain actions that can end or fail only as their own check found, so a plan shared by
+/// many parents is explored once, not once per path to it.
+pub(super) type Outcomes = HashMap<String, (bool, bool)>;
+
 /// The [`Environment`] of the exploration: answers atoms from a list of decisions.
 struct Decisions<'p> {
-    /// Executable and condition names (sub-plans' included) to numbers.
+    /// Executable and condition names to numbers.
     names: HashMap<&'p str, u32>,
+    /// Atoms that are always false: a sub-plan's end or fail it cannot come to.
+    never: Vec<u32>,
     /// Atoms answered in this run, in the order asked (atom = name * 3 + kind).
     path: Vec<(u32, bool)>,
     mode: Mode,
 }
 
 impl<'p> Decisions<'p> {
-    fn new(plan: &'p Plan) -> Self {
+    fn new(plan: &'p Plan, outcomes: &Outcomes) -> Self {
         let mut names = HashMap::new();
-        let mut plans = vec![plan];
-        while let Some(p) = plans.pop() {
-            for name in p
-                .conditions()
-                .iter()
-                .chain(p.executables().iter().map(|e| &e.name))
-            {
-                let n = names.len() as u32;
-                names.entry(name.as_str()).or_insert(n);
+        for name in plan
+            .conditions()
+            .iter()
+            .chain(plan.executables().iter().map(|e| &e.name))
+        {
+            let n = names.len() as u32;
+            names.entry(name.as_str()).or_insert(n);
+        }
+        let mut never = Vec::new();
+        for (name, &(can_end, can_fail)) in outcomes {
+            if let Some(&n) = names.get(name.as_str()) {
+                never.extend((!can_end).then_some(n * 3 + 1));
+                never.extend((!can_fail).then_some(n * 3 + 2));
             }
-            plans.extend(p.executables().iter().filter_map(|e| e.subplan.as_deref()));
         }
         Decisions {
             names,
+            never,
             path: Vec::new(),
             mode: Mode::Record,
         }
@@ -146,6 +158,9 @@ impl<'p> Decisions<'p> {
 
     fn answer(&mut self, name: &str, kind: u32) -> bool {
         let atom = self.names.get(name).map_or(u32::MAX - 3, |n| n * 3) + kind;
+        if self.never.contains(&atom) {
+            return false;
+        }
         if let Some(&(_, v)) = self.path.iter().find(|(a, _)| *a == atom) {
             return v;
         }
@@ -183,11 +198,11 @@ pub(super) struct Stepper<'p> {
 }
 
 impl<'p> Stepper<'p> {
-    pub fn new(plan: &'p Plan) -> Self {
+    pub fn new(plan: &'p Plan, outcomes: &Outcomes) -> Self {
         Stepper {
             plan,
             state: PlanState::new(plan),
-            env: Decisions::new(plan),
+            env: Decisions::new(plan, outcomes),
             next: Vec::new(),
         }
     }
@@ -270,8 +285,8 @@ pub(super) struct Explored {
 
 /// Explores `plan` breadth-first, interning at most `max_states` markings; stops at the first
 /// marking beyond.
-pub(super) fn explore(plan: &Plan, max_states: usize) -> Explored {
-    let mut stepper = Stepper::new(plan);
+pub(super) fn explore(plan: &Plan, outcomes: &Outcomes, max_states: usize) -> Explored {
+    let mut stepper = Stepper::new(plan, outcomes);
     let mut ex = Explored {
         markings: Markings::default(),
         graph: Graph::default(),
@@ -325,7 +340,7 @@ pub(super) fn explore(plan: &Plan, max_states: usize) -> Explored {
 
 /// The transitions fired by each step of the shortest path from the initial marking to
 /// `to`, replayed with the real step.
-pub(super) fn witness(plan: &Plan, ex: &Explored, to: u32) -> Vec<Vec<usize>> {
+pub(super) fn witness(plan: &Plan, outcomes: &Outcomes, ex: &Explored, to: u32) -> Vec<Vec<usize>> {
     let mut path = vec![to];
     while let Some(&p) = path.last().and_then(|&n| ex.parent.get(n as usize)) {
         if p == u32::MAX {
@@ -334,7 +349,7 @@ pub(super) fn witness(plan: &Plan, ex: &Explored, to: u32) -> Vec<Vec<usize>> {
         path.push(p);
     }
     path.reverse();
-    let mut stepper = Stepper::new(plan);
+    let mut stepper = Stepper::new(plan, outcomes);
     path.windows(2)
         .map(|w| {
             let (from, target) = (ex.markings.get(w[0]), ex.markings.get(w[1]));

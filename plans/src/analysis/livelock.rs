@@ -9,7 +9,7 @@
 
 use petgraph::algo::kosaraju_scc;
 
-use super::explore::{witness, Explored, Kind};
+use super::explore::{witness, Explored, Kind, Outcomes};
 use super::{finding, show_marking, Finding};
 use crate::model::Plan;
 
@@ -17,7 +17,7 @@ use crate::model::Plan;
 const SHOWN_STEPS: usize = 6;
 
 /// The livelock whose trap is reached first (breadth-first), with a witness, if any.
-pub(super) fn find(plan: &Plan, ex: &Explored) -> Option<Finding> {
+pub(super) fn find(plan: &Plan, outcomes: &Outcomes, ex: &Explored) -> Option<Finding> {
     if plan.goal_places().is_empty() {
         return None; // no goal to miss: the plan is reported unusable already
     }
@@ -43,7 +43,7 @@ pub(super) fn find(plan: &Plan, ex: &Explored) -> Option<Finding> {
         .iter()
         .min_by_key(|scc| scc.iter().map(|n| n.index()).min())?;
     let entry = trap.iter().map(|n| n.index() as u32).min()?;
-    let steps = witness(plan, ex, entry);
+    let steps = witness(plan, outcomes, ex, entry);
     let others = match traps.len() - 1 {
         0 => String::new(),
         1 => " (and 1 other such trap)".to_string(),

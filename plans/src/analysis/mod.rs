@@ -21,7 +21,10 @@ mod livelock;
 use std::fmt;
 
 use crate::model::Plan;
-use explore::{explore, top_pairs, Kind, MAX_TOKENS};
+use explore::{explore, top_pairs, Kind, Outcomes, MAX_TOKENS};
+use std::collections::HashMap;
+use std::rc::Rc;
+use std::sync::Arc;
 
 /// The markings [`check`] explores at most, and the default of `petrel plan check
 /// --max-states`: a linear plan of 100,000 actions has about 200,000 markings.
@@ -133,27 +136,66 @@ pub fn check(plan: &Plan) -> CheckReport {
 
 /// [`check`] with explicit options.
 pub fn check_with(plan: &Plan, options: &CheckOptions) -> CheckReport {
+    check_once(plan, options, &mut HashMap::new())
+        .report
+        .clone()
+}
+
+/// A plan's report, and what its parents may assume of it as a sub-plan.
+struct Checked {
+    report: CheckReport,
+    can_end: bool,
+    can_fail: bool,
+}
+
+/// Checks `plan`, each distinct sub-plan once (`done`, by address): a sub-plan shared by
+/// many plans of a deep hierarchy costs one check, and its parents are explored with it as an
+/// action that ends or fails only if its own check says it can.
+fn check_once(
+    plan: &Plan,
+    options: &CheckOptions,
+    done: &mut HashMap<*const Plan, Rc<Checked>>,
+) -> Rc<Checked> {
     let mut r = CheckReport {
         plan: plan.name().to_string(),
         ..CheckReport::default()
     };
+    let mut outcomes = Outcomes::new();
     for e in plan.executables() {
         match &e.subplan {
             Some(sp) => {
                 r.subplans.push(e.name.clone());
-                let sub = check_with(sp, options);
+                let key = Arc::as_ptr(sp);
+                let sub = match done.get(&key) {
+                    Some(sub) => sub.clone(),
+                    None => {
+                        let sub = check_once(sp, options, done);
+                        done.insert(key, sub.clone());
+                        sub
+                    }
+                };
+                outcomes.insert(e.name.clone(), (sub.can_end, sub.can_fail));
                 let pre =
-                    |f: Finding| finding(f.code, format!("sub-plan {}: {}", e.name, f.message));
-                r.errors.extend(sub.errors.into_iter().map(pre));
-                r.warnings.extend(sub.warnings.into_iter().map(pre));
+                    |f: &Finding| finding(f.code, format!("sub-plan {}: {}", e.name, f.message));
+                r.errors.extend(sub.report.errors.iter().map(pre));
+                r.warnings.extend(sub.report.warnings.iter().map(pre));
             }
             None => r.actions.push(e.name.clone()),
         }
     }
     r.conditions = plan.conditions().to_vec();
     structural(plan, &mut r);
-    behaviour(plan, options.max_states, &mut r);
-    r
+    let (can_end, can_fail) = behaviour(
+        &plan.without_subplans(),
+        &outcomes,
+        options.max_states,
+        &mut r,
+    );
+    Rc::new(Checked {
+        report: r,
+        can_end,
+        can_fail,
+    })
 }
 
 fn structural(plan: &Plan, r: &mut CheckReport) {
@@ -202,8 +244,15 @@ fn show_marking(plan: &Plan, key: &[u32]) -> String {
 }
 
 /// The findings of the exploration.
-fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
-    let ex = explore(plan, max_states);
+/// Explores `plan` (sub-plans as actions with `outcomes`) and reports what it finds; returns
+/// whether the goal and the fail marking can be reached (either, when unsure).
+fn behaviour(
+    plan: &Plan,
+    outcomes: &Outcomes,
+    max_states: usize,
+    r: &mut CheckReport,
+) -> (bool, bool) {
+    let ex = explore(plan, outcomes, max_states);
     let mut max_tokens = vec![0u32; plan.places().len()];
     for id in 0..ex.markings.len() as u32 {
         for (p, k) in top_pairs(ex.markings.get(id)) {
@@ -248,8 +297,10 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
             ));
         }
     }
+    let reached = (has(Kind::Goal), has(Kind::Fail));
     if !r.complete {
-        return;
+        // Unsure: a parent must not conclude this plan never ends or never fails.
+        return (true, true);
     }
     for (ti, t) in plan.transitions().iter().enumerate() {
         if !ex.fired[ti] {
@@ -259,7 +310,7 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
             ));
         }
     }
-    if let Some(f) = livelock::find(plan, &ex) {
+    if let Some(f) = livelock::find(plan, outcomes, &ex) {
         r.warnings.push(f);
     }
     if !has(Kind::Goal) && !plan.goal_places().is_empty() {
@@ -285,4 +336,5 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
             format!("the goal marking can never be reached exactly{why}"),
         ));
     }
+    reached
 }
