@@ -14,3 +14,8 @@ pub mod sink;
 pub use encode::{Codec, Format, Kind, LogLevel, LogRecord, SchemaDef, Stamp};
 pub use select::{RecordOptions, Selection, SplitPolicy};
 pub use sink::{ChannelSpec, Entry, Sink, SinkReport};
+pub mod read;
+pub mod recorder;
+
+pub use read::{ChannelInfo, ReadProblem, RecordedMessage, Recording};
+pub use recorder::{LogSink, Recorder};
