@@ -19,3 +19,10 @@ pub mod recorder;
 
 pub use read::{ChannelInfo, ReadProblem, RecordedMessage, Recording};
 pub use recorder::{LogSink, Recorder};
+pub mod replay;
+pub mod playback;
+
+/// Adds the `record.replay` module type.
+pub fn register(registry: &mut petrel_actors::ModuleRegistry) {
+    registry.register::<playback::Playback>();
+}
