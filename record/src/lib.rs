@@ -26,3 +26,4 @@ pub mod playback;
 pub fn register(registry: &mut petrel_actors::ModuleRegistry) {
     registry.register::<playback::Playback>();
 }
+pub mod info;

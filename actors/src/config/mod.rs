@@ -363,7 +363,7 @@ impl ConfigFile {
     }
 
     /// An error located at the first occurrence of `needle` in the last source that has it.
-    fn locate(&self, needle: &str, message: String) -> ConfigError {
+    pub fn locate(&self, needle: &str, message: String) -> ConfigError {
         for (file, text) in self.sources.iter().rev() {
             if let Some(at) = text.find(needle) {
                 return ConfigError::at(file, text, at, message);
