@@ -77,6 +77,58 @@ impl Module for Playback {
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        // A recording that does not fit the config is bad input, not a fault a restart
+        // mends: the run ends, saying why.
+        let result = self.prepare(ctx).await;
+        if let Err(e) = &result {
+            ctx.stop_agent(2, format!("{}: cannot replay: {e:#}", ctx.module()));
+        }
+        result
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        self.publish_due(ctx)
+    }
+}
+
+impl Playback {
+    fn publish_due(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let Some(run) = self.run.as_mut() else {
+            return Ok(());
+        };
+        let now = ctx.now();
+        run.start.get_or_insert(now);
+        let mut sent = 0;
+        while let Some(due) = run.due(run.next) {
+            if due > now || (run.rate == Rate::Max && sent == MAX_BATCH) {
+                break;
+            }
+            let (_, track, index) = run.plan.schedule[run.next];
+            let t = &run.plan.tracks[track];
+            let feed = &run.feeds[track];
+            let data = &run.recording.messages[index].data;
+            match t.codec.decode(&feed.type_info(), data) {
+                Ok(value) => match feed {
+                    RemoteFeed::Value(v) => v.write(value, now),
+                    RemoteFeed::Queue(q) => q.push(value, now),
+                },
+                Err(e) => bail!("message {index} of channel `{}`: {e}", t.topic),
+            }
+            run.next += 1;
+            sent += 1;
+        }
+        self.published.set(run.next as i64);
+        if run.next == run.plan.schedule.len() {
+            self.done.set(true);
+            if self.stop_at_end.value() {
+                ctx.stop_agent(0, "the recording is replayed");
+            }
+        }
+        ctx.reschedule();
+        Ok(())
+    }
+
+    async fn prepare(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let file = self.file.get();
         if file.is_empty() {
             bail!("params/file is empty; expected the path of an MCAP recording");
@@ -127,39 +179,4 @@ impl Module for Playback {
         Ok(())
     }
 
-    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let Some(run) = self.run.as_mut() else {
-            return Ok(());
-        };
-        let now = ctx.now();
-        run.start.get_or_insert(now);
-        let mut sent = 0;
-        while let Some(due) = run.due(run.next) {
-            if due > now || (run.rate == Rate::Max && sent == MAX_BATCH) {
-                break;
-            }
-            let (_, track, index) = run.plan.schedule[run.next];
-            let t = &run.plan.tracks[track];
-            let feed = &run.feeds[track];
-            let data = &run.recording.messages[index].data;
-            match t.codec.decode(&feed.type_info(), data) {
-                Ok(value) => match feed {
-                    RemoteFeed::Value(v) => v.write(value, now),
-                    RemoteFeed::Queue(q) => q.push(value, now),
-                },
-                Err(e) => bail!("message {index} of channel `{}`: {e}", t.topic),
-            }
-            run.next += 1;
-            sent += 1;
-        }
-        self.published.set(run.next as i64);
-        if run.next == run.plan.schedule.len() {
-            self.done.set(true);
-            if self.stop_at_end.value() {
-                ctx.stop_agent(0, "the recording is replayed");
-            }
-        }
-        ctx.reschedule();
-        Ok(())
-    }
 }

@@ -18,8 +18,6 @@ use crate::encode::LogRecord;
 use crate::select::RecordOptions;
 use crate::sink::{ChannelSpec, Entry, Sink, SinkReport};
 
-/// Values waiting for the writer thread at most; beyond, taps drop and count.
-pub const BACKLOG: usize = 8192;
 /// How often the writer closes its chunk, so a killed run loses at most this much.
 pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
 /// Items a queue tap takes per wake-up.
@@ -126,7 +124,7 @@ impl Recorder {
     /// Creates the first file and starts the writer thread.
     pub fn start(options: RecordOptions) -> io::Result<Recorder> {
         let mut sink = Sink::create(&options.path, options.format, options.split)?;
-        let (tx, rx) = mpsc::sync_channel::<Msg>(BACKLOG);
+        let (tx, rx) = mpsc::sync_channel::<Msg>(options.backlog.max(1));
         let thread = std::thread::Builder::new()
             .name("petrel-record".into())
             .spawn(move || {

@@ -26,7 +26,12 @@ pub struct RecordOptions {
     pub log: bool,
     /// When to start a new file.
     pub split: SplitPolicy,
+    /// Values waiting for the writer at most; beyond, they are dropped and counted.
+    pub backlog: usize,
 }
+
+/// Default [`RecordOptions::backlog`]: a few seconds of a busy agent.
+pub const DEFAULT_BACKLOG: usize = 8192;
 
 impl RecordOptions {
     /// Everything, in `format`, to `path`, in one file.
@@ -37,6 +42,7 @@ impl RecordOptions {
             selection: Selection::everything(),
             log: true,
             split: SplitPolicy::default(),
+            backlog: DEFAULT_BACKLOG,
         }
     }
 
@@ -65,6 +71,7 @@ impl RecordOptions {
             selection,
             log: section.log,
             split,
+            backlog: DEFAULT_BACKLOG,
         })
     }
 }
