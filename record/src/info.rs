@@ -36,6 +36,8 @@ pub struct Info {
     pub finished: bool,
     /// Where reading stopped early, if it did.
     pub problem: Option<String>,
+    /// Where the chunk open when the recording was killed starts.
+    pub interrupted_at: Option<u64>,
     /// Messages.
     pub messages: u64,
     /// Chunks.
@@ -100,6 +102,7 @@ impl Info {
             format,
             finished: rec.finished,
             problem: rec.problem.as_ref().map(ToString::to_string),
+            interrupted_at: rec.interrupted_at,
             messages: rec.messages.len() as u64,
             chunks: rec.chunks,
             span_ns,
@@ -114,7 +117,10 @@ impl fmt::Display for Info {
         let state = match (&self.problem, self.finished) {
             (Some(p), _) => format!("damaged: {p}; figures below cover what comes before"),
             (None, true) => "finished (summary and index written)".into(),
-            (None, false) => "unfinished (no summary: the recording was killed); readable up to its last whole chunk".into(),
+            (None, false) => match self.interrupted_at {
+                Some(at) => format!("unfinished (no summary: the recording was killed); readable up to its last whole chunk, the chunk at byte {at} was being written"),
+                None => "unfinished (no summary: the recording was killed); readable up to its last whole chunk".into(),
+            },
         };
         writeln!(f, "size:      {} bytes", self.bytes)?;
         writeln!(f, "state:     {state}")?;

@@ -89,6 +89,9 @@ pub struct Recording {
     pub chunks: usize,
     /// Where reading stopped before the end, if it did.
     pub problem: Option<ReadProblem>,
+    /// Where the chunk being written when the recording was killed starts (its records are
+    /// lost; everything before it reads).
+    pub interrupted_at: Option<u64>,
     /// The file's length.
     pub len: u64,
 }
@@ -149,6 +152,12 @@ impl Recording {
             let opcode = head[0];
             let len = u64::from_le_bytes(head[1..9].try_into().expect("8 bytes"));
             let start = pos + 9;
+            if top && len == u64::MAX {
+                // The mcap writer fills a chunk's length in when it closes the chunk: this
+                // one was open when the recording was killed. The file ends here.
+                self.interrupted_at = Some(offset);
+                return Ok(());
+            }
             let end = usize::try_from(len).ok().and_then(|l| start.checked_add(l));
             let Some(body) = end.and_then(|e| bytes.get(start..e)) else {
                 return Err(stop(format!(

@@ -124,12 +124,15 @@ impl Recorder {
     /// Creates the first file and starts the writer thread.
     pub fn start(options: RecordOptions) -> io::Result<Recorder> {
         let mut sink = Sink::create(&options.path, options.format, options.split)?;
+        let path = options.path.clone();
         let (tx, rx) = mpsc::sync_channel::<Msg>(options.backlog.max(1));
         let thread = std::thread::Builder::new()
             .name("petrel-record".into())
             .spawn(move || {
                 let mut counters: Vec<(Arc<AtomicU64>, u64)> = Vec::new();
                 let mut last_flush = std::time::Instant::now();
+                let mut on_disk = false;
+                let mut written = 0_u64;
                 let sync = |sink: &mut Sink, counters: &mut Vec<(Arc<AtomicU64>, u64)>| {
                     for (i, (counter, seen)) in counters.iter_mut().enumerate() {
                         let now = counter.load(Ordering::Relaxed);
@@ -143,7 +146,10 @@ impl Recorder {
                             sink.channel(spec);
                             counters.push((dropped, 0));
                         }
-                        Ok(Msg::Entry(entry)) => sink.write(&entry)?,
+                        Ok(Msg::Entry(entry)) => {
+                            sink.write(&entry)?;
+                            written += 1;
+                        }
                         Ok(Msg::Stop) | Err(RecvTimeoutError::Disconnected) => break,
                         Err(RecvTimeoutError::Timeout) => {}
                     }
@@ -151,6 +157,10 @@ impl Recorder {
                         sync(&mut sink, &mut counters);
                         sink.flush()?;
                         last_flush = std::time::Instant::now();
+                        if !on_disk && written > 0 {
+                            on_disk = true;
+                            tracing::info!(file = %path.display(), messages = written, "recording: first chunks on disk (a killed run leaves a file that opens)");
+                        }
                     }
                 }
                 sync(&mut sink, &mut counters);
