@@ -5,7 +5,7 @@
 
 use std::io;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::mpsc::{self, RecvTimeoutError, SyncSender, TrySendError};
+use parking_lot::{Condvar, Mutex};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -56,10 +56,66 @@ impl StampClock {
     }
 }
 
+/// Values queued before the writer thread is woken: it takes them in batches, so a busy
+/// agent costs one thread wake-up per batch, not one per value.
+const WAKE_AT: usize = 256;
+/// Longest a value waits for the writer when fewer than [`WAKE_AT`] are queued.
+const LATENCY: Duration = Duration::from_millis(100);
+
+struct Queue {
+    msgs: Mutex<Vec<Msg>>,
+    ready: Condvar,
+    limit: usize,
+}
+
+/// The hand-off to the writer thread: bounded by a count (a large backlog costs memory only
+/// while used), never waited on by the taps.
+#[derive(Clone)]
+struct Backlog(Arc<Queue>);
+
+impl Backlog {
+    fn new(limit: usize) -> Self {
+        Backlog(Arc::new(Queue {
+            msgs: Mutex::new(Vec::new()),
+            ready: Condvar::new(),
+            limit: limit.max(1),
+        }))
+    }
+
+    /// Queues a value unless `limit` already wait; says whether it did.
+    fn try_send(&self, msg: Msg) -> bool {
+        let mut msgs = self.0.msgs.lock();
+        if msgs.len() >= self.0.limit {
+            return false;
+        }
+        msgs.push(msg);
+        if msgs.len() == WAKE_AT {
+            self.0.ready.notify_one();
+        }
+        true
+    }
+
+    /// Queues a control message (a channel, the stop), whatever the backlog, and wakes the writer.
+    fn send(&self, msg: Msg) {
+        self.0.msgs.lock().push(msg);
+        self.0.ready.notify_one();
+    }
+
+    /// Takes what is queued into `out` (emptied first), waiting up to [`LATENCY`] for some.
+    fn take(&self, out: &mut Vec<Msg>) {
+        out.clear();
+        let mut msgs = self.0.msgs.lock();
+        if msgs.len() < WAKE_AT {
+            self.0.ready.wait_for(&mut msgs, LATENCY);
+        }
+        std::mem::swap(&mut *msgs, out);
+    }
+}
+
 /// Sends values to the writer thread without ever waiting.
 #[derive(Clone)]
 struct Out {
-    tx: SyncSender<Msg>,
+    tx: Backlog,
     clock: StampClock,
     channel: usize,
     dropped: Arc<AtomicU64>,
@@ -74,13 +130,8 @@ impl Out {
             publish_ns: self.clock.unix_ns(written),
             log_ns: self.clock.unix_ns(Instant::now()),
         };
-        match self.tx.try_send(Msg::Entry(entry)) {
-            Ok(()) => {}
-            Err(TrySendError::Full(_)) => {
-                self.dropped.fetch_add(1, Ordering::Relaxed);
-            }
-            // The recorder stopped: nothing more to record.
-            Err(TrySendError::Disconnected(_)) => {}
+        if !self.tx.try_send(Msg::Entry(entry)) {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
         }
     }
 }
@@ -103,7 +154,7 @@ impl LogSink {
             value: Arc::new(rec),
             sequence: seq,
         };
-        if let Err(TrySendError::Full(_)) = self.out.tx.try_send(Msg::Entry(entry)) {
+        if !self.out.tx.try_send(Msg::Entry(entry)) {
             self.out.dropped.fetch_add(1, Ordering::Relaxed);
         }
     }
@@ -111,7 +162,7 @@ impl LogSink {
 
 /// A running recording.
 pub struct Recorder {
-    tx: SyncSender<Msg>,
+    tx: Backlog,
     clock: StampClock,
     options: RecordOptions,
     channels: usize,
@@ -125,7 +176,8 @@ impl Recorder {
     pub fn start(options: RecordOptions) -> io::Result<Recorder> {
         let mut sink = Sink::create(&options.path, options.format, options.split)?;
         let path = options.path.clone();
-        let (tx, rx) = mpsc::sync_channel::<Msg>(options.backlog.max(1));
+        let tx = Backlog::new(options.backlog);
+        let rx = tx.clone();
         let thread = std::thread::Builder::new()
             .name("petrel-record".into())
             .spawn(move || {
@@ -140,18 +192,23 @@ impl Recorder {
                         *seen = now;
                     }
                 };
-                loop {
-                    match rx.recv_timeout(FLUSH_EVERY) {
-                        Ok(Msg::Channel(spec, dropped)) => {
-                            sink.channel(spec);
-                            counters.push((dropped, 0));
+                let mut batch = Vec::new();
+                let mut stop = false;
+                while !stop {
+                    rx.take(&mut batch);
+                    for msg in batch.drain(..) {
+                        match msg {
+                            Msg::Channel(spec, dropped) => {
+                                sink.channel(spec);
+                                counters.push((dropped, 0));
+                            }
+                            Msg::Entry(entry) => {
+                                sink.write(&entry)?;
+                                written += 1;
+                            }
+                            // What was queued before the stop is written; nothing after.
+                            Msg::Stop => stop = true,
                         }
-                        Ok(Msg::Entry(entry)) => {
-                            sink.write(&entry)?;
-                            written += 1;
-                        }
-                        Ok(Msg::Stop) | Err(RecvTimeoutError::Disconnected) => break,
-                        Err(RecvTimeoutError::Timeout) => {}
                     }
                     if last_flush.elapsed() >= FLUSH_EVERY {
                         sync(&mut sink, &mut counters);
@@ -184,8 +241,7 @@ impl Recorder {
 
     fn add_channel(&mut self, spec: ChannelSpec) -> Out {
         let dropped = Arc::new(AtomicU64::new(0));
-        // Waiting here is fine: channels are added while attaching, not by modules.
-        let _ = self.tx.send(Msg::Channel(spec, dropped.clone()));
+        self.tx.send(Msg::Channel(spec, dropped.clone()));
         let out = Out {
             tx: self.tx.clone(),
             clock: self.clock,
@@ -254,7 +310,7 @@ impl Recorder {
         for task in self.tasks.drain(..) {
             task.abort();
         }
-        let _ = self.tx.send(Msg::Stop);
+        self.tx.send(Msg::Stop);
         let thread = self.thread.take().expect("finished once");
         tokio::task::spawn_blocking(move || thread.join())
             .await
@@ -268,7 +324,7 @@ impl Drop for Recorder {
         for task in &self.tasks {
             task.abort();
         }
-        let _ = self.tx.try_send(Msg::Stop);
+        self.tx.send(Msg::Stop);
     }
 }
 
