@@ -24,7 +24,9 @@ fn cpu_time() -> Duration {
 }
 
 fn navigate() -> ConfigFile {
-    let mut file = ConfigFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/navigate.ron")).unwrap();
+    let mut file =
+        ConfigFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/navigate.ron"))
+            .unwrap();
     let overlay = ConfigFile::parse(
         "overlay.ron",
         r#"Agent(name: "robot1", modules: [(name: "recorder", type: "sim.recorder", values: {"params/png": ""})])"#,
@@ -35,7 +37,7 @@ fn navigate() -> ConfigFile {
 }
 
 /// One run; returns the CPU time it took.
-fn run(file: &ConfigFile, record: Option<&Path>) -> Duration {
+fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .start_paused(true)
@@ -45,8 +47,8 @@ fn run(file: &ConfigFile, record: Option<&Path>) -> Duration {
     rt.block_on(async {
         let agent = Agent::start(file, &common::registry()).await.unwrap();
         let recorder = match record {
-            Some(path) => {
-                let mut options = RecordOptions::everything(path, Format::Foxglove);
+            Some((path, format)) => {
+                let mut options = RecordOptions::everything(path, format);
                 options.backlog = 1 << 22;
                 let mut r = Recorder::start(options).unwrap();
                 r.attach("robot1", agent.blackboard()).await.unwrap();
@@ -70,7 +72,18 @@ fn record_overhead(c: &mut Criterion) {
     let path = dir.path().join("nav.mcap");
     let mut g = c.benchmark_group("record_overhead");
     g.bench_function("navigate_recording_everything", |b| {
-        b.iter_custom(|iters| (0..iters).map(|_| run(&file, Some(&path))).sum())
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| run(&file, Some((&path, Format::Foxglove))))
+                .sum()
+        })
+    });
+    g.bench_function("navigate_recording_everything_ros2", |b| {
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| run(&file, Some((&path, Format::Ros2))))
+                .sum()
+        })
     });
     g.bench_function("navigate_without_recording", |b| {
         b.iter_custom(|iters| (0..iters).map(|_| run(&file, None)).sum())

@@ -21,7 +21,10 @@ fn scan() -> AnyValue {
         angle_min: -std::f64::consts::FRAC_PI_2,
         angle_increment: std::f64::consts::PI / 180.0,
         range_max: 8.0,
-        ranges: (0..181).map(|i| 1.0 + (i as f64 * 0.37).sin().abs() * 6.0).collect::<Vec<_>>().into(),
+        ranges: (0..181)
+            .map(|i| 1.0 + (i as f64 * 0.37).sin().abs() * 6.0)
+            .collect::<Vec<_>>()
+            .into(),
     })
 }
 
@@ -35,8 +38,14 @@ fn petrel_sink(dir: &std::path::Path, format: Format, value: &AnyValue) -> u64 {
     });
     for i in 0..SCANS {
         let ns = 1_000_000_000 + i * 50_000_000;
-        sink.write(&Entry { channel: ch, value: value.clone(), sequence: i, publish_ns: ns, log_ns: ns })
-            .unwrap();
+        sink.write(&Entry {
+            channel: ch,
+            value: value.clone(),
+            sequence: i,
+            publish_ns: ns,
+            log_ns: ns,
+        })
+        .unwrap();
     }
     sink.finish().unwrap().written
 }
@@ -48,14 +57,26 @@ fn encoded(format: Format, value: &AnyValue) -> Vec<Vec<u8>> {
         .map(|i| {
             let mut bytes = Vec::new();
             let ns = 1_000_000_000 + i * 50_000_000;
-            codec.encode(&TypeInfo::of::<LaserScan>(), value, Stamp::from_ns(ns), &mut bytes).unwrap();
+            codec
+                .encode(
+                    &TypeInfo::of::<LaserScan>(),
+                    value,
+                    Stamp::from_ns(ns),
+                    &mut bytes,
+                )
+                .unwrap();
             bytes
         })
         .collect()
 }
 
 /// The raw writer; with `ahead`, the bytes come encoded, else it encodes each as petrel does.
-fn raw_mcap(dir: &std::path::Path, format: Format, value: &AnyValue, ahead: Option<&[Vec<u8>]>) -> u64 {
+fn raw_mcap(
+    dir: &std::path::Path,
+    format: Format,
+    value: &AnyValue,
+    ahead: Option<&[Vec<u8>]>,
+) -> u64 {
     let codec = Codec::for_value(format, &TypeInfo::of::<LaserScan>(), value);
     let schema = codec.schema("LaserScan");
     let file = std::io::BufWriter::new(std::fs::File::create(dir.join("raw.mcap")).unwrap());
@@ -64,19 +85,40 @@ fn raw_mcap(dir: &std::path::Path, format: Format, value: &AnyValue, ahead: Opti
         .chunk_size(Some(CHUNK_BYTES))
         .create(file)
         .unwrap();
-    let sid = w.add_schema(&schema.name, schema.encoding, &schema.data).unwrap();
+    let sid = w
+        .add_schema(&schema.name, schema.encoding, &schema.data)
+        .unwrap();
     let cid = w
-        .add_channel(sid, "/robot1/robot/out/laserScan", schema.message_encoding, &BTreeMap::new())
+        .add_channel(
+            sid,
+            "/robot1/robot/out/laserScan",
+            schema.message_encoding,
+            &BTreeMap::new(),
+        )
         .unwrap();
     let mut bytes = Vec::new();
     for i in 0..SCANS {
         let ns = 1_000_000_000 + i * 50_000_000;
-        let header = MessageHeader { channel_id: cid, sequence: i as u32, log_time: ns, publish_time: ns };
+        let header = MessageHeader {
+            channel_id: cid,
+            sequence: i as u32,
+            log_time: ns,
+            publish_time: ns,
+        };
         match ahead {
-            Some(messages) => w.write_to_known_channel(&header, &messages[i as usize]).unwrap(),
+            Some(messages) => w
+                .write_to_known_channel(&header, &messages[i as usize])
+                .unwrap(),
             None => {
                 bytes.clear();
-                codec.encode(&TypeInfo::of::<LaserScan>(), value, Stamp::from_ns(ns), &mut bytes).unwrap();
+                codec
+                    .encode(
+                        &TypeInfo::of::<LaserScan>(),
+                        value,
+                        Stamp::from_ns(ns),
+                        &mut bytes,
+                    )
+                    .unwrap();
                 w.write_to_known_channel(&header, &bytes).unwrap();
             }
         }

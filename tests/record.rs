@@ -23,7 +23,9 @@ fn text(bytes: &[u8]) -> String {
 }
 
 fn shipped(name: &str) -> String {
-    let path: PathBuf = [env!("CARGO_MANIFEST_DIR"), "configs", name].iter().collect();
+    let path: PathBuf = [env!("CARGO_MANIFEST_DIR"), "configs", name]
+        .iter()
+        .collect();
     path.display().to_string()
 }
 
@@ -39,7 +41,15 @@ fn a_sigkilled_recording_opens_up_to_its_last_chunk() {
     use std::sync::mpsc;
     let dir = tempfile::tempdir().unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(["run", &shipped("navigate.ron"), "--record", "run.mcap", "--no-remote", "--for", "120s"])
+        .args([
+            "run",
+            &shipped("navigate.ron"),
+            "--record",
+            "run.mcap",
+            "--no-remote",
+            "--for",
+            "120s",
+        ])
         .current_dir(dir.path())
         .env("RUST_LOG", "info")
         .stdout(std::process::Stdio::null())
@@ -57,7 +67,10 @@ fn a_sigkilled_recording_opens_up_to_its_last_chunk() {
     let log = std::io::BufReader::new(child.stderr.take().unwrap());
     let mut seen = false;
     for line in log.lines() {
-        if line.expect("the log is text").contains("first chunks on disk") {
+        if line
+            .expect("the log is text")
+            .contains("first chunks on disk")
+        {
             seen = true;
             break;
         }
@@ -71,10 +84,15 @@ fn a_sigkilled_recording_opens_up_to_its_last_chunk() {
     let bytes = std::fs::read(&path).unwrap();
     let rec = Recording::parse(&bytes);
     assert!(!rec.finished, "killed before its summary");
-    assert!(rec.chunks >= 1 && !rec.messages.is_empty(), "{} chunks", rec.chunks);
+    assert!(
+        rec.chunks >= 1 && !rec.messages.is_empty(),
+        "{} chunks",
+        rec.chunks
+    );
     // The mcap crate's own streaming reader reads it too, up to where it was cut.
-    let stream = mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-        .expect("the file starts like an MCAP file");
+    let stream =
+        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
+            .expect("the file starts like an MCAP file");
     let read = stream.take_while(Result::is_ok).count();
     assert!(read >= rec.messages.len().min(1), "{read}");
     let out = petrel(dir.path(), &["record", "info", "run.mcap", "--salvage"]);
@@ -82,29 +100,68 @@ fn a_sigkilled_recording_opens_up_to_its_last_chunk() {
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
     assert!(stdout.contains("unfinished"), "{stdout}");
     // Killed files open without `--salvage`: only the chunk being written is lost.
-    assert!(petrel(dir.path(), &["record", "info", "run.mcap"]).status.success());
-    assert!(stdout.contains("/robot1/robot/out/laserScan") && stdout.contains("foxglove.LaserScan"), "{stdout}");
+    assert!(petrel(dir.path(), &["record", "info", "run.mcap"])
+        .status
+        .success());
+    assert!(
+        stdout.contains("/robot1/robot/out/laserScan") && stdout.contains("foxglove.LaserScan"),
+        "{stdout}"
+    );
 }
 
 #[test]
 fn a_recorded_run_is_listed_and_replayed_in_place_of_a_module() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("demo.ron"), DEMO).unwrap();
-    let out = petrel(dir.path(), &["run", "demo.ron", "--for", "1s", "--no-remote", "--record", "demo.mcap", "--record-format", "ros2"]);
+    let out = petrel(
+        dir.path(),
+        &[
+            "run",
+            "demo.ron",
+            "--for",
+            "1s",
+            "--no-remote",
+            "--record",
+            "demo.mcap",
+            "--record-format",
+            "ros2",
+        ],
+    );
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
-    assert!(stdout.contains("recorded ") && stdout.contains("demo.mcap (dropped 0)"), "{stdout}");
+    assert!(
+        stdout.contains("recorded ") && stdout.contains("demo.mcap (dropped 0)"),
+        "{stdout}"
+    );
     let info = petrel(dir.path(), &["record", "info", "demo.mcap"]);
     let listing = text(&info.stdout);
     assert!(info.status.success(), "{listing}");
-    assert!(listing.contains("finished (summary and index written)"), "{listing}");
+    assert!(
+        listing.contains("finished (summary and index written)"),
+        "{listing}"
+    );
     assert!(listing.contains("format:    ros2"), "{listing}");
     assert!(listing.contains("/d/counter/out/value"), "{listing}");
-    let out = petrel(dir.path(), &["replay", "demo.mcap", "demo.ron", "--replace", "counter", "--rate", "max", "--no-remote"]);
+    let out = petrel(
+        dir.path(),
+        &[
+            "replay",
+            "demo.mcap",
+            "demo.ron",
+            "--replace",
+            "counter",
+            "--rate",
+            "max",
+            "--no-remote",
+        ],
+    );
     let stdout = text(&out.stdout);
     assert!(out.status.success(), "{stdout}{}", text(&out.stderr));
     assert!(stdout.contains("the recording is replayed"), "{stdout}");
-    assert!(stdout.contains("replay") && !stdout.contains("counter  "), "counter not started: {stdout}");
+    assert!(
+        stdout.contains("replay") && !stdout.contains("counter  "),
+        "counter not started: {stdout}"
+    );
 }
 
 #[test]
@@ -116,9 +173,22 @@ fn bad_recordings_and_mismatched_configs_are_errors_naming_what_is_wrong() {
     );
     std::fs::write(dir.path().join("demo.ron"), DEMO).unwrap();
     std::fs::write(dir.path().join("part.ron"), without_counter).unwrap();
-    let out = petrel(dir.path(), &["run", "part.ron", "--for", "500ms", "--no-remote"]);
+    let out = petrel(
+        dir.path(),
+        &["run", "part.ron", "--for", "500ms", "--no-remote"],
+    );
     assert!(out.status.success(), "{}", text(&out.stderr));
-    let out = petrel(dir.path(), &["replay", "part.mcap", "demo.ron", "--replace", "counter", "--no-remote"]);
+    let out = petrel(
+        dir.path(),
+        &[
+            "replay",
+            "part.mcap",
+            "demo.ron",
+            "--replace",
+            "counter",
+            "--no-remote",
+        ],
+    );
     let stdout = text(&out.stdout);
     assert_eq!(out.status.code(), Some(2), "{stdout}{}", text(&out.stderr));
     assert!(
@@ -131,17 +201,56 @@ fn bad_recordings_and_mismatched_configs_are_errors_naming_what_is_wrong() {
     let out = petrel(dir.path(), &["record", "info", "cut.mcap"]);
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("cut.mcap: at byte ") && stderr.contains("expected"), "{stderr}");
+    assert!(
+        stderr.contains("cut.mcap: at byte ") && stderr.contains("expected"),
+        "{stderr}"
+    );
     std::fs::write(dir.path().join("junk.mcap"), b"not a recording at all").unwrap();
-    let out = petrel(dir.path(), &["replay", "junk.mcap", "demo.ron", "--replace", "counter", "--no-remote"]);
-    assert!(text(&out.stdout).contains("magic bytes"), "{}", text(&out.stdout));
-    let out = petrel(dir.path(), &["replay", "part.mcap", "demo.ron", "--replace", "counter", "--rate", "fast"]);
+    let out = petrel(
+        dir.path(),
+        &[
+            "replay",
+            "junk.mcap",
+            "demo.ron",
+            "--replace",
+            "counter",
+            "--no-remote",
+        ],
+    );
+    assert!(
+        text(&out.stdout).contains("magic bytes"),
+        "{}",
+        text(&out.stdout)
+    );
+    let out = petrel(
+        dir.path(),
+        &[
+            "replay",
+            "part.mcap",
+            "demo.ron",
+            "--replace",
+            "counter",
+            "--rate",
+            "fast",
+        ],
+    );
     assert_eq!(out.status.code(), Some(2));
-    assert!(text(&out.stderr).contains("expected a factor (e.g. 2) or `max`, got `fast`"), "{}", text(&out.stderr));
-    let bad = DEMO.replace(r#"Agent(name: "d","#, "Agent(name: \"d\",\n  record: (max_duration_s: 0.1),");
+    assert!(
+        text(&out.stderr).contains("expected a factor (e.g. 2) or `max`, got `fast`"),
+        "{}",
+        text(&out.stderr)
+    );
+    let bad = DEMO.replace(
+        r#"Agent(name: "d","#,
+        "Agent(name: \"d\",\n  record: (max_duration_s: 0.1),",
+    );
     std::fs::write(dir.path().join("bad.ron"), bad).unwrap();
     let out = petrel(dir.path(), &["check", "bad.ron"]);
     let stderr = text(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("bad.ron:2:") && stderr.contains("max_duration_s: expected seconds in [1, 1e9], got 0.1"), "{stderr}");
+    assert!(
+        stderr.contains("bad.ron:2:")
+            && stderr.contains("max_duration_s: expected seconds in [1, 1e9], got 0.1"),
+        "{stderr}"
+    );
 }

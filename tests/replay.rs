@@ -26,7 +26,12 @@ fn registry() -> petrel::actors::ModuleRegistry {
 }
 
 async fn map_of(agent: &Agent) -> OccupancyGrid {
-    (*agent.blackboard().get::<OccupancyGrid>("mapper/out/map").await.unwrap()).clone()
+    (*agent
+        .blackboard()
+        .get::<OccupancyGrid>("mapper/out/map")
+        .await
+        .unwrap())
+    .clone()
 }
 
 /// Runs the live mission for `run` of virtual time, recording the simulator, then stops the
@@ -44,7 +49,11 @@ async fn live(path: &Path, format: Format, run: Duration) -> OccupancyGrid {
     recorder.attach("robot1", agent.blackboard()).await.unwrap();
     agent.blackboard().set("robot/enabled", true).await.unwrap();
     tokio::time::sleep(run).await;
-    agent.blackboard().set("robot/enabled", false).await.unwrap();
+    agent
+        .blackboard()
+        .set("robot/enabled", false)
+        .await
+        .unwrap();
     tokio::time::sleep(Duration::from_millis(200)).await;
     let map = map_of(&agent).await;
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
@@ -66,8 +75,16 @@ async fn replayed(path: &Path) -> OccupancyGrid {
         .await
         .unwrap();
     let deadline = tokio::time::Instant::now() + GUARD;
-    while !*agent.blackboard().get::<bool>("replay/out/done").await.unwrap() {
-        assert!(tokio::time::Instant::now() < deadline, "the replay should end");
+    while !*agent
+        .blackboard()
+        .get::<bool>("replay/out/done")
+        .await
+        .unwrap()
+    {
+        assert!(
+            tokio::time::Instant::now() < deadline,
+            "the replay should end"
+        );
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
     tokio::time::sleep(Duration::from_millis(200)).await;
@@ -86,9 +103,23 @@ async fn mapping_replayed_from_a_recording_gives_the_live_map() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("nav.mcap");
     let live_map = live(&path, Format::Foxglove, Duration::from_secs(2)).await;
-    assert!(known(&live_map) > 1000, "the robot mapped something: {}", known(&live_map));
+    assert!(
+        known(&live_map) > 1000,
+        "the robot mapped something: {}",
+        known(&live_map)
+    );
     let replay_map = replayed(&path).await;
-    let differ = live_map.data.iter().zip(replay_map.data.iter()).filter(|(a, b)| a != b).count();
-    assert_eq!(differ, 0, "cells that differ (of {} known)", known(&live_map));
+    let differ = live_map
+        .data
+        .iter()
+        .zip(replay_map.data.iter())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differ,
+        0,
+        "cells that differ (of {} known)",
+        known(&live_map)
+    );
     assert_eq!(live_map, replay_map);
 }

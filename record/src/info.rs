@@ -53,14 +53,13 @@ pub struct Info {
 impl Info {
     /// The figures of a recording.
     pub fn of(rec: &Recording) -> Info {
-        let span_ns = rec
-            .messages
-            .iter()
-            .map(|m| m.log_ns)
-            .fold(None, |acc: Option<(u64, u64)>, t| match acc {
+        let span_ns = rec.messages.iter().map(|m| m.log_ns).fold(
+            None,
+            |acc: Option<(u64, u64)>, t| match acc {
                 None => Some((t, t)),
                 Some((a, b)) => Some((a.min(t), b.max(t))),
-            });
+            },
+        );
         let seconds = span_ns.map_or(0.0, |(a, b)| (b - a) as f64 / 1e9);
         let mut dropped: BTreeMap<&str, u64> = BTreeMap::new();
         for (name, values) in &rec.metadata {
@@ -85,7 +84,11 @@ impl Info {
                     encoding: c.message_encoding.clone(),
                     petrel_type: c.petrel_type().unwrap_or("").to_string(),
                     count,
-                    rate_hz: if seconds > 0.0 { count as f64 / seconds } else { 0.0 },
+                    rate_hz: if seconds > 0.0 {
+                        count as f64 / seconds
+                    } else {
+                        0.0
+                    },
                     dropped: dropped.get(c.topic.as_str()).copied().unwrap_or(0),
                 }
             })
@@ -130,9 +133,25 @@ impl fmt::Display for Info {
         writeln!(f, "messages:  {} in {} chunks", self.messages, self.chunks)?;
         writeln!(f, "dropped:   {}", self.dropped)?;
         writeln!(f, "channels:  {}", self.channels.len())?;
-        let width = self.channels.iter().map(|c| c.topic.len()).max().unwrap_or(5).max(5);
-        let swidth = self.channels.iter().map(|c| c.schema.len()).max().unwrap_or(6).max(6);
-        writeln!(f, "  {:width$}  {:swidth$}  {:>8}  {:>9}  {:>7}  petrel type", "topic", "schema", "count", "rate Hz", "dropped")?;
+        let width = self
+            .channels
+            .iter()
+            .map(|c| c.topic.len())
+            .max()
+            .unwrap_or(5)
+            .max(5);
+        let swidth = self
+            .channels
+            .iter()
+            .map(|c| c.schema.len())
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        writeln!(
+            f,
+            "  {:width$}  {:swidth$}  {:>8}  {:>9}  {:>7}  petrel type",
+            "topic", "schema", "count", "rate Hz", "dropped"
+        )?;
         for c in &self.channels {
             writeln!(
                 f,

@@ -19,8 +19,8 @@ pub mod recorder;
 
 pub use read::{ChannelInfo, ReadProblem, RecordedMessage, Recording};
 pub use recorder::{LogSink, Recorder};
-pub mod replay;
 pub mod playback;
+pub mod replay;
 
 /// Adds the `record.replay` module type.
 pub fn register(registry: &mut petrel_actors::ModuleRegistry) {

@@ -70,7 +70,10 @@ impl Module for Playback {
         match (run.due(run.next), run.start) {
             (Some(due), Some(_)) => {
                 let now = Instant::now();
-                Schedule::new().timeout(due.saturating_duration_since(now).max(Duration::from_micros(1)))
+                Schedule::new().timeout(
+                    due.saturating_duration_since(now)
+                        .max(Duration::from_micros(1)),
+                )
             }
             _ => Schedule::new(),
         }
@@ -145,7 +148,8 @@ impl Playback {
         if modules.is_empty() {
             bail!("params/modules is empty; expected the modules to replay, e.g. \"robot\"");
         }
-        let recording = Recording::open(file.as_path(), self.salvage.value()).map_err(anyhow::Error::msg)?;
+        let recording =
+            Recording::open(file.as_path(), self.salvage.value()).map_err(anyhow::Error::msg)?;
         if let Some(p) = &recording.problem {
             tracing::warn!(module = ctx.module(), file = %file, "salvaging a damaged recording: {p}; replaying the {} messages before it", recording.messages.len());
         }
@@ -163,7 +167,11 @@ impl Playback {
         let plan = plan(&recording, &modules, &listing).map_err(anyhow::Error::msg)?;
         let mut feeds = Vec::new();
         for t in &plan.tracks {
-            feeds.push(bb.feed(&t.key).await.with_context(|| format!("replaying into `{}`", t.key))?);
+            feeds.push(
+                bb.feed(&t.key)
+                    .await
+                    .with_context(|| format!("replaying into `{}`", t.key))?,
+            );
         }
         tracing::info!(module = ctx.module(), file = %file, tracks = plan.tracks.len(), messages = plan.schedule.len(), "replaying");
         let first_ns = plan.schedule.first().map_or(0, |s| s.0);
@@ -178,5 +186,4 @@ impl Playback {
         });
         Ok(())
     }
-
 }

@@ -100,7 +100,8 @@ impl Recording {
     /// Reads `path`; a damaged file is an error naming the file, offset and what was expected
     /// unless `salvage`, which keeps what was read before the damage.
     pub fn open(path: &Path, salvage: bool) -> Result<Recording, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        let bytes =
+            std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
         let rec = Recording::parse(&bytes);
         match (&rec.problem, salvage) {
             (Some(p), false) => Err(format!(
@@ -121,7 +122,9 @@ impl Recording {
         if bytes.get(..MAGIC.len()) != Some(MAGIC) {
             rec.problem = Some(ReadProblem {
                 offset: 0,
-                expected: "the MCAP magic bytes (89 4D 43 41 50 30 0D 0A): this is not an MCAP file".into(),
+                expected:
+                    "the MCAP magic bytes (89 4D 43 41 50 30 0D 0A): this is not an MCAP file"
+                        .into(),
             });
             return rec;
         }
@@ -182,8 +185,10 @@ impl Recording {
                 Record::Chunk { header, data } if top => {
                     let records = decompress(&header, &data).map_err(stop)?;
                     // A chunk's records count only once the whole chunk reads well.
-                    let mut chunk = Recording::default();
-                    chunk.channels = self.channels.clone();
+                    let mut chunk = Recording {
+                        channels: self.channels.clone(),
+                        ..Recording::default()
+                    };
                     let mut chunk_schemas = schemas.clone();
                     chunk.walk(&records, 0, offset, &mut chunk_schemas)?;
                     self.channels = chunk.channels;

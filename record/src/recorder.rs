@@ -3,9 +3,9 @@
 //! drops the value and counts it (per channel, written in the file's summary), and a queue tap
 //! that lags behind its queue's capacity loses the oldest items, counted the same way.
 
+use parking_lot::{Condvar, Mutex};
 use std::io;
 use std::sync::atomic::{AtomicU64, Ordering};
-use parking_lot::{Condvar, Mutex};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -39,7 +39,9 @@ pub struct StampClock {
 impl StampClock {
     /// A conversion taken now.
     pub fn now() -> Self {
-        let unix = SystemTime::now().duration_since(UNIX_EPOCH).unwrap_or_default();
+        let unix = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap_or_default();
         StampClock {
             instant: Instant::now(),
             unix_ns: u64::try_from(unix.as_nanos()).unwrap_or(u64::MAX),
@@ -273,12 +275,19 @@ impl Recorder {
 
     /// Taps every property of the agent the selection wants (linked inputs are recorded at
     /// their source; input queues are their source's items); returns how many.
-    pub async fn attach(&mut self, agent: &str, blackboard: &Blackboard) -> Result<usize, BlackboardError> {
+    pub async fn attach(
+        &mut self,
+        agent: &str,
+        blackboard: &Blackboard,
+    ) -> Result<usize, BlackboardError> {
         let listing = blackboard.listing().await?;
         let queue_in = PropertyKind::QueueIn.to_string();
         let mut tapped = 0;
         for p in listing.properties {
-            if p.link.is_some() || p.kind == queue_in || !self.options.selection.wants(agent, &p.key) {
+            if p.link.is_some()
+                || p.kind == queue_in
+                || !self.options.selection.wants(agent, &p.key)
+            {
                 continue;
             }
             let tap = blackboard.tap(&p.key).await?;

@@ -47,7 +47,7 @@ impl Rate {
     /// `params/rate`: a positive factor, or 0 for as fast as possible.
     pub fn from_param(rate: f64) -> Result<Self, String> {
         match rate {
-            r if r == 0.0 => Ok(Rate::Max),
+            0.0 => Ok(Rate::Max),
             r if r.is_finite() && (1e-3..=1e3).contains(&r) => Ok(Rate::Scaled(r)),
             r => Err(format!(
                 "invalid parameter `params/rate`: expected a factor in [0.001, 1000] or 0 (as fast as possible), got {r}"
@@ -80,17 +80,26 @@ fn key_of(address: &str) -> &str {
 /// Plans the replay of `modules`' recorded outputs into an agent holding `listing`. Every
 /// input linked to one of those outputs must find a channel of the output's type; every
 /// recorded output of those modules must exist in the agent with the recorded type.
-pub fn plan(rec: &Recording, modules: &[String], listing: &AgentListing) -> Result<ReplayPlan, String> {
+pub fn plan(
+    rec: &Recording,
+    modules: &[String],
+    listing: &AgentListing,
+) -> Result<ReplayPlan, String> {
     let properties: BTreeMap<&str, (&str, &str)> = listing
         .properties
         .iter()
         .map(|p| (p.key.as_str(), (p.kind.as_str(), p.type_name.as_str())))
         .collect();
-    let outputs = [PropertyKind::Output.to_string(), PropertyKind::QueueOut.to_string()];
+    let outputs = [
+        PropertyKind::Output.to_string(),
+        PropertyKind::QueueOut.to_string(),
+    ];
     let mut problems = Vec::new();
     for m in modules {
         if !listing.modules.iter().any(|l| &l.name == m) {
-            problems.push(format!("module `{m}` is not in the config: nothing to replay it into"));
+            problems.push(format!(
+                "module `{m}` is not in the config: nothing to replay it into"
+            ));
         }
     }
     // Channels of the replayed modules' outputs, by key.
@@ -138,7 +147,9 @@ pub fn plan(rec: &Recording, modules: &[String], listing: &AgentListing) -> Resu
     }
     // Every input reading a replayed output needs its channel.
     for p in &listing.properties {
-        let Some(target) = p.link.as_deref().map(key_of) else { continue };
+        let Some(target) = p.link.as_deref().map(key_of) else {
+            continue;
+        };
         if !modules.iter().any(|m| m == module_of(target)) || by_key.contains_key(target) {
             continue;
         }
@@ -156,7 +167,11 @@ pub fn plan(rec: &Recording, modules: &[String], listing: &AgentListing) -> Resu
     if !problems.is_empty() {
         return Err(problems.join("\n"));
     }
-    let track_of: BTreeMap<u16, usize> = tracks.iter().enumerate().map(|(i, t)| (t.channel, i)).collect();
+    let track_of: BTreeMap<u16, usize> = tracks
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (t.channel, i))
+        .collect();
     let mut schedule: Vec<(u64, usize, usize)> = rec
         .messages
         .iter()
@@ -173,7 +188,10 @@ mod tests {
 
     #[test]
     fn rates_scale_recorded_time() {
-        assert_eq!(Rate::from_param(2.0).unwrap().due(1_000_000_000), Duration::from_millis(500));
+        assert_eq!(
+            Rate::from_param(2.0).unwrap().due(1_000_000_000),
+            Duration::from_millis(500)
+        );
         assert_eq!(Rate::from_param(0.0).unwrap().due(5), Duration::ZERO);
         assert!(Rate::from_param(-1.0).unwrap_err().contains("params/rate"));
         assert!(Rate::from_param(f64::INFINITY).is_err());

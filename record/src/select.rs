@@ -56,7 +56,12 @@ impl RecordOptions {
         let path = match (path, &section.file) {
             (Some(p), _) => p.to_path_buf(),
             (None, Some(f)) if !f.is_empty() => PathBuf::from(f),
-            _ => return Err("record: expected `file: \"out/run.mcap\"` (or `petrel run --record FILE`)".into()),
+            _ => {
+                return Err(
+                    "record: expected `file: \"out/run.mcap\"` (or `petrel run --record FILE`)"
+                        .into(),
+                )
+            }
         };
         let format = match (format, &section.format) {
             (Some(f), _) => f,
@@ -149,10 +154,14 @@ pub fn topic(agent: &str, key: &str) -> String {
         if segment.starts_with(|c: char| c.is_ascii_digit()) {
             topic.push('_');
         }
-        topic.extend(segment.chars().map(|c| match c.is_ascii_alphanumeric() || c == '_' {
-            true => c,
-            false => '_',
-        }));
+        topic.extend(
+            segment
+                .chars()
+                .map(|c| match c.is_ascii_alphanumeric() || c == '_' {
+                    true => c,
+                    false => '_',
+                }),
+        );
     }
     topic
 }
@@ -176,9 +185,7 @@ impl SplitPolicy {
         }
         let max_duration_ns = match max_duration_s {
             None => None,
-            Some(s) if s.is_finite() && (MIN_SPLIT_S..=1e9).contains(&s) => {
-                Some((s * 1e9) as u64)
-            }
+            Some(s) if s.is_finite() && (MIN_SPLIT_S..=1e9).contains(&s) => Some((s * 1e9) as u64),
             Some(s) => {
                 return Err(format!(
                     "record: max_duration_s: expected seconds in [{MIN_SPLIT_S}, 1e9], got {s}"
@@ -223,25 +230,41 @@ mod tests {
     #[test]
     fn globs_match_within_and_across_segments() {
         let s = Selection::new(
-            &["robot/out/*".into(), "**/laserScan".into(), "petrel://b/**".into()],
+            &[
+                "robot/out/*".into(),
+                "**/laserScan".into(),
+                "petrel://b/**".into(),
+            ],
             &["robot/out/pose".into()],
         )
         .unwrap();
         assert!(s.wants("a", "robot/out/odometry"));
         assert!(!s.wants("a", "robot/out/pose"), "excluded");
-        assert!(!s.wants("a", "robot/stats/steps"), "`*` stays in one segment");
+        assert!(
+            !s.wants("a", "robot/stats/steps"),
+            "`*` stays in one segment"
+        );
         assert!(s.wants("a", "lidar/out/laserScan"));
         assert!(s.wants("b", "x/params/y"));
         assert!(!s.wants("a", "x/params/y"));
         assert!(Selection::everything().wants("a", "_supervisor/events"));
         let err = Selection::new(&["robot/[out".into()], &[]).unwrap_err();
-        assert!(err.contains("include") && err.contains("robot/[out"), "{err}");
+        assert!(
+            err.contains("include") && err.contains("robot/[out"),
+            "{err}"
+        );
     }
 
     #[test]
     fn topics_are_ros_names() {
-        assert_eq!(topic("robot1", "robot/out/laserScan"), "/robot1/robot/out/laserScan");
-        assert_eq!(topic("r-2", "_supervisor/events"), "/r_2/_supervisor/events");
+        assert_eq!(
+            topic("robot1", "robot/out/laserScan"),
+            "/robot1/robot/out/laserScan"
+        );
+        assert_eq!(
+            topic("r-2", "_supervisor/events"),
+            "/r_2/_supervisor/events"
+        );
         assert_eq!(topic("a", "m/params/3d"), "/a/m/params/_3d");
     }
 
@@ -251,11 +274,24 @@ mod tests {
         assert!(!p.full(10, Some(0), 1_000_000_000));
         assert!(p.full(MIN_SPLIT_BYTES, Some(0), 0));
         assert!(p.full(10, Some(0), 2_000_000_000));
-        assert!(!p.full(10, None, 5_000_000_000), "an empty file is never full");
-        assert!(SplitPolicy::new(Some(10), None).unwrap_err().contains("max_bytes"));
-        assert!(SplitPolicy::new(None, Some(f64::NAN)).unwrap_err().contains("max_duration_s"));
-        assert_eq!(split_path(Path::new("out/run.mcap"), 0), Path::new("out/run.mcap"));
-        assert_eq!(split_path(Path::new("out/run.mcap"), 2), Path::new("out/run.2.mcap"));
+        assert!(
+            !p.full(10, None, 5_000_000_000),
+            "an empty file is never full"
+        );
+        assert!(SplitPolicy::new(Some(10), None)
+            .unwrap_err()
+            .contains("max_bytes"));
+        assert!(SplitPolicy::new(None, Some(f64::NAN))
+            .unwrap_err()
+            .contains("max_duration_s"));
+        assert_eq!(
+            split_path(Path::new("out/run.mcap"), 0),
+            Path::new("out/run.mcap")
+        );
+        assert_eq!(
+            split_path(Path::new("out/run.mcap"), 2),
+            Path::new("out/run.2.mcap")
+        );
     }
 
     #[test]

@@ -129,7 +129,11 @@ pub struct Sink {
 
 impl Sink {
     /// Creates the first file (and its directory).
-    pub fn create(path: impl Into<PathBuf>, format: Format, split: SplitPolicy) -> io::Result<Self> {
+    pub fn create(
+        path: impl Into<PathBuf>,
+        format: Format,
+        split: SplitPolicy,
+    ) -> io::Result<Self> {
         let mut sink = Sink {
             base: path.into(),
             format,
@@ -168,7 +172,10 @@ impl Sink {
             .create(file)
             .map_err(io::Error::other)?;
         let about = BTreeMap::from([
-            ("format".to_string(), format!("{:?}", self.format).to_lowercase()),
+            (
+                "format".to_string(),
+                format!("{:?}", self.format).to_lowercase(),
+            ),
             ("part".to_string(), self.files.len().to_string()),
         ]);
         writer
@@ -222,12 +229,10 @@ impl Sink {
         let Some(c) = self.channels.get_mut(entry.channel) else {
             return Ok(());
         };
-        let codec = *c
-            .codec
-            .get_or_insert_with(|| match c.spec.url.is_empty() {
-                true => Codec::log(format),
-                false => Codec::for_value(format, &c.spec.type_info, &entry.value),
-            });
+        let codec = *c.codec.get_or_insert_with(|| match c.spec.url.is_empty() {
+            true => Codec::log(format),
+            false => Codec::for_value(format, &c.spec.type_info, &entry.value),
+        });
         self.buffer.clear();
         let stamp = Stamp::from_ns(entry.publish_ns);
         if let Err(e) = codec.encode(&c.spec.type_info, &entry.value, stamp, &mut self.buffer) {

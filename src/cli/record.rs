@@ -49,9 +49,8 @@ pub(crate) fn parse_rate(text: &str) -> Result<f64, String> {
     let rate: f64 = text
         .parse()
         .map_err(|_| format!("expected a factor (e.g. 2) or `max`, got `{text}`"))?;
-    petrel_record::replay::Rate::from_param(rate).map_err(|_| {
-        format!("expected a factor in [0.001, 1000] or `max`, got `{text}`")
-    })?;
+    petrel_record::replay::Rate::from_param(rate)
+        .map_err(|_| format!("expected a factor in [0.001, 1000] or `max`, got `{text}`"))?;
     Ok(rate)
 }
 
@@ -73,7 +72,10 @@ pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) {
         values: [
             ("params/file".to_string(), value(&path.to_string_lossy())),
             ("params/modules".to_string(), value(&spec.replace.join(","))),
-            ("params/rate".to_string(), ron::Value::Number(spec.rate.into())),
+            (
+                "params/rate".to_string(),
+                ron::Value::Number(spec.rate.into()),
+            ),
             ("params/salvage".to_string(), ron::Value::Bool(spec.salvage)),
             ("params/stop_at_end".to_string(), ron::Value::Bool(true)),
         ]
@@ -114,7 +116,9 @@ pub(crate) async fn start(options: RecordOptions, agents: &[Agent]) -> Result<Re
     }
     for agent in agents {
         match recorder.attach(agent.name(), agent.blackboard()).await {
-            Ok(n) => tracing::info!(agent = agent.name(), properties = n, file = %path.display(), "recording"),
+            Ok(n) => {
+                tracing::info!(agent = agent.name(), properties = n, file = %path.display(), "recording")
+            }
             Err(e) => {
                 eprintln!("error: cannot record agent `{}`: {e}", agent.name());
                 return Err(ExitCode::FAILURE);
@@ -127,8 +131,15 @@ pub(crate) async fn start(options: RecordOptions, agents: &[Agent]) -> Result<Re
 /// Finishes the file and says what it holds.
 pub(crate) async fn finish(recorder: Recorder) -> Result<(), String> {
     super::record_log::install(None);
-    let report = recorder.finish().await.map_err(|e| format!("the recording failed: {e}"))?;
-    let files: Vec<String> = report.files.iter().map(|f| f.display().to_string()).collect();
+    let report = recorder
+        .finish()
+        .await
+        .map_err(|e| format!("the recording failed: {e}"))?;
+    let files: Vec<String> = report
+        .files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect();
     println!(
         "recorded {} messages on {} channels to {} (dropped {}{})",
         report.written,
@@ -144,7 +155,7 @@ pub(crate) async fn finish(recorder: Recorder) -> Result<(), String> {
 }
 
 /// `petrel record info FILE`.
-pub(crate) fn info(file: &PathBuf, salvage: bool) -> ExitCode {
+pub(crate) fn info(file: &std::path::Path, salvage: bool) -> ExitCode {
     match Recording::open(file, salvage) {
         Ok(rec) => {
             use std::io::Write;

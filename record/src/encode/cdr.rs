@@ -125,22 +125,30 @@ impl<'a> CdrReader<'a> {
 
     /// An `int32`.
     pub fn i32(&mut self, what: &str) -> Result<i32, String> {
-        Ok(i32::from_le_bytes(self.take(4, 4, what)?.try_into().unwrap()))
+        Ok(i32::from_le_bytes(
+            self.take(4, 4, what)?.try_into().unwrap(),
+        ))
     }
 
     /// An `uint32`.
     pub fn u32(&mut self, what: &str) -> Result<u32, String> {
-        Ok(u32::from_le_bytes(self.take(4, 4, what)?.try_into().unwrap()))
+        Ok(u32::from_le_bytes(
+            self.take(4, 4, what)?.try_into().unwrap(),
+        ))
     }
 
     /// A `float32`.
     pub fn f32(&mut self, what: &str) -> Result<f32, String> {
-        Ok(f32::from_le_bytes(self.take(4, 4, what)?.try_into().unwrap()))
+        Ok(f32::from_le_bytes(
+            self.take(4, 4, what)?.try_into().unwrap(),
+        ))
     }
 
     /// A `float64`.
     pub fn f64(&mut self, what: &str) -> Result<f64, String> {
-        Ok(f64::from_le_bytes(self.take(8, 8, what)?.try_into().unwrap()))
+        Ok(f64::from_le_bytes(
+            self.take(8, 8, what)?.try_into().unwrap(),
+        ))
     }
 
     /// A `string` (its NUL checked and dropped).

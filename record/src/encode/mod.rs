@@ -197,14 +197,12 @@ impl Codec {
             (Format::Ros2, Kind::LaserScan) => {
                 ("sensor_msgs/msg/LaserScan", ros2::laser_scan_schema())
             }
-            (Format::Ros2, Kind::Pose) => (
-                "geometry_msgs/msg/PoseStamped",
-                ros2::pose_stamped_schema(),
-            ),
-            (Format::Ros2, Kind::Grid) => (
-                "nav_msgs/msg/OccupancyGrid",
-                ros2::occupancy_grid_schema(),
-            ),
+            (Format::Ros2, Kind::Pose) => {
+                ("geometry_msgs/msg/PoseStamped", ros2::pose_stamped_schema())
+            }
+            (Format::Ros2, Kind::Grid) => {
+                ("nav_msgs/msg/OccupancyGrid", ros2::occupancy_grid_schema())
+            }
             (Format::Ros2, Kind::Image) => ("sensor_msgs/msg/Image", ros2::image_schema()),
             (Format::Ros2, Kind::Log) => ("rcl_interfaces/msg/Log", ros2::log_schema()),
         };
@@ -330,12 +328,7 @@ impl Codec {
                 let bytes = serde_json::to_vec(&inner).map_err(|e| e.to_string())?;
                 ti.from_json(&bytes)?
             }
-            other => {
-                return Err(format!(
-                    "a {other:?} message cannot become a {}",
-                    ti.name()
-                ))
-            }
+            other => return Err(format!("a {other:?} message cannot become a {}", ti.name())),
         };
         Ok(value)
     }

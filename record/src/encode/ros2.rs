@@ -33,7 +33,10 @@ pub fn laser_scan_schema() -> String {
         "std_msgs/Header header\nfloat32 angle_min\nfloat32 angle_max\nfloat32 angle_increment\n\
          float32 time_increment\nfloat32 scan_time\nfloat32 range_min\nfloat32 range_max\n\
          float32[] ranges\nfloat32[] intensities\n",
-        &[("std_msgs/Header", HEADER), ("builtin_interfaces/Time", TIME)],
+        &[
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+        ],
     )
 }
 
@@ -75,7 +78,10 @@ pub fn image_schema() -> String {
     definition(
         "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n\
          uint8 is_bigendian\nuint32 step\nuint8[] data\n",
-        &[("std_msgs/Header", HEADER), ("builtin_interfaces/Time", TIME)],
+        &[
+            ("std_msgs/Header", HEADER),
+            ("builtin_interfaces/Time", TIME),
+        ],
     )
 }
 

@@ -145,7 +145,9 @@ impl Registry {
             (Handle::Value(ep), PropertyKind::Output) => {
                 Ok(RemoteFeed::Value(RemoteValue { ep: ep.clone() }))
             }
-            (Handle::QueueOut(core), _) => Ok(RemoteFeed::Queue(RemoteQueue { core: core.clone() })),
+            (Handle::QueueOut(core), _) => {
+                Ok(RemoteFeed::Queue(RemoteQueue { core: core.clone() }))
+            }
             _ => Err(BlackboardError::NotSettable {
                 key,
                 kind: entry.decl.kind,
