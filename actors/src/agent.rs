@@ -87,6 +87,8 @@ impl Agent {
         types: &ModuleRegistry,
         not_started: &[String],
     ) -> Result<Agent, StartError> {
+        // A module's panic is then one ERROR event in its span, not a print beside the log.
+        crate::panic_report::install();
         let registry = config.build(types)?;
         let events = registry.events_writer();
         let cfg = &config.config;

@@ -140,7 +140,7 @@ pub(crate) async fn finish(recorder: Recorder) -> Result<(), String> {
         .iter()
         .map(|f| f.display().to_string())
         .collect();
-    println!(
+    petrel_actors::outln!(
         "recorded {} messages on {} channels to {} (dropped {}{})",
         report.written,
         report.channels,
