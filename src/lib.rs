@@ -33,6 +33,7 @@ pub use petrel_actors as actors;
 pub use petrel_contexts as contexts;
 pub use petrel_modules as modules;
 pub use petrel_plans as plans;
+pub use petrel_record as record;
 pub use petrel_team as team;
 
 use petrel_actors::{Module, ModuleRegistry};
@@ -55,6 +56,7 @@ impl Petrel {
         let mut registry = petrel_modules::builtin();
         petrel_contexts::register(&mut registry);
         petrel_plans::register(&mut registry);
+        petrel_record::register(&mut registry);
         Petrel { registry }
     }
 

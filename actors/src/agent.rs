@@ -76,6 +76,17 @@ impl Agent {
     /// Checks `config` against `types` and, if it is sound, starts the agent: the blackboard
     /// with every property, value and link in place, then each module in config order.
     pub async fn start(config: &ConfigFile, types: &ModuleRegistry) -> Result<Agent, StartError> {
+        Self::start_without(config, types, &[]).await
+    }
+
+    /// Like [`start`](Agent::start), but the modules named in `not_started` are declared (their
+    /// properties exist, links to them hold) and never started: a replay publishes their
+    /// outputs in their place.
+    pub async fn start_without(
+        config: &ConfigFile,
+        types: &ModuleRegistry,
+        not_started: &[String],
+    ) -> Result<Agent, StartError> {
         // A module's panic is then one ERROR event in its span, not a print beside the log.
         crate::panic_report::install();
         let registry = config.build(types)?;
@@ -94,6 +105,7 @@ impl Agent {
         let modules = cfg
             .modules
             .iter()
+            .filter(|m| !not_started.contains(&m.name))
             .filter_map(|m| {
                 Some(ModuleSpec {
                     name: m.name.clone(),

@@ -142,6 +142,18 @@ pub(crate) fn check_all(
 ) -> Result<CheckedAgent, ConfigErrors> {
     let built = file.build(registry)?;
     let (mut errors, missing) = check_files(file, &built);
+    if let Some(section) = &file.config.record {
+        // The file may come from `--record`: only the rest of the section is checked here.
+        let path = std::path::Path::new("petrel-check.mcap");
+        if let Err(e) = petrel_record::RecordOptions::from_section(section, Some(path), None) {
+            let field = e.split(':').nth(1).map(str::trim).unwrap_or("record");
+            let needle = match file.config.record.as_ref().map(|_| field) {
+                Some(f) if !f.is_empty() && !f.contains(' ') => format!("{f}:"),
+                _ => "record:".to_string(),
+            };
+            errors.push(file.locate(&needle, e));
+        }
+    }
     let without_missing_files = |module: &str| !missing.iter().any(|m| m == module);
     // What each module type checks itself (a world file that must parse, ...).
     for module in built.modules().iter().filter(|m| without_missing_files(m)) {

@@ -56,6 +56,7 @@ pub(crate) fn init(
     let _ = tracing_subscriber::registry()
         .with(log.with_filter(filter))
         .with(trace)
+        .with(super::record_log::RecordLayer)
         .try_init();
     if let Some(problem) = problem {
         tracing::warn!("{problem}");

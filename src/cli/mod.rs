@@ -11,6 +11,8 @@ mod modules;
 mod plan;
 mod rate;
 mod reach;
+mod record;
+mod record_log;
 mod remote;
 mod run;
 mod top;
@@ -142,11 +144,51 @@ enum Command {
         #[command(flatten)]
         reach: remote::Reach,
     },
+    /// Recordings (MCAP): `record info FILE` shows channels, types, counts, rates, duration
+    /// and drops.
+    Record {
+        #[command(subcommand)]
+        command: RecordCommand,
+    },
+    /// Runs CONFIG with the recorded outputs of the `--replace`d modules published in their
+    /// place (those modules are not started), with the recorded timing scaled by `--rate`.
+    Replay(ReplayArgs),
     /// Petri Net Plans: check, draw, compile and simulate PNML or text plans.
     Plan {
         #[command(subcommand)]
         command: plan::PlanCommand,
     },
+}
+
+#[derive(Subcommand)]
+enum RecordCommand {
+    /// What a recording holds: channels, schemas, counts, rates, duration, drops; whether it
+    /// was finished or cut.
+    Info {
+        /// The recording (`.mcap`).
+        file: PathBuf,
+        /// Show what is readable of a damaged file instead of failing.
+        #[arg(long)]
+        salvage: bool,
+    },
+}
+
+/// Arguments of `petrel replay`.
+#[derive(clap::Args)]
+struct ReplayArgs {
+    /// The recording (`.mcap`).
+    file: PathBuf,
+    #[command(flatten)]
+    run: RunArgs,
+    /// A module whose recorded outputs are replayed in its place (repeat for several).
+    #[arg(long, required = true)]
+    replace: Vec<String>,
+    /// Recorded time scale: `2` twice as fast, `max` as fast as the agent takes it.
+    #[arg(long, default_value = "1", value_parser = record::parse_rate)]
+    rate: f64,
+    /// Replay what is readable of a damaged recording instead of failing.
+    #[arg(long)]
+    salvage: bool,
 }
 
 #[derive(Subcommand)]
@@ -194,6 +236,16 @@ pub(crate) struct RunArgs {
     /// instants.
     #[arg(long)]
     trace_out: Option<PathBuf>,
+    /// Record the run to this MCAP file: every property and queue, supervisor events, context
+    /// switches, plan firings and the log (or what the config's `record:` section selects).
+    #[arg(long)]
+    record: Option<PathBuf>,
+    /// How the standard types are written: Foxglove schemas (JSON) or ROS 2 messages (CDR).
+    #[arg(long, value_enum)]
+    record_format: Option<record::RecordFormat>,
+    /// Set by `petrel replay`.
+    #[arg(skip)]
+    replay: Option<record::ReplaySpec>,
 }
 
 /// The most worker threads `--workers` takes (more threads than this only cost memory on any
@@ -234,6 +286,19 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             command: Some(ModulesCommand::Describe { type_name }),
         } => modules::describe(&registry, &type_name),
         Command::Plan { command } => plan::run(command),
+        Command::Record {
+            command: RecordCommand::Info { file, salvage },
+        } => record::info(&file, salvage),
+        Command::Replay(args) => {
+            let mut run = args.run;
+            run.replay = Some(record::ReplaySpec {
+                file: args.file,
+                replace: args.replace,
+                rate: args.rate,
+                salvage: args.salvage,
+            });
+            run::run(&registry, run)
+        }
         Command::Echo {
             url,
             count,

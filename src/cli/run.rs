@@ -51,7 +51,10 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
 fn load_all(registry: &ModuleRegistry, args: &RunArgs) -> Result<Vec<ConfigFile>, ExitCode> {
     let mut files = Vec::new();
     for config in &args.configs {
-        let file = load(config, &args.overlay).map_err(|e| bad_input(&e))?;
+        let mut file = load(config, &args.overlay).map_err(|e| bad_input(&e))?;
+        if let Some(replay) = &args.replay {
+            super::record::apply_replay(&mut file, replay);
+        }
         check_all(&file, registry).map_err(|e| bad_input(&e))?;
         files.push(file);
     }
@@ -65,6 +68,10 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let hangups = Hangups::listen();
     let workers = tokio::runtime::Handle::current().metrics().num_workers();
     tracing::info!(workers, "modules run on {workers} worker thread(s)");
+    let recording = match super::record::options(args.record.as_ref(), args.record_format, &files) {
+        Ok(options) => options,
+        Err(code) => return code,
+    };
     let mut agents = Vec::new();
     let mut teams = Vec::new();
     let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
@@ -77,6 +84,16 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             }
             return code;
         }
+    };
+    let recorder = match recording {
+        Some(options) => match super::record::start(options, &agents).await {
+            Ok(r) => Some(r),
+            Err(code) => {
+                stop_all(&agents, Vec::new(), args).await;
+                return code;
+            }
+        },
+        None => None,
     };
     let forever = std::future::pending::<()>();
     let (why, mut code) = tokio::select! {
@@ -96,6 +113,12 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }
     let summaries = stop_all(&agents, teams, args).await;
+    if let Some(recorder) = recorder {
+        if let Err(e) = super::record::finish(recorder).await {
+            eprintln!("error: {e}");
+            code = ExitCode::FAILURE;
+        }
+    }
     if let (Some(path), [agent]) = (&args.snapshot_out, agents.as_slice()) {
         match agent
             .snapshot()
@@ -141,8 +164,9 @@ async fn start_all(
     agents: &mut Vec<Agent>,
     teams: &mut Vec<Team>,
 ) -> Result<Option<Registration>, ExitCode> {
+    let not_started = args.replay.as_ref().map_or(&[][..], |r| &r.replace[..]);
     for file in files {
-        match Agent::start(file, registry).await {
+        match Agent::start_without(file, registry, not_started).await {
             Ok(agent) => agents.push(agent),
             Err(StartError::Config(errors)) => return Err(bad_input(&errors)),
             Err(e) => {

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::{Blackboard, BlackboardMsg, Registry, Reply};
 use crate::ports::PropertyKind;
-use crate::team::{LinkTarget, Outbox, RemoteLinks, RemoteQueue, RemoteWriter, Tap};
+use crate::team::{LinkTarget, Outbox, RemoteFeed, RemoteLinks, RemoteQueue, RemoteWriter, Tap};
 use crate::types::PropertyType;
 use crate::url::PropertyUrl;
 use crate::value::TypeInfo;
@@ -19,6 +19,7 @@ pub(crate) enum TeamRequest {
     Outboxes(Reply<Vec<Outbox>>),
     Inbox(String, Reply<RemoteQueue>),
     Listing(Reply<AgentListing>),
+    Feed(String, Reply<RemoteFeed>),
 }
 
 /// What an agent holds, for tools that list it (`petrel ls`): its modules and properties.
@@ -86,6 +87,9 @@ pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
         TeamRequest::Listing(reply) => {
             let _ = reply.send(Ok(listing(reg)));
         }
+        TeamRequest::Feed(key, reply) => {
+            let _ = reply.send(reg.feed(&key));
+        }
     }
 }
 
@@ -124,6 +128,13 @@ impl Blackboard {
     /// Watches a value property or output queue, for a transport that publishes it.
     pub async fn tap(&self, address: &str) -> Result<Tap, BlackboardError> {
         self.call(|r| BlackboardMsg::Team(TeamRequest::Tap(address.to_string(), r)))
+            .await
+    }
+
+    /// A writer to a module's output (`out/` value or queue) from outside the module: a replay
+    /// publishes recorded outputs through it in place of a module that is not started.
+    pub async fn feed(&self, address: &str) -> Result<RemoteFeed, BlackboardError> {
+        self.call(|r| BlackboardMsg::Team(TeamRequest::Feed(address.to_string(), r)))
             .await
     }
 

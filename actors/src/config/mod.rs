@@ -26,8 +26,10 @@ use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
 use crate::team::{LinkTarget, TeamConfig};
 
 mod error;
+mod record;
 
 pub use error::{parse_ron, read_text, ConfigError, ConfigErrors};
+pub use record::RecordSection;
 
 /// One agent's configuration.
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -49,6 +51,10 @@ pub struct AgentConfig {
     /// its links may name only its own properties.
     #[serde(default)]
     pub team: Option<TeamConfig>,
+    /// What a run records to MCAP (see [`RecordSection`]); `petrel run --record` also records
+    /// without it.
+    #[serde(default)]
+    pub record: Option<RecordSection>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -126,6 +132,9 @@ impl ConfigFile {
         let source = self.sources.len();
         if overlay.config.team.is_some() {
             self.config.team = overlay.config.team.clone();
+        }
+        if overlay.config.record.is_some() {
+            self.config.record = overlay.config.record.clone();
         }
         for m in &overlay.config.modules {
             for key in m.values.keys() {
@@ -354,7 +363,7 @@ impl ConfigFile {
     }
 
     /// An error located at the first occurrence of `needle` in the last source that has it.
-    fn locate(&self, needle: &str, message: String) -> ConfigError {
+    pub fn locate(&self, needle: &str, message: String) -> ConfigError {
         for (file, text) in self.sources.iter().rev() {
             if let Some(at) = text.find(needle) {
                 return ConfigError::at(file, text, at, message);

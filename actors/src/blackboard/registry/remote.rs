@@ -136,6 +136,24 @@ impl Registry {
         }
     }
 
+    /// Where a replay writes in place of a module: one of its outputs (`out/` value or queue).
+    pub(crate) fn feed(&self, address: &str) -> Result<RemoteFeed, BlackboardError> {
+        let key = self.key_of(address)?;
+        let entry = &self.entries[&key];
+        match (&entry.handle, entry.decl.kind) {
+            (Handle::Value(ep), PropertyKind::Output) => {
+                Ok(RemoteFeed::Value(RemoteValue { ep: ep.clone() }))
+            }
+            (Handle::QueueOut(core), _) => {
+                Ok(RemoteFeed::Queue(RemoteQueue { core: core.clone() }))
+            }
+            _ => Err(BlackboardError::NotSettable {
+                key,
+                kind: entry.decl.kind,
+            }),
+        }
+    }
+
     /// The kind and type of a property.
     pub(crate) fn kind_of(
         &self,

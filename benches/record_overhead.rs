@@ -1,0 +1,102 @@
+//! `record_overhead`: the CPU time of `configs/navigate.ron` (one virtual second on tokio's
+//! paused clock: 10 s of simulated time, as fast as the CPU allows) recording every property
+//! and queue to MCAP, against the same run without recording. CPU time of the whole process
+//! (the recorder's writer thread included), from `getrusage`.
+
+mod common;
+
+use std::path::Path;
+use std::time::Duration;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use petrel::actors::{Agent, ConfigFile, DEFAULT_STOP_TIMEOUT};
+use petrel::record::{Format, RecordOptions, Recorder};
+
+fn cpu_time() -> Duration {
+    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+    // SAFETY: getrusage fills the struct it is given.
+    let usage = unsafe {
+        libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr());
+        usage.assume_init()
+    };
+    let t = |tv: libc::timeval| Duration::new(tv.tv_sec as u64, tv.tv_usec as u32 * 1000);
+    t(usage.ru_utime) + t(usage.ru_stime)
+}
+
+fn navigate() -> ConfigFile {
+    let mut file =
+        ConfigFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/navigate.ron"))
+            .unwrap();
+    let overlay = ConfigFile::parse(
+        "overlay.ron",
+        r#"Agent(name: "robot1", modules: [(name: "recorder", type: "sim.recorder", values: {"params/png": ""})])"#,
+    )
+    .unwrap();
+    file.overlay(overlay);
+    file
+}
+
+/// One run; returns the CPU time it took.
+fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .start_paused(true)
+        .build()
+        .unwrap();
+    let start = cpu_time();
+    rt.block_on(async {
+        let agent = Agent::start(file, &common::registry()).await.unwrap();
+        let recorder = match record {
+            Some((path, format)) => {
+                let mut options = RecordOptions::everything(path, format);
+                options.backlog = 1 << 22;
+                let mut r = Recorder::start(options).unwrap();
+                r.attach("robot1", agent.blackboard()).await.unwrap();
+                Some(r)
+            }
+            None => None,
+        };
+        tokio::time::sleep(Duration::from_secs(1)).await;
+        agent.stop(DEFAULT_STOP_TIMEOUT).await;
+        if let Some(r) = recorder {
+            let report = r.finish().await.unwrap();
+            assert_eq!(report.dropped, 0);
+        }
+    });
+    cpu_time() - start
+}
+
+fn record_overhead(c: &mut Criterion) {
+    let file = navigate();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("nav.mcap");
+    let mut g = c.benchmark_group("record_overhead");
+    g.bench_function("navigate_recording_everything", |b| {
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| run(&file, Some((&path, Format::Foxglove))))
+                .sum()
+        })
+    });
+    g.bench_function("navigate_recording_everything_ros2", |b| {
+        b.iter_custom(|iters| {
+            (0..iters)
+                .map(|_| run(&file, Some((&path, Format::Ros2))))
+                .sum()
+        })
+    });
+    g.bench_function("navigate_without_recording", |b| {
+        b.iter_custom(|iters| (0..iters).map(|_| run(&file, None)).sum())
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = common::criterion()
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(10));
+    targets = record_overhead
+}
+criterion_main!(benches);

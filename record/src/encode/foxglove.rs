@@ -1,0 +1,412 @@
+//! The standard robot types as Foxglove schemas (JSON schema encoding, JSON messages), so
+//! Foxglove shows the laser, the map, the image and the logs without configuration.
+//!
+//! A pose also carries petrel's exact heading (`theta`, radians) beside the quaternion, so a
+//! replay gives back the very pose that was recorded.
+
+use std::sync::Arc;
+
+use base64::engine::general_purpose::STANDARD as BASE64;
+use base64::Engine;
+use petrel_actors::{Image, LaserScan, OccupancyGrid, Pose2};
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use super::ros2::{heading, image_step, quaternion};
+use super::{LogLevel, LogRecord, Stamp};
+
+#[derive(Serialize, Deserialize)]
+struct Time {
+    sec: u32,
+    nsec: u32,
+}
+
+impl From<Stamp> for Time {
+    fn from(s: Stamp) -> Self {
+        Time {
+            sec: s.sec,
+            nsec: s.nsec,
+        }
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+struct Vector3 {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Quaternion {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Pose {
+    position: Vector3,
+    orientation: Quaternion,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    theta: Option<f64>,
+}
+
+impl Pose {
+    fn of(p: &Pose2) -> Self {
+        let [x, y, z, w] = quaternion(p.theta());
+        Pose {
+            position: Vector3 {
+                x: p.x(),
+                y: p.y(),
+                z: 0.0,
+            },
+            orientation: Quaternion { x, y, z, w },
+            theta: Some(p.theta()),
+        }
+    }
+
+    fn pose2(&self) -> Pose2 {
+        let q = &self.orientation;
+        let theta = self.theta.unwrap_or_else(|| heading([q.x, q.y, q.z, q.w]));
+        Pose2::new(self.position.x, self.position.y, theta)
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+struct FoxLaserScan {
+    timestamp: Time,
+    frame_id: String,
+    pose: Pose,
+    start_angle: f64,
+    end_angle: f64,
+    ranges: Vec<f64>,
+    intensities: Vec<f64>,
+    /// petrel's maximum range (Foxglove has none).
+    #[serde(default)]
+    range_max: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PoseInFrame {
+    timestamp: Time,
+    frame_id: String,
+    pose: Pose,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Vector2 {
+    x: f64,
+    y: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct PackedElementField {
+    name: String,
+    offset: u32,
+    #[serde(rename = "type")]
+    kind: u8,
+}
+
+/// `foxglove.PackedElementField`'s `INT8`.
+const INT8: u8 = 2;
+
+#[derive(Serialize, Deserialize)]
+struct Grid {
+    timestamp: Time,
+    frame_id: String,
+    pose: Pose,
+    column_count: u32,
+    cell_size: Vector2,
+    row_stride: u32,
+    cell_stride: u32,
+    fields: Vec<PackedElementField>,
+    data: String,
+}
+
+#[derive(Serialize, Deserialize)]
+struct RawImage {
+    timestamp: Time,
+    frame_id: String,
+    width: u32,
+    height: u32,
+    encoding: String,
+    step: u32,
+    data: String,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Log {
+    timestamp: Time,
+    level: u8,
+    message: String,
+    name: String,
+    file: String,
+    line: u32,
+}
+
+fn time_schema() -> serde_json::Value {
+    json!({"type": "object", "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999}}})
+}
+
+fn pose_schema() -> serde_json::Value {
+    let xyz = json!({"type": "object", "properties": {
+        "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}});
+    json!({"type": "object", "properties": {
+        "position": xyz,
+        "orientation": {"type": "object", "properties": {
+            "x": {"type": "number"}, "y": {"type": "number"},
+            "z": {"type": "number"}, "w": {"type": "number"}}},
+        "theta": {"type": "number", "description": "petrel: exact heading, radians"}}})
+}
+
+fn schema(title: &str, properties: serde_json::Value) -> Vec<u8> {
+    let text = json!({"title": title, "type": "object", "properties": properties});
+    serde_json::to_vec_pretty(&text).expect("a JSON value serializes")
+}
+
+/// `foxglove.LaserScan`'s JSON schema.
+pub fn laser_scan_schema() -> Vec<u8> {
+    let numbers = json!({"type": "array", "items": {"type": "number"}});
+    schema(
+        "foxglove.LaserScan",
+        json!({"timestamp": time_schema(), "frame_id": {"type": "string"}, "pose": pose_schema(),
+            "start_angle": {"type": "number"}, "end_angle": {"type": "number"},
+            "ranges": numbers, "intensities": numbers,
+            "range_max": {"type": "number", "description": "petrel: maximum range, m"}}),
+    )
+}
+
+/// `foxglove.PoseInFrame`'s JSON schema.
+pub fn pose_in_frame_schema() -> Vec<u8> {
+    schema(
+        "foxglove.PoseInFrame",
+        json!({"timestamp": time_schema(), "frame_id": {"type": "string"}, "pose": pose_schema()}),
+    )
+}
+
+/// `foxglove.Grid`'s JSON schema.
+pub fn grid_schema() -> Vec<u8> {
+    let field = json!({"type": "object", "properties": {
+        "name": {"type": "string"}, "offset": {"type": "integer"}, "type": {"type": "integer"}}});
+    schema(
+        "foxglove.Grid",
+        json!({"timestamp": time_schema(), "frame_id": {"type": "string"}, "pose": pose_schema(),
+            "column_count": {"type": "integer"},
+            "cell_size": {"type": "object", "properties": {
+                "x": {"type": "number"}, "y": {"type": "number"}}},
+            "row_stride": {"type": "integer"}, "cell_stride": {"type": "integer"},
+            "fields": {"type": "array", "items": field},
+            "data": {"type": "string", "contentEncoding": "base64"}}),
+    )
+}
+
+/// `foxglove.RawImage`'s JSON schema.
+pub fn raw_image_schema() -> Vec<u8> {
+    schema(
+        "foxglove.RawImage",
+        json!({"timestamp": time_schema(), "frame_id": {"type": "string"},
+            "width": {"type": "integer"}, "height": {"type": "integer"},
+            "encoding": {"type": "string"}, "step": {"type": "integer"},
+            "data": {"type": "string", "contentEncoding": "base64"}}),
+    )
+}
+
+/// `foxglove.Log`'s JSON schema.
+pub fn log_schema() -> Vec<u8> {
+    schema(
+        "foxglove.Log",
+        json!({"timestamp": time_schema(),
+            "level": {"type": "integer", "description": "0 unknown, 1 debug, 2 info, 3 warning, 4 error, 5 fatal"},
+            "message": {"type": "string"}, "name": {"type": "string"},
+            "file": {"type": "string"}, "line": {"type": "integer"}}),
+    )
+}
+
+fn write(out: &mut Vec<u8>, value: &impl Serialize) {
+    serde_json::to_writer(out, value).expect("writing JSON to memory cannot fail");
+}
+
+fn read<'a, T: Deserialize<'a>>(data: &'a [u8], what: &str) -> Result<T, String> {
+    serde_json::from_slice(data).map_err(|e| format!("expected a {what} JSON message: {e}"))
+}
+
+/// Encodes a scan as `foxglove.LaserScan`.
+pub fn laser_scan(out: &mut Vec<u8>, scan: &LaserScan, stamp: Stamp, frame: &str) {
+    let n = scan.ranges.len();
+    write(
+        out,
+        &FoxLaserScan {
+            timestamp: stamp.into(),
+            frame_id: frame.into(),
+            pose: Pose::of(&Pose2::default()),
+            start_angle: scan.angle_min,
+            end_angle: scan.angle_min + scan.angle_increment * n.saturating_sub(1) as f64,
+            ranges: scan.ranges.to_vec(),
+            intensities: Vec::new(),
+            range_max: scan.range_max,
+        },
+    );
+}
+
+/// Decodes a `foxglove.LaserScan`.
+pub fn read_laser_scan(data: &[u8]) -> Result<LaserScan, String> {
+    let s: FoxLaserScan = read(data, "foxglove.LaserScan")?;
+    let n = s.ranges.len();
+    let increment = match n {
+        0 | 1 => 0.0,
+        n => (s.end_angle - s.start_angle) / (n - 1) as f64,
+    };
+    Ok(LaserScan {
+        angle_min: s.start_angle,
+        angle_increment: increment,
+        range_max: s.range_max,
+        ranges: s.ranges.into(),
+    })
+}
+
+/// Encodes a pose as `foxglove.PoseInFrame`.
+pub fn pose_in_frame(out: &mut Vec<u8>, p: &Pose2, stamp: Stamp, frame: &str) {
+    write(
+        out,
+        &PoseInFrame {
+            timestamp: stamp.into(),
+            frame_id: frame.into(),
+            pose: Pose::of(p),
+        },
+    );
+}
+
+/// Decodes a `foxglove.PoseInFrame`.
+pub fn read_pose_in_frame(data: &[u8]) -> Result<Pose2, String> {
+    Ok(read::<PoseInFrame>(data, "foxglove.PoseInFrame")?
+        .pose
+        .pose2())
+}
+
+/// Encodes a grid as `foxglove.Grid` with one `INT8` field, `occupancy`.
+pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
+    let cells: Vec<u8> = g.data.iter().map(|&c| c as u8).collect();
+    write(
+        out,
+        &Grid {
+            timestamp: stamp.into(),
+            frame_id: frame.into(),
+            pose: Pose::of(&g.origin),
+            column_count: g.width,
+            cell_size: Vector2 {
+                x: g.resolution,
+                y: g.resolution,
+            },
+            row_stride: g.width,
+            cell_stride: 1,
+            fields: vec![PackedElementField {
+                name: "occupancy".into(),
+                offset: 0,
+                kind: INT8,
+            }],
+            data: BASE64.encode(cells),
+        },
+    );
+}
+
+/// Decodes a `foxglove.Grid` of one `INT8` field per cell.
+pub fn read_grid(data: &[u8]) -> Result<OccupancyGrid, String> {
+    let g: Grid = read(data, "foxglove.Grid")?;
+    if g.cell_stride != 1 || g.row_stride != g.column_count {
+        return Err(format!(
+            "expected a grid of one byte per cell (cell_stride 1, row_stride = column_count {}), got cell_stride {} and row_stride {}",
+            g.column_count, g.cell_stride, g.row_stride
+        ));
+    }
+    let cells = BASE64
+        .decode(&g.data)
+        .map_err(|e| format!("expected base64 cells in data: {e}"))?;
+    if g.column_count == 0 || cells.len() % g.column_count as usize != 0 {
+        return Err(format!(
+            "expected whole rows of {} cells, got {} cells",
+            g.column_count,
+            cells.len()
+        ));
+    }
+    Ok(OccupancyGrid {
+        width: g.column_count,
+        height: (cells.len() / g.column_count as usize) as u32,
+        resolution: g.cell_size.x,
+        origin: g.pose.pose2(),
+        data: cells.iter().map(|&c| c as i8).collect::<Vec<_>>().into(),
+    })
+}
+
+/// Encodes an image as `foxglove.RawImage`.
+pub fn raw_image(out: &mut Vec<u8>, img: &Image, stamp: Stamp, frame: &str) {
+    write(
+        out,
+        &RawImage {
+            timestamp: stamp.into(),
+            frame_id: frame.into(),
+            width: img.width,
+            height: img.height,
+            encoding: img.encoding.clone(),
+            step: image_step(img),
+            data: BASE64.encode(&img.data),
+        },
+    );
+}
+
+/// Decodes a `foxglove.RawImage`.
+pub fn read_raw_image(data: &[u8]) -> Result<Image, String> {
+    let i: RawImage = read(data, "foxglove.RawImage")?;
+    let bytes = BASE64
+        .decode(&i.data)
+        .map_err(|e| format!("expected base64 pixels in data: {e}"))?;
+    Ok(Image {
+        width: i.width,
+        height: i.height,
+        encoding: i.encoding,
+        data: Arc::from(bytes),
+    })
+}
+
+/// Encodes a log line as `foxglove.Log`.
+pub fn log(out: &mut Vec<u8>, rec: &LogRecord) {
+    let level = match rec.level {
+        LogLevel::Trace | LogLevel::Debug => 1,
+        LogLevel::Info => 2,
+        LogLevel::Warn => 3,
+        LogLevel::Error => 4,
+    };
+    write(
+        out,
+        &Log {
+            timestamp: Stamp::from_ns(rec.stamp_ns).into(),
+            level,
+            message: rec.message.clone(),
+            name: rec.target.clone(),
+            file: rec.file.clone(),
+            line: rec.line,
+        },
+    );
+}
+
+/// Decodes a `foxglove.Log`.
+pub fn read_log(data: &[u8]) -> Result<LogRecord, String> {
+    let l: Log = read(data, "foxglove.Log")?;
+    let level = match l.level {
+        0 | 1 => LogLevel::Debug,
+        2 => LogLevel::Info,
+        3 => LogLevel::Warn,
+        _ => LogLevel::Error,
+    };
+    Ok(LogRecord {
+        stamp_ns: u64::from(l.timestamp.sec) * 1_000_000_000 + u64::from(l.timestamp.nsec),
+        level,
+        target: l.name,
+        message: l.message,
+        file: l.file,
+        line: l.line,
+    })
+}

@@ -1,0 +1,189 @@
+//! `record.replay`: OpenRDK's playback module. Publishes the recorded outputs of the modules
+//! it names (`params/modules`) in their place, with the recorded timing scaled by
+//! `params/rate`. Those modules must not run: `petrel replay --replace` does not start them;
+//! in a config of your own, set their `enabled` to false.
+
+use std::time::Duration;
+
+use anyhow::{bail, Context as _};
+use petrel_actors::team::RemoteFeed;
+use petrel_actors::{Context, FilePath, Input, Module, Output, Ports, Schedule};
+use tokio::time::Instant;
+
+use crate::read::Recording;
+use crate::replay::{plan, Rate, ReplayPlan};
+
+/// Messages published per step at most at `rate: 0`, so consumers get turns in between.
+const MAX_BATCH: usize = 64;
+
+/// The `record.replay` module.
+pub struct Playback {
+    file: Input<FilePath>,
+    modules: Input<String>,
+    rate: Input<f64>,
+    salvage: Input<bool>,
+    stop_at_end: Input<bool>,
+    published: Output<i64>,
+    done: Output<bool>,
+    run: Option<Run>,
+}
+
+struct Run {
+    recording: Recording,
+    plan: ReplayPlan,
+    feeds: Vec<RemoteFeed>,
+    rate: Rate,
+    next: usize,
+    start: Option<Instant>,
+    first_ns: u64,
+}
+
+impl Run {
+    fn due(&self, i: usize) -> Option<Instant> {
+        let (ns, _, _) = *self.plan.schedule.get(i)?;
+        Some(self.start? + self.rate.due(ns.saturating_sub(self.first_ns)))
+    }
+}
+
+impl Module for Playback {
+    const TYPE: &'static str = "record.replay";
+    const DESCRIPTION: &'static str =
+        "Replays the recorded outputs of other modules from an MCAP file, in their place.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        Playback {
+            file: ports.param("params/file", FilePath::default(), "the recording (`.mcap`, relative to the config file)"),
+            modules: ports.param("params/modules", String::new(), "the modules whose recorded outputs are replayed, comma separated (they must not run)"),
+            rate: ports.param("params/rate", 1.0, "recorded time scale: 2 = twice as fast; 0 = as fast as possible"),
+            salvage: ports.param("params/salvage", false, "replay what is readable of a damaged file instead of failing"),
+            stop_at_end: ports.param("params/stop_at_end", false, "end the run when the recording is replayed"),
+            published: ports.output("out/published", 0, "messages published so far"),
+            done: ports.output("out/done", false, "true once every message is published"),
+            run: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        let Some(run) = &self.run else {
+            return Schedule::new();
+        };
+        match (run.due(run.next), run.start) {
+            (Some(due), Some(_)) => {
+                let now = Instant::now();
+                Schedule::new().timeout(
+                    due.saturating_duration_since(now)
+                        .max(Duration::from_micros(1)),
+                )
+            }
+            _ => Schedule::new(),
+        }
+    }
+
+    async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        // A recording that does not fit the config is bad input, not a fault a restart
+        // mends: the run ends, saying why.
+        let result = self.prepare(ctx).await;
+        if let Err(e) = &result {
+            ctx.stop_agent(2, format!("{}: cannot replay: {e:#}", ctx.module()));
+        }
+        result
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        self.publish_due(ctx)
+    }
+}
+
+impl Playback {
+    fn publish_due(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let Some(run) = self.run.as_mut() else {
+            return Ok(());
+        };
+        let now = ctx.now();
+        run.start.get_or_insert(now);
+        let mut sent = 0;
+        while let Some(due) = run.due(run.next) {
+            if due > now || (run.rate == Rate::Max && sent == MAX_BATCH) {
+                break;
+            }
+            let (_, track, index) = run.plan.schedule[run.next];
+            let t = &run.plan.tracks[track];
+            let feed = &run.feeds[track];
+            let data = &run.recording.messages[index].data;
+            match t.codec.decode(&feed.type_info(), data) {
+                Ok(value) => match feed {
+                    RemoteFeed::Value(v) => v.write(value, now),
+                    RemoteFeed::Queue(q) => q.push(value, now),
+                },
+                Err(e) => bail!("message {index} of channel `{}`: {e}", t.topic),
+            }
+            run.next += 1;
+            sent += 1;
+        }
+        self.published.set(run.next as i64);
+        if run.next == run.plan.schedule.len() {
+            self.done.set(true);
+            if self.stop_at_end.value() {
+                ctx.stop_agent(0, "the recording is replayed");
+            }
+        }
+        ctx.reschedule();
+        Ok(())
+    }
+
+    async fn prepare(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let file = self.file.get();
+        if file.is_empty() {
+            bail!("params/file is empty; expected the path of an MCAP recording");
+        }
+        let rate = Rate::from_param(self.rate.value()).map_err(anyhow::Error::msg)?;
+        let modules: Vec<String> = self
+            .modules
+            .get()
+            .split(',')
+            .map(str::trim)
+            .filter(|m| !m.is_empty())
+            .map(String::from)
+            .collect();
+        if modules.is_empty() {
+            bail!("params/modules is empty; expected the modules to replay, e.g. \"robot\"");
+        }
+        let recording =
+            Recording::open(file.as_path(), self.salvage.value()).map_err(anyhow::Error::msg)?;
+        if let Some(p) = &recording.problem {
+            tracing::warn!(module = ctx.module(), file = %file, "salvaging a damaged recording: {p}; replaying the {} messages before it", recording.messages.len());
+        }
+        let bb = ctx.blackboard();
+        for m in &modules {
+            // Both would write its outputs: the module must be off (`petrel replay --replace`
+            // does not start it and turns it off).
+            if let Ok(enabled) = bb.get::<bool>(&format!("{m}/enabled")).await {
+                if *enabled {
+                    bail!("module `{m}` is enabled: set its `enabled` to false in the config (or use `petrel replay --replace {m}`), so only the recording writes its outputs");
+                }
+            }
+        }
+        let listing = bb.listing().await?;
+        let plan = plan(&recording, &modules, &listing).map_err(anyhow::Error::msg)?;
+        let mut feeds = Vec::new();
+        for t in &plan.tracks {
+            feeds.push(
+                bb.feed(&t.key)
+                    .await
+                    .with_context(|| format!("replaying into `{}`", t.key))?,
+            );
+        }
+        tracing::info!(module = ctx.module(), file = %file, tracks = plan.tracks.len(), messages = plan.schedule.len(), "replaying");
+        let first_ns = plan.schedule.first().map_or(0, |s| s.0);
+        self.run = Some(Run {
+            recording,
+            plan,
+            feeds,
+            rate,
+            next: 0,
+            start: None,
+            first_ns,
+        });
+        Ok(())
+    }
+}

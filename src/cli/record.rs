@@ -1,0 +1,176 @@
+//! `petrel run --record`, `petrel record info` and `petrel replay`: the command-line side of
+//! the `petrel-record` crate.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::ValueEnum;
+use petrel_actors::{Agent, ConfigFile, ModuleConfig};
+use petrel_record::info::Info;
+use petrel_record::{Format, RecordOptions, Recorder, Recording};
+
+use super::EXIT_BAD_INPUT;
+
+/// `--record-format`.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum RecordFormat {
+    /// Foxglove schemas as JSON.
+    Foxglove,
+    /// ROS 2 messages (ros2msg schemas, CDR), as rosbag2 writes them.
+    Ros2,
+}
+
+impl From<RecordFormat> for Format {
+    fn from(f: RecordFormat) -> Self {
+        match f {
+            RecordFormat::Foxglove => Format::Foxglove,
+            RecordFormat::Ros2 => Format::Ros2,
+        }
+    }
+}
+
+/// What `petrel replay` adds to a run.
+#[derive(Clone)]
+pub(crate) struct ReplaySpec {
+    pub file: PathBuf,
+    pub replace: Vec<String>,
+    pub rate: f64,
+    pub salvage: bool,
+}
+
+/// The name of the playback module `petrel replay` adds.
+const REPLAY_MODULE: &str = "replay";
+
+/// `--rate 2` or `--rate max` (0 for the module's parameter).
+pub(crate) fn parse_rate(text: &str) -> Result<f64, String> {
+    if text == "max" {
+        return Ok(0.0);
+    }
+    let rate: f64 = text
+        .parse()
+        .map_err(|_| format!("expected a factor (e.g. 2) or `max`, got `{text}`"))?;
+    petrel_record::replay::Rate::from_param(rate)
+        .map_err(|_| format!("expected a factor in [0.001, 1000] or `max`, got `{text}`"))?;
+    Ok(rate)
+}
+
+/// Turns `replace`d modules off and adds the playback module that writes their outputs.
+pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) {
+    let path = std::path::absolute(&spec.file).unwrap_or_else(|_| spec.file.clone());
+    for m in file
+        .config
+        .modules
+        .iter_mut()
+        .filter(|m| spec.replace.contains(&m.name))
+    {
+        m.values.insert("enabled".into(), ron::Value::Bool(false));
+    }
+    let value = |s: &str| ron::Value::String(s.to_string());
+    file.config.modules.push(ModuleConfig {
+        name: REPLAY_MODULE.into(),
+        type_name: "record.replay".into(),
+        values: [
+            ("params/file".to_string(), value(&path.to_string_lossy())),
+            ("params/modules".to_string(), value(&spec.replace.join(","))),
+            (
+                "params/rate".to_string(),
+                ron::Value::Number(spec.rate.into()),
+            ),
+            ("params/salvage".to_string(), ron::Value::Bool(spec.salvage)),
+            ("params/stop_at_end".to_string(), ron::Value::Bool(true)),
+        ]
+        .into(),
+        ..Default::default()
+    });
+}
+
+/// The recording a run asks for: `--record FILE`, else the first config's `record:` section.
+pub(crate) fn options(
+    file: Option<&PathBuf>,
+    format: Option<RecordFormat>,
+    configs: &[ConfigFile],
+) -> Result<Option<RecordOptions>, ExitCode> {
+    let section = configs.iter().find_map(|c| c.config.record.clone());
+    if file.is_none() && section.is_none() {
+        return Ok(None);
+    }
+    let section = section.unwrap_or_default();
+    RecordOptions::from_section(&section, file.map(PathBuf::as_path), format.map(Into::into))
+        .map(Some)
+        .map_err(|e| {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        })
+}
+
+/// Starts recording every agent (and the log, if asked).
+pub(crate) async fn start(options: RecordOptions, agents: &[Agent]) -> Result<Recorder, ExitCode> {
+    let path = options.path.clone();
+    let log = options.log;
+    let mut recorder = Recorder::start(options).map_err(|e| {
+        eprintln!("error: cannot record to {}: {e}", path.display());
+        ExitCode::FAILURE
+    })?;
+    if log {
+        super::record_log::install(Some(recorder.log_sink()));
+    }
+    for agent in agents {
+        match recorder.attach(agent.name(), agent.blackboard()).await {
+            Ok(n) => {
+                tracing::info!(agent = agent.name(), properties = n, file = %path.display(), "recording")
+            }
+            Err(e) => {
+                eprintln!("error: cannot record agent `{}`: {e}", agent.name());
+                return Err(ExitCode::FAILURE);
+            }
+        }
+    }
+    Ok(recorder)
+}
+
+/// Finishes the file and says what it holds.
+pub(crate) async fn finish(recorder: Recorder) -> Result<(), String> {
+    super::record_log::install(None);
+    let report = recorder
+        .finish()
+        .await
+        .map_err(|e| format!("the recording failed: {e}"))?;
+    let files: Vec<String> = report
+        .files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect();
+    petrel_actors::outln!(
+        "recorded {} messages on {} channels to {} (dropped {}{})",
+        report.written,
+        report.channels,
+        files.join(", "),
+        report.dropped,
+        match report.failed {
+            0 => String::new(),
+            n => format!(", {n} values could not be encoded"),
+        }
+    );
+    Ok(())
+}
+
+/// `petrel record info FILE`.
+pub(crate) fn info(file: &std::path::Path, salvage: bool) -> ExitCode {
+    match Recording::open(file, salvage) {
+        Ok(rec) => {
+            use std::io::Write;
+            // A closed pipe (`| head`) ends the listing, not the process.
+            let _ = write!(
+                std::io::stdout().lock(),
+                "file:      {}\n{}",
+                file.display(),
+                Info::of(&rec)
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        }
+    }
+}

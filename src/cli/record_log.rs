@@ -1,0 +1,78 @@
+//! The tracing log as a recording's log channel: a layer that hands each event at info and
+//! above to the recorder's [`LogSink`] while a recording runs (and costs one lock check when
+//! none does).
+
+use std::fmt::Write as _;
+use std::sync::RwLock;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use petrel_record::{LogLevel, LogRecord, LogSink};
+use tracing::field::{Field, Visit};
+use tracing::{Event, Level, Subscriber};
+use tracing_subscriber::layer::Context;
+use tracing_subscriber::Layer;
+
+static SINK: RwLock<Option<LogSink>> = RwLock::new(None);
+
+/// Sends the log to `sink` from now on (`None`: stop).
+pub(crate) fn install(sink: Option<LogSink>) {
+    *SINK.write().unwrap_or_else(|e| e.into_inner()) = sink;
+}
+
+/// The layer; `logging::init` adds it.
+pub(crate) struct RecordLayer;
+
+#[derive(Default)]
+struct Text(String);
+
+impl Visit for Text {
+    fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {
+        match field.name() {
+            "message" => {
+                let rest = std::mem::take(&mut self.0);
+                let _ = write!(self.0, "{value:?}");
+                self.0.push_str(&rest);
+            }
+            name => {
+                let _ = write!(self.0, " {name}={value:?}");
+            }
+        }
+    }
+    fn record_str(&mut self, field: &Field, value: &str) {
+        match field.name() {
+            "message" => self.0.insert_str(0, value),
+            name => {
+                let _ = write!(self.0, " {name}={value}");
+            }
+        }
+    }
+}
+
+impl<S: Subscriber> Layer<S> for RecordLayer {
+    fn on_event(&self, event: &Event<'_>, _ctx: Context<'_, S>) {
+        let meta = event.metadata();
+        if *meta.level() > Level::INFO {
+            return;
+        }
+        let guard = SINK.read().unwrap_or_else(|e| e.into_inner());
+        let Some(sink) = guard.as_ref() else { return };
+        let mut text = Text::default();
+        event.record(&mut text);
+        let level = match *meta.level() {
+            Level::ERROR => LogLevel::Error,
+            Level::WARN => LogLevel::Warn,
+            _ => LogLevel::Info,
+        };
+        let stamp_ns = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        sink.record(LogRecord {
+            stamp_ns,
+            level,
+            target: meta.target().to_string(),
+            message: text.0,
+            file: meta.file().unwrap_or_default().to_string(),
+            line: meta.line().unwrap_or(0),
+        });
+    }
+}
