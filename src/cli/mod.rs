@@ -23,8 +23,14 @@ use std::time::Duration;
 use clap::{Parser, Subcommand, ValueEnum};
 use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry};
 
+// Exit codes: one table, documented in docs/missions.md ("Exit codes").
+/// Exit code when a mission or plan failed, a module failed, or a check found errors.
+pub(crate) const EXIT_FAILED: u8 = 1;
 /// Exit code for bad input (config errors, unknown names).
 pub(crate) const EXIT_BAD_INPUT: u8 = 2;
+// 3: the supervisor gave up (`petrel_actors::EXIT_GAVE_UP`), passed on from the agent.
+/// Exit code when time ran out (`run --for`, `plan simulate --steps`) with a mission still running.
+pub(crate) const EXIT_STILL_RUNNING: u8 = 4;
 
 #[derive(Parser)]
 #[command(

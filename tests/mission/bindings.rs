@@ -95,9 +95,10 @@ async fn bad_bindings_are_all_refused_at_init_with_positions() {
         r#"m/params/actions["a"].finished: 2:2: unknown property `c1/out/valu` (in `c1/out/value >= 3 and"#,
         r#"m/params/actions["b"].finished: 1:1: the left operand of `and` must be a boolean, found a number"#,
         r#"m/params/actions["c"].enable (action `c`): no module `nope` in this agent"#,
-        r#"m/params/actions["c"].set["c1/params/period_ms"] (action `c`): expected i64: "#,
+        r#"bad.plan:1): `c1/params/period_ms` takes a value like 10, found "fast""#,
         r#"m/params/actions["e"].failed: 1:19: expected a value, found the end (in `c1/out/value > 1 +`)"#,
-        "m/params/actions: no binding for action `d` (bound: a, b, c, e); bind them, or set params/allow_unbound",
+        "m/params/actions: no binding for action `d` at ",
+        "(bound: a, b, c, e); bind them, or set params/allow_unbound",
     ] {
         assert!(err.contains(want), "missing `{want}` in:\n{err}");
     }

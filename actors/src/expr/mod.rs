@@ -34,6 +34,8 @@ mod parse;
 mod tests;
 #[cfg(test)]
 mod tests_depth;
+#[cfg(test)]
+mod tests_time;
 mod types;
 mod value;
 

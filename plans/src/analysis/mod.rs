@@ -251,12 +251,9 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
     if !r.complete {
         return;
     }
-    for (ti, t) in plan.transitions().iter().enumerate() {
+    for ti in 0..plan.transitions().len() {
         if !ex.fired[ti] {
-            r.warnings.push(finding(
-                "dead-transition",
-                format!("transition '{}' ('{}') can never fire", t.id, t.label),
-            ));
+            r.warnings.push(finding("dead-transition", dead_transition(plan, &ex.fired, ti)));
         }
     }
     if let Some(f) = livelock::find(plan, &ex) {
@@ -285,4 +282,26 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
             format!("the goal marking can never be reached exactly{why}"),
         ));
     }
+}
+
+/// Why transition `ti` never fires, in the terms the user wrote: the rule or action it comes
+/// from, and an earlier transition that takes the same tokens on the same guard (a rule
+/// shadowed by another).
+fn dead_transition(plan: &Plan, fired: &[bool], ti: usize) -> String {
+    let ts = plan.transitions();
+    let t = &ts[ti];
+    let Some(origin) = plan.origin(ti) else {
+        return format!("transition '{}' ('{}') can never fire", t.id, t.label);
+    };
+    let shadow = ts[..ti].iter().enumerate().find(|(ei, e)| {
+        fired[*ei] && e.guard == t.guard && e.inputs.iter().any(|i| t.inputs.contains(i))
+    });
+    let why = match shadow {
+        Some((ei, e)) => match plan.origin(ei) {
+            Some(o) => format!(": {o} already handles it"),
+            None => format!(": `{}` takes the same tokens first", e.label),
+        },
+        None => String::new(),
+    };
+    format!("{origin} never applies (`{}` can never fire){why}", t.label)
 }

@@ -39,14 +39,19 @@
 //! in parallel is disabled when the first of them ends.
 
 mod bind;
+mod builtin;
+mod clock;
 mod config;
 mod env;
+mod memory;
 mod module;
 
 pub use bind::BindingProblem;
 pub use config::{
-    match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
+    config_form, match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings,
+    Flags, Places,
 };
+pub use memory::{ActionStats, MissionMemory, RunningAction};
 pub use module::{check_mission, Mission};
 
 use petrel_actors::ModuleRegistry;
