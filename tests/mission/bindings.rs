@@ -124,3 +124,52 @@ async fn a_missing_plan_file_is_reported_with_its_path() {
     );
     stop(agent).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn named_places_are_parameters_of_one_binding() {
+    // `goto_far` and `goto_near` bind to `goto`: the place's value is set with the target's type
+    // and its field is read in the condition.
+    let plans = Plans::new(&[("places.plan", "goto_far; goto_near")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/places": {{"far": (increment: 5.0, until: 20.0), "near": (increment: 1.0, until: 23.0)}},
+           "params/actions": {{
+            "goto": (enable: ["c1"], set: {{"c1/params/increment": "$1.increment"}},
+                     finished: "c1/out/value >= $1.until"),
+        }}"#,
+        plans.path("places.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 0, "{}", exit.reason);
+    let bb = agent.blackboard();
+    assert_eq!(*bb.get::<f64>("c1/out/value").await.unwrap(), 23.0, "4 x 5, then 3 x 1");
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn wrong_arity_and_wrong_place_values_are_refused_naming_the_plan_line() {
+    let plans = Plans::new(&[("bad.plan", "# patrol\ngoto_kitchen; count_1_2")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/places": {{"kitchen": (x: 1.0, y: 2.0)}},
+           "params/actions": {{
+            "goto": (set: {{"c1/params/increment": "$1"}}, finished: "true"),
+            "count": (finished: "c1/out/value >= $1"),
+        }}"#,
+        plans.path("bad.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 2);
+    let summary = stop(agent).await;
+    let err = summary.module("m").unwrap().last_error.clone().unwrap_or_default();
+    for want in [
+        "action `count_1_2` at ",
+        "bad.plan:2 has 2 parameters, but the binding uses up to $1; write the action as `count_P1`",
+        "`c1/params/increment` takes a value like 1.0, found (x: 1.0, y: 2.0)",
+    ] {
+        assert!(err.contains(want), "missing `{want}` in:\n{err}");
+    }
+    assert!(!err.contains("Expected") && !err.contains("f64"), "no type names from the code: {err}");
+}

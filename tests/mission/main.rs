@@ -4,4 +4,6 @@
 mod bindings;
 mod cli;
 mod execution;
+mod resilience;
 mod support;
+mod time;

@@ -213,18 +213,26 @@ fn expr_literal(v: &ron::Value) -> Option<String> {
 }
 
 /// A `set` value with parameters substituted: `"$N"` alone becomes the place the parameter
-/// names, or else the parameter read as RON (so `6` is a number); `$N` inside a longer string
+/// names (`"$N.field"` its field), or else the parameter read as RON (so `6` is a number); `$N` inside a longer string
 /// is replaced in the text.
 pub fn substitute_value(v: &ron::Value, params: &[String], places: &Places) -> ron::Value {
     match v {
         ron::Value::String(s) => {
-            let whole = s
+            // `"$1.x"`: a field of the place the parameter names.
+            let (head, field) = s.split_once('.').unwrap_or((s, ""));
+            let whole = head
                 .strip_prefix('$')
                 .and_then(|n| n.parse::<usize>().ok())
                 .and_then(|n| params.get(n.wrapping_sub(1)));
             if let Some(place) = whole.and_then(|p| places.0.get(p)) {
-                return place.clone();
+                if field.is_empty() {
+                    return place.clone();
+                }
+                if let Some(v) = field_of(place, field) {
+                    return v.clone();
+                }
             }
+            let whole = if field.is_empty() { whole } else { None };
             match whole.and_then(|p| ron::from_str::<ron::Value>(p).ok()) {
                 Some(parsed) => parsed,
                 None => ron::Value::String(replace_params(s, params)),
