@@ -110,10 +110,19 @@ fn timed_actions_cannot_deadlock_whichever_ends_first() {
     let r = check(&p);
     assert_eq!(codes(&r), (vec![], vec![]), "{r}");
     // The action, its timer, or both in the same step: each way reaches the goal.
-    for script in ["finish a 1\nfinish wait_5 5", "finish a 5\nfinish wait_5 1", "finish a 3\nfinish wait_5 3"] {
+    for script in [
+        "finish a 1\nfinish wait_5 5",
+        "finish a 5\nfinish wait_5 1",
+        "finish a 3\nfinish wait_5 3",
+    ] {
         let mut out = Vec::new();
         let script = Script::parse(script, "s").unwrap();
-        assert_eq!(simulate(&p, &script, 20, &mut out).unwrap(), PlanStatus::Goal, "{}", String::from_utf8_lossy(&out));
+        assert_eq!(
+            simulate(&p, &script, 20, &mut out).unwrap(),
+            PlanStatus::Goal,
+            "{}",
+            String::from_utf8_lossy(&out)
+        );
     }
 }
 

@@ -154,7 +154,10 @@ fn an_unhandled_failure_fails_the_plan_and_a_handled_one_does_not() {
         "a; b",
         "f.plan",
         "f",
-        Some(("*if* action_failed *during* b *do* fix; skip_action", "f.er")),
+        Some((
+            "*if* action_failed *during* b *do* fix; skip_action",
+            "f.er",
+        )),
     )
     .unwrap();
     let (out, status) = lines(&p, "finish a 1\nfail b 1\nfinish fix 1", 20);
@@ -180,5 +183,8 @@ fn an_unhandled_failure_is_reported_with_its_action() {
     let mut again = petrel_plans::PlanState::new(&p);
     again.restore(&p, &state.save()).unwrap();
     assert_eq!(again.status(&p), PlanStatus::Fail);
-    assert!(again.restore(&p, &[7, 1]).is_err(), "a key that does not fit is refused");
+    assert!(
+        again.restore(&p, &[7, 1]).is_err(),
+        "a key that does not fit is refused"
+    );
 }

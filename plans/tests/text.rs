@@ -340,7 +340,14 @@ fn a_block_repeats_n_times() {
     let starts: Vec<&String> = trans.iter().filter(|t| t.contains(".start")).collect();
     assert_eq!(starts.len(), 5, "{trans:?}");
     let glued = compile("{ a }*3", None);
-    assert_eq!(structure(&glued).1.iter().filter(|t| t.starts_with("a.start")).count(), 3);
+    assert_eq!(
+        structure(&glued)
+            .1
+            .iter()
+            .filter(|t| t.starts_with("a.start"))
+            .count(),
+        3
+    );
     assert!(error("{ a } * 0", None).contains("expected a number of times from 1 to 1000"));
     assert!(error("{ a } * x", None).contains("'x'"));
 }

@@ -239,7 +239,10 @@ fn check_missions(file: &ConfigFile, built: Registry, missions: &[&str]) -> Vec<
             match petrel_plans::mission::check_mission(&bb, module).await {
                 Ok(warnings) => {
                     for w in warnings {
-                        eprintln!("warning: {}", file.error(module, Some(&w.needle), w.message));
+                        eprintln!(
+                            "warning: {}",
+                            file.error(module, Some(&w.needle), w.message)
+                        );
                     }
                 }
                 Err(problems) => errors.extend(

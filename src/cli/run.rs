@@ -144,9 +144,16 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
 async fn pending_missions(agents: &[Agent], files: &[ConfigFile]) -> Vec<String> {
     let mut pending = Vec::new();
     for (agent, file) in agents.iter().zip(files) {
-        for m in file.config.modules.iter().filter(|m| m.type_name == "mission.pnp") {
+        for m in file
+            .config
+            .modules
+            .iter()
+            .filter(|m| m.type_name == "mission.pnp")
+        {
             let bb = agent.blackboard();
-            let is_mission = bb.get::<bool>(&format!("{}/params/is_mission", m.name)).await;
+            let is_mission = bb
+                .get::<bool>(&format!("{}/params/is_mission", m.name))
+                .await;
             let result = bb.get::<String>(&format!("{}/out/result", m.name)).await;
             if let (Ok(is_mission), Ok(result)) = (is_mission, result) {
                 if *is_mission && result.as_str() == "running" {

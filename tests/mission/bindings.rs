@@ -143,7 +143,11 @@ async fn named_places_are_parameters_of_one_binding() {
     let exit = finished(&agent).await;
     assert_eq!(exit.code, 0, "{}", exit.reason);
     let bb = agent.blackboard();
-    assert_eq!(*bb.get::<f64>("c1/out/value").await.unwrap(), 23.0, "4 x 5, then 3 x 1");
+    assert_eq!(
+        *bb.get::<f64>("c1/out/value").await.unwrap(),
+        23.0,
+        "4 x 5, then 3 x 1"
+    );
     stop(agent).await;
 }
 
@@ -163,7 +167,12 @@ async fn wrong_arity_and_wrong_place_values_are_refused_naming_the_plan_line() {
     let exit = finished(&agent).await;
     assert_eq!(exit.code, 2);
     let summary = stop(agent).await;
-    let err = summary.module("m").unwrap().last_error.clone().unwrap_or_default();
+    let err = summary
+        .module("m")
+        .unwrap()
+        .last_error
+        .clone()
+        .unwrap_or_default();
     for want in [
         "action `count_1_2` at ",
         "bad.plan:2 has 2 parameters, but the binding uses up to $1; write the action as `count_P1`",
@@ -171,5 +180,8 @@ async fn wrong_arity_and_wrong_place_values_are_refused_naming_the_plan_line() {
     ] {
         assert!(err.contains(want), "missing `{want}` in:\n{err}");
     }
-    assert!(!err.contains("Expected") && !err.contains("f64"), "no type names from the code: {err}");
+    assert!(
+        !err.contains("Expected") && !err.contains("f64"),
+        "no type names from the code: {err}"
+    );
 }

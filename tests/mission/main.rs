@@ -4,6 +4,7 @@
 mod bindings;
 mod cli;
 mod execution;
+mod patrol;
 mod resilience;
 mod support;
 mod time;

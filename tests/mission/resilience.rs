@@ -32,7 +32,12 @@ fn config(plans: &Plans) -> String {
 }
 
 async fn memory(agent: &petrel::actors::Agent) -> MissionMemory {
-    (*agent.blackboard().get::<MissionMemory>("m/state/memory").await.unwrap()).clone()
+    (*agent
+        .blackboard()
+        .get::<MissionMemory>("m/state/memory")
+        .await
+        .unwrap())
+    .clone()
 }
 
 #[tokio::test(start_paused = true)]
@@ -49,7 +54,11 @@ async fn faults_injected_into_the_mission_never_rerun_an_action() {
             .unwrap();
         // The fault fails the mission's next step: make it step.
         let wake = *agent.blackboard().get::<i64>("m/state/wake").await.unwrap();
-        agent.blackboard().set("m/state/wake", wake + 1).await.unwrap();
+        agent
+            .blackboard()
+            .set("m/state/wake", wake + 1)
+            .await
+            .unwrap();
     }
     let exit = finished(&agent).await;
     assert_eq!(exit.code, 0, "{}", exit.reason);
@@ -62,7 +71,11 @@ async fn faults_injected_into_the_mission_never_rerun_an_action() {
     assert_eq!(fired, 6, "a, b and c started and ended once each");
     let summary = stop(agent).await;
     let m = summary.module("m").unwrap();
-    assert!(m.restarts >= 5, "the mission restarted: {} restarts", m.restarts);
+    assert!(
+        m.restarts >= 5,
+        "the mission restarted: {} restarts",
+        m.restarts
+    );
 }
 
 #[tokio::test(start_paused = true)]
@@ -71,7 +84,11 @@ async fn a_snapshot_taken_mid_mission_resumes_the_plan_where_it_was() {
     let agent = start(&config(&plans)).await;
     advance(300).await;
     assert_eq!(
-        *agent.blackboard().get::<String>("m/out/running").await.unwrap(),
+        *agent
+            .blackboard()
+            .get::<String>("m/out/running")
+            .await
+            .unwrap(),
         "b"
     );
     let snapshot = agent.snapshot().await.unwrap();
@@ -83,10 +100,20 @@ async fn a_snapshot_taken_mid_mission_resumes_the_plan_where_it_was() {
     let exit = finished(&resumed).await;
     assert_eq!(exit.code, 0, "{}", exit.reason);
     let memory = memory(&resumed).await;
-    assert_eq!(memory.actions["a"].starts, 1, "a is not run again: {memory:?}");
+    assert_eq!(
+        memory.actions["a"].starts, 1,
+        "a is not run again: {memory:?}"
+    );
     assert_eq!(memory.actions["b"].starts, 1, "b goes on: {memory:?}");
     assert_eq!(memory.actions["c"].starts, 1);
-    let fired = *resumed.blackboard().get::<i64>("m/out/fired").await.unwrap();
-    assert_eq!(fired, 6, "a, b and c started and ended once each, across the snapshot");
+    let fired = *resumed
+        .blackboard()
+        .get::<i64>("m/out/fired")
+        .await
+        .unwrap();
+    assert_eq!(
+        fired, 6,
+        "a, b and c started and ended once each, across the snapshot"
+    );
     stop(resumed).await;
 }

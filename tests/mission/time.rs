@@ -31,9 +31,17 @@ async fn an_unhandled_failure_ends_the_run_in_fail_within_a_step() {
         exit.reason
     );
     // The third count comes after 30 ms; the failure is seen at once.
-    assert!(t0.elapsed() < Duration::from_millis(100), "{:?}", t0.elapsed());
+    assert!(
+        t0.elapsed() < Duration::from_millis(100),
+        "{:?}",
+        t0.elapsed()
+    );
     assert_eq!(text(&agent, "m/out/result").await, "fail");
-    let memory = agent.blackboard().get::<MissionMemory>("m/state/memory").await.unwrap();
+    let memory = agent
+        .blackboard()
+        .get::<MissionMemory>("m/state/memory")
+        .await
+        .unwrap();
     assert_eq!(memory.failed_action.as_deref(), Some("a"));
     assert!(!memory.actions.contains_key("b"), "b never started");
     stop(agent).await;
@@ -54,16 +62,31 @@ async fn wait_and_timed_actions_need_no_binding_and_either_end_may_come_first() 
     advance(900).await;
     assert_eq!(text(&agent, "m/out/running").await, "slow, wait_1");
     advance(200).await;
-    assert_eq!(text(&agent, "m/out/running").await, "wait_2", "slow was interrupted at 1 s");
+    assert_eq!(
+        text(&agent, "m/out/running").await,
+        "wait_2",
+        "slow was interrupted at 1 s"
+    );
     advance(1800).await;
-    assert_eq!(text(&agent, "m/out/running").await, "wait_2", "2 s from its start at 1 s");
+    assert_eq!(
+        text(&agent, "m/out/running").await,
+        "wait_2",
+        "2 s from its start at 1 s"
+    );
     let exit = finished(&agent).await;
     assert_eq!(exit.code, 0, "{}", exit.reason);
-    let memory = agent.blackboard().get::<MissionMemory>("m/state/memory").await.unwrap();
+    let memory = agent
+        .blackboard()
+        .get::<MissionMemory>("m/state/memory")
+        .await
+        .unwrap();
     assert_eq!(memory.actions["slow"].interrupts, 1);
     assert_eq!(memory.actions["fast"].ends, 1);
     assert_eq!(memory.actions["wait_5"].interrupts, 1);
-    assert!((memory.actions["wait_2"].time_s - 2.0).abs() < 0.05, "{memory:?}");
+    assert!(
+        (memory.actions["wait_2"].time_s - 2.0).abs() < 0.05,
+        "{memory:?}"
+    );
     assert_eq!(memory.actions["say_done"].ends, 1);
     stop(agent).await;
 }
@@ -82,10 +105,24 @@ async fn time_in_an_actions_conditions_counts_from_its_start() {
     )))
     .await;
     let exit = finished(&agent).await;
-    assert_eq!(exit.code, 0, "b must not fail at its start: {}", exit.reason);
-    let memory = agent.blackboard().get::<MissionMemory>("m/state/memory").await.unwrap();
-    assert!((memory.actions["a"].time_s - 3.0).abs() < 0.05, "{memory:?}");
-    assert!((memory.actions["b"].time_s - 2.0).abs() < 0.05, "{memory:?}");
+    assert_eq!(
+        exit.code, 0,
+        "b must not fail at its start: {}",
+        exit.reason
+    );
+    let memory = agent
+        .blackboard()
+        .get::<MissionMemory>("m/state/memory")
+        .await
+        .unwrap();
+    assert!(
+        (memory.actions["a"].time_s - 3.0).abs() < 0.05,
+        "{memory:?}"
+    );
+    assert!(
+        (memory.actions["b"].time_s - 2.0).abs() < 0.05,
+        "{memory:?}"
+    );
     stop(agent).await;
 }
 
@@ -107,8 +144,16 @@ async fn a_linked_clock_drives_mission_time() {
     );
     let agent = start(&config).await;
     advance(400).await;
-    assert_eq!(text(&agent, "m/out/result").await, "running", "40 clock seconds");
+    assert_eq!(
+        text(&agent, "m/out/result").await,
+        "running",
+        "40 clock seconds"
+    );
     advance(200).await;
-    assert_eq!(text(&agent, "m/out/result").await, "goal", "60 clock seconds");
+    assert_eq!(
+        text(&agent, "m/out/result").await,
+        "goal",
+        "60 clock seconds"
+    );
     stop(agent).await;
 }

@@ -156,7 +156,8 @@ impl ConfigFile {
         for m in overlay.config.modules {
             match self.config.modules.iter_mut().find(|b| b.name == m.name) {
                 Some(base) => {
-                    let wrote = |field: &str| overlay.written.contains(&format!("{}/{field}", m.name));
+                    let wrote =
+                        |field: &str| overlay.written.contains(&format!("{}/{field}", m.name));
                     base.type_name = m.type_name;
                     if wrote("group") {
                         base.group = m.group;
@@ -469,7 +470,9 @@ fn written_fields(text: &str) -> std::collections::BTreeSet<String> {
         if k != "modules" {
             continue;
         }
-        let ron::Value::Seq(modules) = v else { continue };
+        let ron::Value::Seq(modules) = v else {
+            continue;
+        };
         for m in modules {
             let ron::Value::Map(m) = m else { continue };
             let name = m.iter().find_map(|(k, v)| match (k, v) {

@@ -189,7 +189,9 @@ impl<R: Resolve> Checker<'_, R> {
                 if t != Ty::List(Box::new(Ty::Num)) {
                     return Err(self.err(
                         ast.span,
-                        format!("`{name}` takes a list of numbers or at least 2 numbers, found {t}"),
+                        format!(
+                            "`{name}` takes a list of numbers or at least 2 numbers, found {t}"
+                        ),
                     ));
                 }
                 Ok((Node::MinMaxList(f == Func::Max, Box::new(n)), Ty::Num))

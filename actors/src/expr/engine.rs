@@ -283,7 +283,11 @@ impl ExprSet {
     /// When each `held` of expression `id` has seen its condition true since (`None`: false),
     /// to keep them across a restart of the module that owns the set.
     pub fn held_states(&self, id: ExprId) -> Vec<Option<Instant>> {
-        self.exprs[id.0].held.clone().map(|s| self.held[s]).collect()
+        self.exprs[id.0]
+            .held
+            .clone()
+            .map(|s| self.held[s])
+            .collect()
     }
 
     /// Puts back `held` states saved by [`held_states`](ExprSet::held_states) (extra or

@@ -102,7 +102,9 @@ impl Eval<'_> {
                     .saturating_duration_since(self.written(*i))
                     .as_secs_f64(),
             ),
-            Node::Elapsed => Value::Num(self.now.saturating_duration_since(self.since).as_secs_f64()),
+            Node::Elapsed => {
+                Value::Num(self.now.saturating_duration_since(self.since).as_secs_f64())
+            }
             Node::Held(cond, secs, slot) => {
                 let c = self.bool(cond)?;
                 let since = if c {

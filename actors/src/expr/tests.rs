@@ -237,10 +237,22 @@ fn type_errors_have_positions() {
         ),
         ("age(a/out/x + 1) > 2", (1, 5), "takes a property"),
         ("abs(1, 2) > 0", (1, 1), "`abs` takes 1 argument"),
-        ("min(1) > 0", (1, 1), "a list of numbers or at least 2 numbers"),
+        (
+            "min(1) > 0",
+            (1, 1),
+            "a list of numbers or at least 2 numbers",
+        ),
         ("clamp(1, 2) > 0", (1, 1), "`clamp` takes 3 arguments"),
-        ("s/out/list > 0", (1, 1), "must be a number, found a list of numbers"),
-        ("len(a/out/x) > 0", (1, 5), "`len` takes a list, found a number"),
+        (
+            "s/out/list > 0",
+            (1, 1),
+            "must be a number, found a list of numbers",
+        ),
+        (
+            "len(a/out/x) > 0",
+            (1, 5),
+            "`len` takes a list, found a number",
+        ),
     ];
     for (src, (line, col), msg) in cases {
         let e = err(src);

@@ -10,7 +10,11 @@ fn lists_of_numbers_have_min_max_and_len() {
     assert_eq!(eval("max(s/out/list)"), Value::Num(2.0));
     assert_eq!(eval("len(s/out/list)"), Value::Num(2.0));
     assert_eq!(eval("min(s/out/list) < 1.5"), Value::Bool(true));
-    assert_eq!(eval("min(a/out/x, a/out/y)"), Value::Num(-2.0), "the numeric form stays");
+    assert_eq!(
+        eval("min(a/out/x, a/out/y)"),
+        Value::Num(-2.0),
+        "the numeric form stays"
+    );
 }
 
 #[test]
@@ -26,7 +30,10 @@ fn the_min_of_an_empty_list_is_an_evaluation_error_not_a_panic() {
 #[test]
 fn elapsed_counts_from_the_origin_and_wakes_at_its_comparison() {
     let mut f = Fixture::new();
-    let id = f.set.add("elapsed() >= 2", &env(), Some(&Ty::Bool)).unwrap();
+    let id = f
+        .set
+        .add("elapsed() >= 2", &env(), Some(&Ty::Bool))
+        .unwrap();
     let start = f.at(1000);
     f.set.set_origin(id, Some(start));
     let t = f.at(1500);
@@ -45,8 +52,14 @@ fn elapsed_counts_from_the_origin_and_wakes_at_its_comparison() {
 #[test]
 fn an_origin_forgets_held_windows_and_floors_age() {
     let mut f = Fixture::new();
-    let held = f.set.add("held(b/out/ok, 2s)", &env(), Some(&Ty::Bool)).unwrap();
-    let age = f.set.add("age(a/out/x) > 1", &env(), Some(&Ty::Bool)).unwrap();
+    let held = f
+        .set
+        .add("held(b/out/ok, 2s)", &env(), Some(&Ty::Bool))
+        .unwrap();
+    let age = f
+        .set
+        .add("age(a/out/x) > 1", &env(), Some(&Ty::Bool))
+        .unwrap();
     f.put("b/out/ok", true, 0);
     f.put("a/out/x", 1.0, 0);
     let t = f.at(0);
@@ -57,7 +70,11 @@ fn an_origin_forgets_held_windows_and_floors_age() {
     f.set.set_origin(age, Some(start));
     let t = f.at(5000);
     f.set.evaluate(t);
-    assert_eq!(f.set.bool(held), Some(false), "the window opens at the start");
+    assert_eq!(
+        f.set.bool(held),
+        Some(false),
+        "the window opens at the start"
+    );
     assert_eq!(f.set.bool(age), Some(false), "age counts from the start");
     let saved = f.set.held_states(held);
     assert_eq!(saved, vec![Some(start)]);
@@ -68,7 +85,10 @@ fn an_origin_forgets_held_windows_and_floors_age() {
     // Restoring the held state of a restarted owner keeps the window.
     let mut g = Fixture::new();
     g.t0 = f.t0;
-    let again = g.set.add("held(b/out/ok, 2s)", &env(), Some(&Ty::Bool)).unwrap();
+    let again = g
+        .set
+        .add("held(b/out/ok, 2s)", &env(), Some(&Ty::Bool))
+        .unwrap();
     g.set.set_origin(again, Some(start));
     g.set.restore_held_states(again, &saved);
     g.put("b/out/ok", true, 6000);

@@ -253,7 +253,10 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
     }
     for ti in 0..plan.transitions().len() {
         if !ex.fired[ti] {
-            r.warnings.push(finding("dead-transition", dead_transition(plan, &ex.fired, ti)));
+            r.warnings.push(finding(
+                "dead-transition",
+                dead_transition(plan, &ex.fired, ti),
+            ));
         }
     }
     if let Some(f) = livelock::find(plan, &ex) {

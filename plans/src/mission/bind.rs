@@ -9,8 +9,8 @@ use petrel_actors::{AnyHandle, AnyValue, Blackboard};
 
 use super::builtin::{builtin, Builtin};
 use super::config::{
-    config_form, match_action, max_param, substitute, substitute_value, ActionBindings,
-    ActionName, ConditionBindings, Places,
+    config_form, match_action, max_param, substitute, substitute_value, ActionBindings, ActionName,
+    ConditionBindings, Places,
 };
 use crate::model::Plan;
 
@@ -393,10 +393,7 @@ fn unused_bindings(
     bindings: &ActionBindings,
     actions: &BTreeSet<String>,
 ) -> Vec<BindingProblem> {
-    let locals: Vec<String> = actions
-        .iter()
-        .map(|a| ActionName::parse(a).local)
-        .collect();
+    let locals: Vec<String> = actions.iter().map(|a| ActionName::parse(a).local).collect();
     bindings
         .0
         .keys()

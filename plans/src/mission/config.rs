@@ -165,13 +165,21 @@ pub fn substitute(text: &str, params: &[String], places: &Places) -> Result<Stri
             continue;
         };
         let Some(param) = n.checked_sub(1).and_then(|k| params.get(k)) else {
-            return Err(format!("`${n}`: the action has {} parameter{}", params.len(), plural(params.len())));
+            return Err(format!(
+                "`${n}`: the action has {} parameter{}",
+                params.len(),
+                plural(params.len())
+            ));
         };
         rest = &after[digits..];
         let field_len = rest
             .strip_prefix('.')
             .filter(|f| f.starts_with(|c: char| c.is_alphabetic() || c == '_'))
-            .map(|f| 1 + f.len() - f.trim_start_matches(|c: char| c.is_alphanumeric() || c == '_').len());
+            .map(|f| {
+                1 + f.len()
+                    - f.trim_start_matches(|c: char| c.is_alphanumeric() || c == '_')
+                        .len()
+            });
         match (places.0.get(param), field_len) {
             (Some(value), Some(len)) => {
                 let field = &rest[1..len];
@@ -192,7 +200,11 @@ pub fn substitute(text: &str, params: &[String], places: &Places) -> Result<Stri
 }
 
 fn plural(n: usize) -> &'static str {
-    if n == 1 { "" } else { "s" }
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
 }
 
 fn field_of<'a>(v: &'a ron::Value, field: &str) -> Option<&'a ron::Value> {
@@ -309,7 +321,9 @@ pub fn config_form(v: &ron::Value) -> String {
         ),
         ron::Value::Number(n) => {
             let x = n.into_f64();
-            if x.fract() == 0.0 && matches!(n, ron::value::Number::F32(_) | ron::value::Number::F64(_)) {
+            if x.fract() == 0.0
+                && matches!(n, ron::value::Number::F32(_) | ron::value::Number::F64(_))
+            {
                 format!("{x:.1}")
             } else {
                 x.to_string()
@@ -347,14 +361,19 @@ mod tests {
     fn parameters_substitute_in_text_and_values() {
         let p: Vec<String> = ["6", "2", "x"].iter().map(|s| s.to_string()).collect();
         let none = Places::default();
-        assert_eq!(substitute("a/out/x > $1 + $2", &p, &none).unwrap(), "a/out/x > 6 + 2");
+        assert_eq!(
+            substitute("a/out/x > $1 + $2", &p, &none).unwrap(),
+            "a/out/x > 6 + 2"
+        );
         let n = substitute_value(&ron::Value::String("$1".into()), &p, &none);
         assert!(matches!(n, ron::Value::Number(n) if n.into_f64() == 6.0));
         assert_eq!(
             substitute_value(&ron::Value::String("to $3".into()), &p, &none),
             ron::Value::String("to x".into())
         );
-        assert!(substitute("$4 > 1", &p, &none).unwrap_err().contains("3 parameters"));
+        assert!(substitute("$4 > 1", &p, &none)
+            .unwrap_err()
+            .contains("3 parameters"));
     }
 
     #[test]

@@ -48,8 +48,8 @@ mod module;
 
 pub use bind::BindingProblem;
 pub use config::{
-    config_form, match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings,
-    Flags, Places,
+    config_form, match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
+    Places,
 };
 pub use memory::{ActionStats, MissionMemory, RunningAction};
 pub use module::{check_mission, Mission};

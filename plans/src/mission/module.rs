@@ -216,7 +216,9 @@ impl Run {
             *seen = Some(s.version);
             // On another clock than wall time, a write counts from when the mission saw it.
             let written = if wall { s.written } else { now };
-            self.bound.exprs.update(*id, h.type_info(), &s.value, written);
+            self.bound
+                .exprs
+                .update(*id, h.type_info(), &s.value, written);
         }
         self.bound.exprs.evaluate_into(now, &mut self.changed);
         for &id in &self.changed {
@@ -286,7 +288,11 @@ impl Run {
                 a.set
                     .iter()
                     .zip(vs)
-                    .map(|((h, old), v)| h.type_info().from_ron(v.clone()).unwrap_or_else(|_| old.clone()))
+                    .map(|((h, old), v)| {
+                        h.type_info()
+                            .from_ron(v.clone())
+                            .unwrap_or_else(|_| old.clone())
+                    })
                     .collect()
             });
             let origin = Clock::instant(ra.started_s);
@@ -397,7 +403,10 @@ async fn prepare_all(
     bb: &Blackboard,
     module: &str,
     setup: &Setup,
-) -> (Result<(Arc<Plan>, Bound), Vec<BindingProblem>>, Vec<BindingProblem>) {
+) -> (
+    Result<(Arc<Plan>, Bound), Vec<BindingProblem>>,
+    Vec<BindingProblem>,
+) {
     let plan_problem = |message| {
         vec![BindingProblem {
             needle: "params/plan".into(),

@@ -238,7 +238,10 @@ impl Net<'_> {
     /// made next are its own.
     fn written(&mut self, name: &str, at: usize) {
         let (line, _) = super::line_col(self.src, at);
-        self.sources.action_lines.entry(name.to_string()).or_insert(line);
+        self.sources
+            .action_lines
+            .entry(name.to_string())
+            .or_insert(line);
     }
 
     fn fail_place(&mut self) -> usize {
