@@ -4,6 +4,7 @@
 mod bindings;
 mod cli;
 mod execution;
+mod guide;
 mod patrol;
 mod resilience;
 mod support;
