@@ -369,5 +369,8 @@ fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active() {
     new.adopt(old);
     // Nothing the rules read changes: the reload alone must bring the new value.
     let actions = new.step(t0 + Duration::from_millis(10));
-    assert_eq!(actions, [set("oa/params/maxSpeed", Value::Num(0.1), "slow")]);
+    assert_eq!(
+        actions,
+        [set("oa/params/maxSpeed", Value::Num(0.1), "slow")]
+    );
 }

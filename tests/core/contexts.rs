@@ -170,11 +170,17 @@ async fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active(
     let bb = agent.blackboard().clone();
     bb.set("quality/in/value", 0.1).await.unwrap();
     advance(30).await;
-    assert_eq!(*bb.get::<f64>("localizer/params/increment").await.unwrap(), 0.0);
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        0.0
+    );
     std::fs::write(&rules, LOST.replace(r#""0.0""#, r#""0.25""#)).unwrap();
     bb.set("contexts/params/reload", 1_i64).await.unwrap();
     advance(30).await;
-    assert_eq!(*bb.get::<String>("contexts/out/active").await.unwrap(), "lost");
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "lost"
+    );
     assert_eq!(
         *bb.get::<f64>("localizer/params/increment").await.unwrap(),
         0.25,
@@ -183,6 +189,9 @@ async fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active(
     // It still restores the original value when it ends.
     bb.set("quality/in/value", 0.9).await.unwrap();
     advance(30).await;
-    assert_eq!(*bb.get::<f64>("localizer/params/increment").await.unwrap(), 1.0);
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        1.0
+    );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }

@@ -45,3 +45,110 @@ fn check_accepts_the_mission_demo() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn plan_simulate_exit_codes_say_goal_fail_or_still_running_and_read_scripts_from_stdin() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("p.plan");
+    std::fs::write(&plan, "a; b").unwrap();
+    let plan = plan.display().to_string();
+    let simulate = |script: &str, steps: &str| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["plan", "simulate", &plan, "--script", "-", "--steps", steps])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .expect("petrel runs");
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(script.as_bytes())
+            .unwrap();
+        let out = child.wait_with_output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    assert_eq!(simulate("", "100").0, Some(0));
+    let (code, out) = simulate("fail b 1", "100");
+    assert_eq!(code, Some(1), "an unhandled failure fails the plan: {out}");
+    let (code, out) = simulate("", "2");
+    assert_eq!(code, Some(4), "steps ran out: {out}");
+    assert!(
+        out.ends_with("{\"result\":\"running\",\"step\":2}\n"),
+        "{out}"
+    );
+    let help = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(["plan", "simulate", "--help"])
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("--script <FILE|->") && help.contains("4 when --steps runs out"),
+        "{help}"
+    );
+}
+
+#[test]
+fn a_run_stopped_by_for_while_the_mission_runs_says_so_and_exits_4() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("slow.plan"), "wait_60").unwrap();
+    let config = dir.path().join("slow.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", modules: [
+            (name: "m", type: "mission.pnp", values: {"params/plan": "slow.plan", "params/is_mission": true}),
+        ])"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args([
+            "run",
+            &config.display().to_string(),
+            "--for",
+            "300ms",
+            "--no-remote",
+        ])
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("petrel runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(4), "{stdout}");
+    assert!(stdout.contains("mission still running: r1/m"), "{stdout}");
+}
+
+#[test]
+fn a_give_up_exits_3_naming_the_agent_wide_limit_even_though_a_module_failed() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("giveup.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", supervision: (max_restarts: 2, within_s: 10.0, backoff: (min_ms: 5, max_ms: 5, jitter: 0.0)),
+            modules: [
+                (name: "producer", type: "demo.producer", values: {"params/period_ms": 5}),
+                (name: "chaos", type: "demo.chaos", values: {"params/targets": "producer", "params/faults": "panic",
+                                                            "params/mean_interval_ms": 50, "params/seed": 7}),
+            ])"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args([
+            "run",
+            &config.display().to_string(),
+            "--for",
+            "20s",
+            "--no-remote",
+        ])
+        .env("RUST_LOG", "off")
+        .output()
+        .expect("petrel runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(3), "{stdout}");
+    assert!(
+        stdout.contains("the agent-wide restart limit (supervision max_restarts: 2 within_s: 10) was reached; restarts so far: `producer` 2"),
+        "{stdout}"
+    );
+}

@@ -82,8 +82,12 @@ fn every_block_of_the_guide_is_checked() {
     for b in &blocks {
         let at = format!("docs/missions.md:{} ({})", b.line, b.lang);
         if let Some(file) = b.attr("file") {
-            let shipped = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{at}: {file}: {e}"));
-            assert_eq!(b.text, shipped, "{at}: the guide must show {file} as shipped");
+            let shipped =
+                std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{at}: {file}: {e}"));
+            assert_eq!(
+                b.text, shipped,
+                "{at}: the guide must show {file} as shipped"
+            );
         }
         match b.lang.as_str() {
             "plan" => {
@@ -91,33 +95,51 @@ fn every_block_of_the_guide_is_checked() {
                     Some(file) => {
                         let rules = Path::new(file).with_extension("er");
                         let rules = rules.is_file().then_some(rules.as_path());
-                        check(&load_plan(Path::new(file), rules).unwrap_or_else(|e| panic!("{at}: {e}")).plan)
+                        check(
+                            &load_plan(Path::new(file), rules)
+                                .unwrap_or_else(|e| panic!("{at}: {e}"))
+                                .plan,
+                        )
                     }
-                    None => check(&compile_text(&b.text, &at, "guide", None).unwrap_or_else(|e| panic!("{at}: {e}"))),
+                    None => check(
+                        &compile_text(&b.text, &at, "guide", None)
+                            .unwrap_or_else(|e| panic!("{at}: {e}")),
+                    ),
                 };
                 no_deadlock(&at, &report);
             }
             "rules" => {
                 let plan = "goto_A; say_x";
-                compile_text(plan, "p.plan", "p", Some((&b.text, &at))).unwrap_or_else(|e| panic!("{e}"));
+                compile_text(plan, "p.plan", "p", Some((&b.text, &at)))
+                    .unwrap_or_else(|e| panic!("{e}"));
             }
             "ron" => match (b.attr("file"), b.attr("fragment")) {
                 (Some(file), _) if b.text.trim_start().contains("Agent(") => {
                     let out = petrel(&["check", file]);
-                    assert!(out.status.success(), "{at}: {}", String::from_utf8_lossy(&out.stderr));
+                    assert!(
+                        out.status.success(),
+                        "{at}: {}",
+                        String::from_utf8_lossy(&out.stderr)
+                    );
                 }
                 (Some(_), _) => {} // context rules: checked with their config
                 (None, Some("binding")) => {
                     let text = format!("{{\"x\": {}}}", b.text);
-                    let v: ron::Value = ron::from_str(&text).unwrap_or_else(|e| panic!("{at}: {e}"));
-                    v.into_rust::<ActionBindings>().unwrap_or_else(|e| panic!("{at}: {e}"));
+                    let v: ron::Value =
+                        ron::from_str(&text).unwrap_or_else(|e| panic!("{at}: {e}"));
+                    v.into_rust::<ActionBindings>()
+                        .unwrap_or_else(|e| panic!("{at}: {e}"));
                 }
                 (None, Some("actions")) => {
                     let text = format!("{{{}}}", b.text);
-                    let v: ron::Value = ron::from_str(&text).unwrap_or_else(|e| panic!("{at}: {e}"));
-                    v.into_rust::<ActionBindings>().unwrap_or_else(|e| panic!("{at}: {e}"));
+                    let v: ron::Value =
+                        ron::from_str(&text).unwrap_or_else(|e| panic!("{at}: {e}"));
+                    v.into_rust::<ActionBindings>()
+                        .unwrap_or_else(|e| panic!("{at}: {e}"));
                 }
-                other => panic!("{at}: a ron block must name a file or a fragment kind, found {other:?}"),
+                other => {
+                    panic!("{at}: a ron block must name a file or a fragment kind, found {other:?}")
+                }
             },
             "expr" => {
                 petrel::actors::expr::parse(b.text.trim()).unwrap_or_else(|e| panic!("{at}: {e}"));
@@ -136,7 +158,11 @@ fn every_block_of_the_guide_is_checked() {
                         .collect();
                     let args: Vec<&str> = args.iter().map(String::as_str).collect();
                     let out = petrel(&args);
-                    assert!(out.status.success(), "{at}: {line}: {}", String::from_utf8_lossy(&out.stdout));
+                    assert!(
+                        out.status.success(),
+                        "{at}: {line}: {}",
+                        String::from_utf8_lossy(&out.stdout)
+                    );
                 }
             }
             "text" => {} // output shown to the reader
