@@ -123,6 +123,65 @@ impl fmt::Debug for TypeInfo {
     }
 }
 
+/// A value written as in a config file: structs as `(x: 1.0, y: 2.0)`, lists as `[..]`, so
+/// that messages show the form a user writes, never a type's name in the code.
+pub fn config_form(v: &ron::Value) -> String {
+    match v {
+        ron::Value::Map(m) if m.keys().all(|k| matches!(k, ron::Value::String(_))) => {
+            let fields: Vec<String> = m
+                .iter()
+                .map(|(k, v)| match k {
+                    ron::Value::String(k) => format!("{k}: {}", config_form(v)),
+                    _ => unreachable!("keys checked above"),
+                })
+                .collect();
+            format!("({})", fields.join(", "))
+        }
+        ron::Value::Seq(xs) if xs.len() > 4 => {
+            let head: Vec<String> = xs.iter().take(3).map(config_form).collect();
+            format!("[{}, ...]", head.join(", "))
+        }
+        ron::Value::Seq(xs) => format!(
+            "[{}]",
+            xs.iter().map(config_form).collect::<Vec<_>>().join(", ")
+        ),
+        ron::Value::Number(n) => {
+            let x = n.into_f64();
+            if x.fract() == 0.0
+                && matches!(n, ron::value::Number::F32(_) | ron::value::Number::F64(_))
+            {
+                format!("{x:.1}")
+            } else {
+                x.to_string()
+            }
+        }
+        other => ron::to_string(other).unwrap_or_default(),
+    }
+}
+
+/// A conversion error from serde in the terms of a config file: what was expected, as a value
+/// written like `example` (the property's current value), never a type's name in the code.
+pub fn config_value_error(reason: &str, example: &ron::Value, given: &ron::Value) -> String {
+    let form = config_form(example);
+    let words = [
+        ("Expected f64", "expected a number"),
+        ("Expected f32", "expected a number"),
+        ("Expected i64", "expected an integer"),
+        ("Expected u64", "expected a non-negative integer"),
+        ("Expected u32", "expected a non-negative integer"),
+        ("Expected bool", "expected true or false"),
+        ("Expected String", "expected a string"),
+    ];
+    if reason.contains("Expected struct") || reason.contains("Repr") {
+        return format!("expected a value like {form}, found {}", config_form(given));
+    }
+    let mut reason = reason.to_string();
+    for (from, to) in words {
+        reason = reason.replace(from, to);
+    }
+    format!("{reason}; a value looks like {form}")
+}
+
 fn shorten(mut s: String) -> String {
     if s.len() > SHORT_LEN {
         let mut cut = SHORT_LEN;

@@ -222,3 +222,30 @@ fn the_budget_stops_wide_plans_with_a_message() {
         .iter()
         .any(|w| w.code == "dead-transition" || w.code == "livelock"));
 }
+
+#[test]
+fn a_rule_that_never_applies_is_named_by_its_file_and_line() {
+    let p = compile_text(
+        "goto_dock",
+        "d.plan",
+        "d",
+        Some((
+            "*if* action_failed *during* goto *do* skip_action\n*if* action_failed *during* goto_dock *do* fail_plan\n",
+            "d.er",
+        )),
+    )
+    .unwrap();
+    let r = check(&p);
+    let dead: Vec<&str> = r
+        .warnings
+        .iter()
+        .filter(|w| w.code == "dead-transition")
+        .map(|w| w.message.as_str())
+        .collect();
+    assert_eq!(
+        dead,
+        ["the rule at d.er:2 (`*if* action_failed *during* goto_dock *do* fail_plan`) for `goto_dock` never applies (`goto_dock.fail` can never fire): the rule at d.er:1 (`*if* action_failed *during* goto *do* skip_action`) for `goto_dock` already handles it"],
+        "{r}"
+    );
+    assert!(!r.to_string().contains("'t"), "no internal ids: {r}");
+}

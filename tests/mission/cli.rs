@@ -152,3 +152,29 @@ fn a_give_up_exits_3_naming_the_agent_wide_limit_even_though_a_module_failed() {
         "{stdout}"
     );
 }
+
+#[test]
+fn check_warns_about_a_binding_no_action_uses_with_the_nearest_name() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.plan"), "report_dock").unwrap();
+    let config = dir.path().join("m.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", modules: [
+            (name: "m", type: "mission.pnp", values: {"params/plan": "m.plan", "params/allow_unbound": true,
+             "params/actions": {"reprot_dock": (finished: "true")}}),
+        ])"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(["check", &config.display().to_string()])
+        .output()
+        .expect("petrel runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "a warning, not an error: {stderr}");
+    assert!(
+        stderr.contains("warning: ")
+            && stderr.contains("m/params/actions[\"reprot_dock\"]: the plan has no action `reprot_dock` (nor `reprot_dock_...`); did you mean `report_dock`?"),
+        "{stderr}"
+    );
+}

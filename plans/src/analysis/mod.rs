@@ -235,7 +235,7 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
         r.warnings.push(finding(
             "deadlock",
             format!(
-                "the plan can get stuck in a marking that is neither goal nor fail: {}",
+                "the plan can get stuck in a marking that is neither goal nor fail: {}; no transition has the tokens it needs there: check that each join waits only for branches that all end, and give each place a way on (`petrel plan simulate` shows how it gets there)",
                 show_marking(plan, ex.markings.get(id as u32))
             ),
         ));
@@ -251,8 +251,10 @@ fn behaviour(plan: &Plan, max_states: usize, r: &mut CheckReport) {
     if !r.complete {
         return;
     }
+    // A rule that never applies leaves all its transitions dead: say it once.
+    let mut told = std::collections::HashSet::new();
     for ti in 0..plan.transitions().len() {
-        if !ex.fired[ti] {
+        if !ex.fired[ti] && plan.origin(ti).is_none_or(|o| told.insert(o)) {
             r.warnings.push(finding(
                 "dead-transition",
                 dead_transition(plan, &ex.fired, ti),

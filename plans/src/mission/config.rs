@@ -297,41 +297,7 @@ pub fn max_param(b: &ActionBinding) -> usize {
     set.max(text(&b.finished)).max(text(&b.failed))
 }
 
-/// A value written as in a config file: structs as `(x: 1.0, y: 2.0)`, lists as `[..]`, so
-/// that messages show the form a user writes, never a type's name in the code.
-pub fn config_form(v: &ron::Value) -> String {
-    match v {
-        ron::Value::Map(m) if m.keys().all(|k| matches!(k, ron::Value::String(_))) => {
-            let fields: Vec<String> = m
-                .iter()
-                .map(|(k, v)| match k {
-                    ron::Value::String(k) => format!("{k}: {}", config_form(v)),
-                    _ => unreachable!("keys checked above"),
-                })
-                .collect();
-            format!("({})", fields.join(", "))
-        }
-        ron::Value::Seq(xs) if xs.len() > 4 => {
-            let head: Vec<String> = xs.iter().take(3).map(config_form).collect();
-            format!("[{}, ...]", head.join(", "))
-        }
-        ron::Value::Seq(xs) => format!(
-            "[{}]",
-            xs.iter().map(config_form).collect::<Vec<_>>().join(", ")
-        ),
-        ron::Value::Number(n) => {
-            let x = n.into_f64();
-            if x.fract() == 0.0
-                && matches!(n, ron::value::Number::F32(_) | ron::value::Number::F64(_))
-            {
-                format!("{x:.1}")
-            } else {
-                x.to_string()
-            }
-        }
-        other => ron::to_string(other).unwrap_or_default(),
-    }
-}
+pub use petrel_actors::config_form;
 
 #[cfg(test)]
 mod tests {

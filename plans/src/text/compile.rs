@@ -265,10 +265,7 @@ impl Net<'_> {
             None => format!("{name}.fail"),
             Some(c) => format!("{name}.interrupt [{c}]"),
         };
-        let t = self.trans(&label, &[exec], &[cur]);
-        self.sources
-            .origins
-            .insert(t, format!("the rule at {} for `{name}`", rule.origin));
+        let first = self.trans(&label, &[exec], &[cur]);
         for r in &rule.recovery {
             cur = self.action(cur, r).1;
         }
@@ -286,7 +283,13 @@ impl Net<'_> {
                 }
             },
         };
-        self.trans(" ", &[cur], &[target]);
+        let last = self.trans(" ", &[cur], &[target]);
+        // Every transition of the recovery is the rule's, for messages.
+        for t in first..=last {
+            self.sources
+                .origins
+                .insert(t, format!("the rule at {} for `{name}`", rule.origin));
+        }
     }
 }
 

@@ -353,13 +353,25 @@ impl Registry {
     ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         let ti = self.entries[&key].decl.type_info;
-        let value = ti
-            .from_ron(value)
-            .map_err(|reason| BlackboardError::BadValue {
-                key: key.clone(),
-                expected: ti.name(),
-                reason,
-            })?;
+        let value = match ti.from_ron(value.clone()) {
+            Ok(v) => v,
+            Err(reason) => {
+                // Say what a value looks like, from the property's current one.
+                let example = self
+                    .get(&key)
+                    .ok()
+                    .and_then(|(_, v)| ti.to_dynamic(&v).ok());
+                let reason = match example {
+                    Some(example) => crate::value::config_value_error(&reason, &example, &value),
+                    None => reason,
+                };
+                return Err(BlackboardError::BadValue {
+                    key: key.clone(),
+                    expected: ti.name(),
+                    reason,
+                });
+            }
+        };
         self.set(&key, ti, value)
     }
 
