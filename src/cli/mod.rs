@@ -248,7 +248,8 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
     }
 }
 
-/// Loads a config with its overlays, and adds the `contexts` module its `contexts:` field asks for.
+/// Loads a config with its overlays, and adds the `contexts` module its `contexts:` field asks for
+/// (on the clock of the agent's mission, when its `in/clock` is linked).
 pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile, ConfigErrors> {
     let mut file = ConfigFile::load(config)?;
     for overlay in overlays {
@@ -262,10 +263,20 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
             .iter()
             .any(|m| m.name == CONTEXTS_MODULE);
         if !exists {
+            // Contexts run on the same clock as the agent's mission (`in/clock`), if it has one.
+            let clock = file
+                .config
+                .modules
+                .iter()
+                .filter(|m| m.type_name == "mission.pnp")
+                .find_map(|m| m.links.get("in/clock").cloned());
             file.config.modules.push(ModuleConfig {
                 name: CONTEXTS_MODULE.into(),
                 type_name: "context.manager".into(),
                 values: [("params/rules".to_string(), ron::Value::String(rules))].into(),
+                links: clock
+                    .map(|c| [("in/clock".to_string(), c)].into())
+                    .unwrap_or_default(),
                 ..Default::default()
             });
         }

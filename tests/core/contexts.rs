@@ -195,3 +195,30 @@ async fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active(
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_linked_clock_drives_held_in_context_rules() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(
+        &rules,
+        r#"Contexts(contexts: [(name: "low", when: "held(quality/out/value < 0.3, 5s)")])"#,
+    )
+    .unwrap();
+    // `clk` counts 100 per wall second: as the clock, 5 s of it pass in 50 ms.
+    let config = agent_with_rules(&rules).replace(
+        r#"(name: "contexts", type: "context.manager","#,
+        r#"(name: "clk", type: "demo.counter", values: {"params/period_ms": 10}),
+            (name: "contexts", type: "context.manager", links: {"in/clock": "clk/out/value"},"#,
+    );
+    let agent = start(&config).await;
+    let bb = agent.blackboard().clone();
+    bb.set("quality/in/value", 0.1).await.unwrap();
+    advance(200).await;
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "low",
+        "5 clock seconds held within 200 ms of wall time"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

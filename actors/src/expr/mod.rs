@@ -25,6 +25,7 @@
 //! alone may change a result.
 
 mod check;
+mod clock;
 mod engine;
 mod eval;
 mod lexer;
@@ -41,6 +42,7 @@ mod value;
 
 use std::fmt;
 
+pub use clock::Clock;
 pub use engine::{ExprId, ExprSet, PropId};
 pub use never::never_true;
 pub use parse::{parse, Ast, AstKind, BinOp, Func};

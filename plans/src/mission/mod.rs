@@ -40,7 +40,6 @@
 
 mod bind;
 mod builtin;
-mod clock;
 mod config;
 mod env;
 mod memory;

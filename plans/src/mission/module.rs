@@ -4,7 +4,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use petrel_actors::expr::ExprId;
+use petrel_actors::expr::{Clock, ExprId};
 use petrel_actors::{
     Blackboard, BlackboardError, Context, FilePath, Input, Module, Output, Param, Ports, Schedule,
     State,
@@ -13,7 +13,6 @@ use tokio::sync::watch;
 use tokio::time::Instant;
 
 use super::bind::{bind, BindingProblem, Bound, Params};
-use super::clock::Clock;
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
 use super::env::MissionEnv;
 use super::memory::MissionMemory;
@@ -123,12 +122,12 @@ impl Module for Mission {
             return Ok(());
         }
         let mut fired = 0;
-        let secs = run.clock.secs(ctx.now());
+        let (now, secs) = (run.clock.now(ctx.now()), run.clock.secs(ctx.now()));
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
         for round in 1.. {
-            let report = run.round(secs, &self.flags.get());
+            let report = run.round(now, secs, &self.flags.get());
             fired += report.fired.len();
             if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
                 break;
@@ -204,8 +203,7 @@ const MAX_ROUNDS: usize = 64;
 impl Run {
     /// One plan step at clock time `secs`: bring expressions up to date with changed
     /// properties, then step.
-    fn round(&mut self, secs: f64, flags: &Flags) -> crate::exec::StepReport {
-        let now = Clock::instant(secs);
+    fn round(&mut self, now: Instant, secs: f64, flags: &Flags) -> crate::exec::StepReport {
         let wall = self.clock.is_wall();
         for (id, h, seen) in &mut self.bound.watched {
             // A lock-free version check first: most rounds change few properties.
@@ -325,11 +323,7 @@ impl Mission {
         let (plan, bound) = prepare(ctx.blackboard(), ctx.module(), &setup)
             .await
             .map_err(|problems| anyhow::anyhow!("{}", Problems(&problems, &setup.plan)))?;
-        let clock_path = format!("{}/in/clock", ctx.module());
-        let clock = match ctx.blackboard().link_of(&clock_path).await {
-            Ok(Some(_)) => Clock::Property(ctx.blackboard().any_handle(&clock_path).await?),
-            _ => Clock::Wall,
-        };
+        let clock = Clock::of_module(ctx.blackboard(), ctx.module()).await;
         if !bound.defaults.is_empty() {
             tracing::info!(atoms = ?bound.defaults, "conditions read from in/conditions");
         }
