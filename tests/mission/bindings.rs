@@ -185,3 +185,40 @@ async fn wrong_arity_and_wrong_place_values_are_refused_naming_the_plan_line() {
         "no type names from the code: {err}"
     );
 }
+
+#[tokio::test(start_paused = true)]
+async fn expressions_read_the_latest_item_of_a_queue() {
+    // The producer pushes 0, 1, 2... every 10 ms; `a` ends when the latest item reaches 20,
+    // read from the queue itself and through a consumer's linked queue input.
+    let plans = Plans::new(&[("q.plan", "a; b")]);
+    let config = agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/actions": {{
+            "a": (finished: "producer/out/items >= 20"),
+            "b": (finished: "consumer/in/items >= 30"),
+        }}"#,
+        plans.path("q.plan")
+    ))
+    .replace(
+        r#"(name: "m", type: "mission.pnp""#,
+        r#"(name: "producer", type: "demo.producer", values: {"params/period_ms": 10}),
+           (name: "consumer", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+           (name: "m", type: "mission.pnp""#,
+    );
+    let agent = start(&config).await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 0, "{}", exit.reason);
+    let memory = agent
+        .blackboard()
+        .get::<petrel::plans::mission::MissionMemory>("m/state/memory")
+        .await
+        .unwrap();
+    assert!(
+        (memory.actions["a"].time_s - 0.2).abs() < 0.015,
+        "{memory:?}"
+    );
+    assert!(
+        (memory.actions["b"].time_s - 0.1).abs() < 0.015,
+        "{memory:?}"
+    );
+    stop(agent).await;
+}

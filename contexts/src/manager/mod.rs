@@ -49,7 +49,7 @@ impl Schema for HashMap<Arc<str>, AnyHandle> {
 
 impl Schema for Registry {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
-        self.get(path).ok()
+        self.get_or_latest(path).ok()
     }
 }
 

@@ -419,6 +419,12 @@ impl Registry {
         }
     }
 
+    /// Like [`get`](Registry::get), and for a queue its latest item (what expressions read).
+    pub fn get_or_latest(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
+        let ep = self.endpoint(address)?;
+        Ok((ep.type_info(), ep.value()))
+    }
+
     /// The current value of a property (of its link target, if linked).
     pub fn get(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
         let key = self.key_of(address)?;
@@ -431,9 +437,24 @@ impl Registry {
         }
     }
 
-    /// The endpoint of a value property.
+    /// The endpoint of a value property; for a queue (output, or input read through its
+    /// link), its latest item as a value (see `QueueCore::latest`).
     pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
         let key = self.key_of(address)?;
+        let queue = match &self.entries[&key].handle {
+            Handle::QueueOut(core) => Some(core.clone()),
+            Handle::QueueIn(reader) => Some(reader.source()),
+            _ => None,
+        };
+        if let Some(core) = queue {
+            return core
+                .latest(crate::types::sample_of(core.type_info))
+                .ok_or_else(|| BlackboardError::BadValue {
+                    key: key.clone(),
+                    expected: core.type_info.name(),
+                    reason: "this queue has no item yet and its item type has no known default: its latest item cannot be read as a value until one is pushed".into(),
+                });
+        }
         match &self.entries[&key].handle {
             Handle::Value(ep) => Ok(ep.clone()),
             _ => Err(BlackboardError::NotSettable {
