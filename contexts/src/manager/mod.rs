@@ -256,7 +256,8 @@ impl ContextManager {
         let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
         let mut handles = HashMap::new();
         for address in mentioned(&loaded) {
-            if let Ok(handle) = ctx.blackboard().any_handle(&address).await {
+            // A queue's latest item too, for expressions such as `min(scan/out/ranges) < 0.6`.
+            if let Ok(handle) = ctx.blackboard().expr_handle(&address).await {
                 handles.insert(Arc::from(address), handle);
             }
         }

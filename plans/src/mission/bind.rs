@@ -123,6 +123,17 @@ impl Binder<'_> {
             .ok_or_else(|| format!("unknown property `{path}`"))
     }
 
+    /// A property an expression reads: a value, or a queue's latest item.
+    async fn read_handle(&mut self, path: &str) -> Result<AnyHandle, String> {
+        if self.handle(path).await.is_err() {
+            let h = self.bb.expr_handle(path).await.ok();
+            self.handles.insert(path.to_string(), h);
+        }
+        self.handles[path]
+            .clone()
+            .ok_or_else(|| format!("unknown property `{path}`"))
+    }
+
     /// Checks boolean expression `src`, reporting errors as `what: line:col: message`, located
     /// at `needle`.
     async fn expr(&mut self, src: &str, what: &str, needle: &str) -> Option<ExprId> {
@@ -136,7 +147,7 @@ impl Binder<'_> {
         let mut env = TypeEnv::new();
         for p in properties(&ast) {
             // An unknown property is left out: the checker reports it with its position.
-            if let Ok(h) = self.handle(&p).await {
+            if let Ok(h) = self.read_handle(&p).await {
                 env.insert_property(&p, h.type_info(), &h.value());
             }
         }

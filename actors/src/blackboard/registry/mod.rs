@@ -421,7 +421,7 @@ impl Registry {
 
     /// Like [`get`](Registry::get), and for a queue its latest item (what expressions read).
     pub fn get_or_latest(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
-        let ep = self.endpoint(address)?;
+        let ep = self.endpoint_or_latest(address)?;
         Ok((ep.type_info(), ep.value()))
     }
 
@@ -437,9 +437,24 @@ impl Registry {
         }
     }
 
-    /// The endpoint of a value property; for a queue (output, or input read through its
-    /// link), its latest item as a value (see `QueueCore::latest`).
+    /// The endpoint of a value property.
     pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
+        let key = self.key_of(address)?;
+        match &self.entries[&key].handle {
+            Handle::Value(ep) => Ok(ep.clone()),
+            _ => Err(BlackboardError::NotSettable {
+                kind: self.entries[&key].decl.kind,
+                key,
+            }),
+        }
+    }
+
+    /// Like [`endpoint`](Registry::endpoint), and for a queue (output, or input read through
+    /// its link) its latest item as a value (see `QueueCore::latest`): what expressions read.
+    pub(crate) fn endpoint_or_latest(
+        &self,
+        address: &str,
+    ) -> Result<Arc<Endpoint>, BlackboardError> {
         let key = self.key_of(address)?;
         let queue = match &self.entries[&key].handle {
             Handle::QueueOut(core) => Some(core.clone()),
