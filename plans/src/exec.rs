@@ -3,7 +3,9 @@
 //!
 //! One step: (1) nothing if the plan is in its goal or fail state; (2) step
 //! once every executable with a marked execution place (shared by name; a
-//! sub-plan steps its own net); (3) compute the enabled transitions once, on
+//! sub-plan steps its own net); (2b) if a running executable failed where no
+//! output transition of its execution place asks `A.failed`, the plan fails
+//! (nothing else would ever take that token); (3) compute the enabled transitions once, on
 //! the marking after (2); (4) fire them in document order, skipping those an
 //! earlier firing of this step disabled, each firing moving the tokens and
 //! then making its calls in label order. Transitions enabled by this step's

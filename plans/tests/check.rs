@@ -249,3 +249,26 @@ fn a_rule_that_never_applies_is_named_by_its_file_and_line() {
     );
     assert!(!r.to_string().contains("'t"), "no internal ids: {r}");
 }
+
+#[test]
+fn an_action_that_can_never_run_is_named_by_its_line() {
+    let p = compile_text(
+        "a;\nGOTO_LABEL_end;\nLABEL_skipped;\nb;\nLABEL_end;\nc",
+        "j.plan",
+        "j",
+        None,
+    )
+    .unwrap();
+    let r = check(&p);
+    let dead: Vec<&str> = r
+        .warnings
+        .iter()
+        .filter(|w| w.code == "dead-transition")
+        .map(|w| w.message.as_str())
+        .collect();
+    assert_eq!(
+        dead,
+        ["action `b` at j.plan:4: `b.start` can never fire"],
+        "{r}"
+    );
+}

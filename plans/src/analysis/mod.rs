@@ -308,5 +308,8 @@ fn dead_transition(plan: &Plan, fired: &[bool], ti: usize) -> String {
         },
         None => String::new(),
     };
+    if origin.starts_with("action") {
+        return format!("{origin}: `{}` can never fire{why}", t.label);
+    }
     format!("{origin} never applies (`{}` can never fire){why}", t.label)
 }

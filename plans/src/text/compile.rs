@@ -181,6 +181,7 @@ impl Net<'_> {
             } => {
                 self.written(name, *at);
                 let (exec, after) = self.action(cur, name);
+                self.own_last(2, name, *at);
                 self.occurrence(name, cur, exec, after, rules);
                 Some(after)
             }
@@ -194,6 +195,7 @@ impl Net<'_> {
                 let (pa, pw) = (self.place(""), self.place(""));
                 self.trans("[]", &[cur], &[pa, pw]);
                 let (exec, end_a) = self.action(pa, name);
+                self.own_last(2, name, *at);
                 self.occurrence(name, pa, exec, end_a, rules);
                 let wait = format!("wait_{secs}");
                 let (wexec, end_w) = self.action(pw, &wait);
@@ -242,6 +244,16 @@ impl Net<'_> {
             .action_lines
             .entry(name.to_string())
             .or_insert(line);
+    }
+
+    /// Marks the last `n` transitions made as action `name`'s (written at byte `at`).
+    fn own_last(&mut self, n: usize, name: &str, at: usize) {
+        let (line, _) = super::line_col(self.src, at);
+        let origin = format!("action `{name}` at {}:{line}", self.file);
+        let len = self.raw.transitions.len();
+        for t in len.saturating_sub(n)..len {
+            self.sources.origins.insert(t, origin.clone());
+        }
     }
 
     fn fail_place(&mut self) -> usize {
