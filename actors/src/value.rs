@@ -159,10 +159,34 @@ pub fn config_form(v: &ron::Value) -> String {
     }
 }
 
+/// RON text as a person writes it in a config: a space after each `,` and `:` outside strings
+/// (`(x:1.0,y:2.0)` becomes `(x: 1.0, y: 2.0)`), so messages show values in config syntax
+/// with fields in their declared order.
+pub fn spaced_ron(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + text.len() / 4);
+    let (mut in_string, mut escaped) = (false, false);
+    for c in text.chars() {
+        out.push(c);
+        if in_string {
+            match c {
+                _ if escaped => escaped = false,
+                '\\' => escaped = true,
+                '"' => in_string = false,
+                _ => {}
+            }
+        } else if c == '"' {
+            in_string = true;
+        } else if c == ',' || c == ':' {
+            out.push(' ');
+        }
+    }
+    out
+}
+
 /// A conversion error from serde in the terms of a config file: what was expected, as a value
 /// written like `example` (the property's current value), never a type's name in the code.
-pub fn config_value_error(reason: &str, example: &ron::Value, given: &ron::Value) -> String {
-    let form = config_form(example);
+pub fn config_value_error(reason: &str, example: &str, given: &ron::Value) -> String {
+    let form = example;
     let words = [
         ("Expected f64", "expected a number"),
         ("Expected f32", "expected a number"),
@@ -171,6 +195,7 @@ pub fn config_value_error(reason: &str, example: &ron::Value, given: &ron::Value
         ("Expected u32", "expected a non-negative integer"),
         ("Expected bool", "expected true or false"),
         ("Expected String", "expected a string"),
+        ("Unexpected missing field named", "missing field"),
     ];
     if reason.contains("Expected struct") || reason.contains("Repr") {
         return format!("expected a value like {form}, found {}", config_form(given));
@@ -198,6 +223,31 @@ fn shorten(mut s: String) -> String {
 mod tests {
     use super::*;
     use crate::types::Pose2;
+
+    #[test]
+    fn value_errors_speak_config_syntax() {
+        assert_eq!(
+            spaced_ron(r#"(x:1.0,y:2.0,name:"a,b:c")"#),
+            r#"(x: 1.0, y: 2.0, name: "a,b:c")"#
+        );
+        let given = ron::Value::String("big".into());
+        assert_eq!(
+            config_value_error(
+                "Expected struct PointRepr but found a string",
+                "(x: 0.0, y: 0.0)",
+                &given
+            ),
+            "expected a value like (x: 0.0, y: 0.0), found \"big\""
+        );
+        assert_eq!(
+            config_value_error(
+                "Expected f64 but found the string \"a\" instead",
+                "1.0",
+                &given
+            ),
+            "expected a number but found the string \"a\" instead; a value looks like 1.0"
+        );
+    }
 
     #[test]
     fn converts_config_values_and_reports_type_errors() {

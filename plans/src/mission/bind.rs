@@ -240,10 +240,10 @@ impl Binder<'_> {
             match h.type_info().from_ron(given.clone()) {
                 Ok(v) => a.set.push((h, v)),
                 Err(_) => {
-                    let expected = h
-                        .type_info()
-                        .to_dynamic(&h.value())
-                        .map_or_else(|_| "a value of its type".to_string(), |v| config_form(&v));
+                    let expected = h.type_info().to_ron(&h.value()).map_or_else(
+                        |_| "a value of its type".to_string(),
+                        |v| petrel_actors::spaced_ron(&v),
+                    );
                     let message = format!(
                         "{what}.set[\"{path}\"] (action `{full}`{}): `{path}` takes a value like {expected}, found {}{}",
                         self.at(full),

@@ -192,7 +192,15 @@ pub fn substitute(text: &str, params: &[String], places: &Places) -> Result<Stri
             (Some(value), None) => out.push_str(&expr_literal(value).ok_or_else(|| {
                 format!("`${n}` is place `{param}`, a structured value: name one of its fields, as `${n}.x`")
             })?),
-            (None, _) => out.push_str(param),
+            (None, Some(len)) => {
+                let known: Vec<&str> = places.0.keys().map(String::as_str).collect();
+                return Err(format!(
+                    "`${n}{}`: `{param}` is not a place in params/places (places: {})",
+                    &rest[..len],
+                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                ));
+            }
+            (None, None) => out.push_str(param),
         }
     }
     out.push_str(rest);
@@ -245,9 +253,10 @@ pub fn substitute_value(v: &ron::Value, params: &[String], places: &Places) -> r
                 }
             }
             let whole = if field.is_empty() { whole } else { None };
+            // A bare word (`kitchen`) reads as RON's unit: keep it as the text it is.
             match whole.and_then(|p| ron::from_str::<ron::Value>(p).ok()) {
+                Some(ron::Value::Unit) | None => ron::Value::String(replace_params(s, params)),
                 Some(parsed) => parsed,
-                None => ron::Value::String(replace_params(s, params)),
             }
         }
         ron::Value::Seq(xs) => ron::Value::Seq(
@@ -356,6 +365,17 @@ mod tests {
         assert!(whole.contains("`$1.x`"), "{whole}");
         let missing = substitute("$1.z > 0", &p, &places).unwrap_err();
         assert!(missing.contains("no field `z`"), "{missing}");
+        let other = vec!["garage".to_string()];
+        let not_a_place = substitute("$1.x > 0", &other, &places).unwrap_err();
+        assert_eq!(
+            not_a_place,
+            "`$1.x`: `garage` is not a place in params/places (places: kitchen)"
+        );
+        assert_eq!(
+            substitute_value(&ron::Value::String("$1".into()), &other, &places),
+            ron::Value::String("garage".into()),
+            "a bare word stays a word"
+        );
     }
 
     #[test]

@@ -357,12 +357,13 @@ impl Registry {
             Ok(v) => v,
             Err(reason) => {
                 // Say what a value looks like, from the property's current one.
-                let example = self
-                    .get(&key)
-                    .ok()
-                    .and_then(|(_, v)| ti.to_dynamic(&v).ok());
+                let example = self.get(&key).ok().and_then(|(_, v)| ti.to_ron(&v).ok());
                 let reason = match example {
-                    Some(example) => crate::value::config_value_error(&reason, &example, &value),
+                    Some(example) => crate::value::config_value_error(
+                        &reason,
+                        &crate::value::spaced_ron(&example),
+                        &value,
+                    ),
                     None => reason,
                 };
                 return Err(BlackboardError::BadValue {
