@@ -1,5 +1,8 @@
-//! `queue_fanout`: one producer module pushes images into a queue read by 8 consumer modules;
-//! 1 KiB vs 1 MiB payloads. Items are shared, so the payload size must not matter.
+//! `queue_fanout`: one producer module pushes fresh images into a queue read by 8 consumer
+//! modules; 1 KiB vs 1 MiB payloads. Items are shared, so the payload size must not matter
+//! (`petrel_1m` / `petrel_1k` ≈ 1). The `copy_*` functions run the same agent with consumers
+//! that copy each item's pixels, as a copying transport would: their 1 MiB / 1 KiB ratio is
+//! what a copy in the queue would show.
 
 mod common;
 
@@ -11,11 +14,11 @@ const READERS: usize = 8;
 /// Items pushed per wake-up of the producer.
 const CHUNK: i64 = 1024;
 
-fn config(bytes: usize) -> String {
+fn config(bytes: usize, copy: bool) -> String {
     let sinks: String = (0..READERS)
         .map(|i| {
             format!(
-                r#"(name: "sink{i}", type: "bench.qsink", links: {{"in/items": "src/out/items"}}),"#
+                r#"(name: "sink{i}", type: "bench.qsink", values: {{"params/copy": {copy}}}, links: {{"in/items": "src/out/items"}}),"#
             )
         })
         .collect();
@@ -27,9 +30,14 @@ fn config(bytes: usize) -> String {
 fn bench(c: &mut Criterion) {
     let rt = common::runtime();
     let mut group = c.benchmark_group("queue_fanout");
-    for (name, bytes) in [("petrel_1k", 1 << 10), ("petrel_1m", 1 << 20)] {
+    for (name, bytes, copy) in [
+        ("petrel_1k", 1 << 10, false),
+        ("petrel_1m", 1 << 20, false),
+        ("copy_1k", 1 << 10, true),
+        ("copy_1m", 1 << 20, true),
+    ] {
         let (agent, go, counts) = rt.block_on(async {
-            let agent = common::start(&config(bytes)).await;
+            let agent = common::start(&config(bytes, copy)).await;
             let bb = agent.blackboard();
             let go = bb.handle::<i64>("src/in/go").await.unwrap();
             let mut counts = Vec::new();

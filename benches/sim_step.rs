@@ -47,13 +47,38 @@ fn sim_step(c: &mut Criterion) {
         b.iter(|| black_box(world.step(black_box(0.01)).unwrap().len()))
     });
 
+    // The scans `step_400` casts: the same robot's 181 rays, from the poses it passes through
+    // while circling (recorded without a laser, replayed in order), relative to its heading.
+    let mut recorder = circling(RobotConfig {
+        laser: None,
+        ..RobotConfig::default()
+    });
+    let poses: Vec<Pose2> = (0..1000)
+        .map(|_| {
+            recorder.step(0.01).unwrap();
+            recorder.pose(0).expect("the only robot, id 0")
+        })
+        .collect();
+    let laser = RobotConfig::default()
+        .laser
+        .expect("the default robot has a laser");
     let grid = warehouse();
+    let mut at = 0;
     g.bench_function("raycast_only", |b| {
         b.iter(|| {
+            let pose = poses[at % poses.len()];
+            at += 1;
             let mut sum = 0.0;
-            for i in 0..181 {
-                let a = -std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * i as f64 / 180.0;
-                sum += cast_ray(&grid, black_box(9.75), black_box(8.8), a, 8.0);
+            for i in 0..laser.rays {
+                let a =
+                    pose.theta() - laser.fov / 2.0 + laser.fov * i as f64 / (laser.rays - 1) as f64;
+                sum += cast_ray(
+                    &grid,
+                    black_box(pose.x()),
+                    black_box(pose.y()),
+                    a,
+                    laser.range_max,
+                );
             }
             black_box(sum)
         })

@@ -217,33 +217,48 @@ fn check_validates_context_rules_with_the_config() {
 #[cfg(unix)]
 struct Running {
     child: std::process::Child,
-    log: std::io::Lines<std::io::BufReader<std::process::ChildStderr>>,
+    /// Log lines, read on their own thread so that waiting for one has a deadline.
+    log: std::sync::mpsc::Receiver<String>,
 }
 
 #[cfg(unix)]
 impl Running {
-    fn start(config: &std::path::Path) -> Self {
+    /// Starts `petrel run CONFIG`, reachable by tools through the discovery records in `records`.
+    fn start(config: &std::path::Path, records: &std::path::Path) -> Self {
         use std::io::BufRead;
         let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
             .args(["run", config.to_str().unwrap(), "--for", "120s"])
             .env("RUST_LOG", "info")
+            .env("PETREL_RUNTIME_DIR", records)
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::piped())
             .spawn()
             .expect("petrel runs");
-        let log = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+        let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+        let (send, log) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in stderr.lines().map_while(Result::ok) {
+                if send.send(line).is_err() {
+                    break;
+                }
+            }
+        });
         Running { child, log }
     }
 
-    /// Reads the log up to the first line containing `needle` and returns it.
-    fn wait_for(&mut self, needle: &str) -> String {
-        for line in self.log.by_ref() {
-            let line = line.expect("the log is text");
-            if line.contains(needle) {
-                return line;
+    /// Reads the log up to the first line containing `needle` and returns it with the lines
+    /// before it; fails if none comes within the process deadline.
+    fn wait_for(&mut self, needle: &str) -> (String, Vec<String>) {
+        let deadline = std::time::Instant::now() + bounded::PROCESS_DEADLINE;
+        let mut before = Vec::new();
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            match self.log.recv_timeout(left) {
+                Ok(line) if line.contains(needle) => return (line, before),
+                Ok(line) => before.push(line),
+                Err(e) => panic!("no `{needle}` in petrel's log ({e}); before: {before:#?}"),
             }
         }
-        panic!("petrel's log ended without `{needle}`");
     }
 
     fn signal(&self, name: &str) {
@@ -252,6 +267,17 @@ impl Running {
             .status()
             .expect("kill runs");
         assert!(sent.success());
+    }
+}
+
+#[cfg(unix)]
+impl Drop for Running {
+    /// A failed test leaves no process behind.
+    fn drop(&mut self) {
+        if self.child.try_wait().ok().flatten().is_none() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
     }
 }
 
@@ -266,19 +292,25 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
         r#"Agent(name: "r1", contexts: "rules.ron", modules: [(name: "s", type: "demo.signal"), (name: "c", type: "demo.camera")])"#,
     )
     .unwrap();
-    let fast = |threshold: &str| {
+    // Always true (the signal stays within ±1), so a context is active from the start.
+    let rule = |name: &str, when: &str, deblur: bool| {
         format!(
-            "Contexts(contexts: [\n  (name: \"fast\", when: \"s/out/value > {threshold}\", set: {{\"c/params/deblur\": \"true\"}}),\n])"
+            "Contexts(contexts: [\n  (name: \"{name}\", when: \"{when}\", set: {{\"c/params/deblur\": \"{deblur}\"}}),\n])"
         )
     };
-    std::fs::write(&rules, fast("0.5")).unwrap();
-    let mut petrel = Running::start(&config);
+    std::fs::write(&rules, rule("fast", "s/out/value > -1000", true)).unwrap();
+    let mut petrel = Running::start(&config, dir.path());
     petrel.wait_for("context rules loaded");
+    let (set, _) = petrel.wait_for("context sets");
+    assert!(
+        set.contains("context=fast") && set.contains("new=true"),
+        "{set}"
+    );
 
-    std::fs::write(&rules, fast("")).unwrap();
+    std::fs::write(&rules, rule("fast", "s/out/value > ", true)).unwrap();
     petrel.signal("HUP");
     petrel.wait_for("context rules not reloaded; the running rules stay");
-    let error = petrel.wait_for("error:");
+    let (error, _) = petrel.wait_for("error:");
     assert!(
         error.contains(&format!(
             "{}:2:39: error: context `fast`: in `s/out/value > `: expected a value",
@@ -287,9 +319,30 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
         "{error}"
     );
 
-    std::fs::write(&rules, fast("0.9")).unwrap();
+    // The running rules still act: `fast` is still the active context.
+    let active = || {
+        let out = bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(["get", "petrel://r1/contexts/out/active"])
+                .env("PETREL_RUNTIME_DIR", dir.path()),
+        );
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        text(&out.stdout)
+    };
+    assert!(active().contains("fast"), "{}", active());
+
+    // The new rules are in force: `fast` ends (its setting restored), `slow` is active.
+    std::fs::write(&rules, rule("slow", "s/out/value > -1000", false)).unwrap();
     petrel.signal("HUP");
-    petrel.wait_for("context rules reloaded");
+    let (_, before) = petrel.wait_for("context activated context=slow");
+    for needle in ["context rules reloaded", "context deactivated context=fast"] {
+        assert!(
+            before.iter().any(|l| l.contains(needle)),
+            "{needle}: {before:#?}"
+        );
+    }
+    let now = active();
+    assert!(now.contains("slow") && !now.contains("fast"), "{now}");
 
     petrel.signal("INT");
     petrel.wait_for("stopping: interrupted");
@@ -380,11 +433,28 @@ fn check_reports_a_missing_file_where_the_config_names_it() {
 
 #[test]
 fn a_mission_runs_to_its_goal_on_one_worker_thread() {
-    let out = petrel(&["run", "configs/mission-demo.ron", "--workers", "1"]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    let refused = petrel(&["run", "configs/mission-demo.ron", "--workers", "0"]);
-    assert_eq!(refused.status.code(), Some(2));
-    assert!(text(&refused.stderr).contains("'--workers <WORKERS>'"));
+    let out = bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                "configs/mission-demo.ron",
+                "--workers",
+                "1",
+                "--no-remote",
+            ])
+            .env("RUST_LOG", "petrel=info"),
+    );
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("modules run on 1 worker thread(s)"),
+        "the worker count in effect: {err}"
+    );
+    for bad in ["0", "257", "3000"] {
+        let refused = petrel(&["run", "configs/mission-demo.ron", "--workers", bad]);
+        assert_eq!(refused.status.code(), Some(2), "--workers {bad}");
+        assert!(text(&refused.stderr).contains("'--workers <WORKERS>'"));
+    }
 }
 
 #[test]
@@ -408,5 +478,227 @@ fn plan_check_stops_at_max_states_and_says_how_to_go_further() {
         !text(&full.stdout).contains("incomplete"),
         "{}",
         text(&full.stdout)
+    );
+}
+
+#[test]
+fn graph_draws_modules_and_links_as_dot() {
+    let out = petrel(&["graph", "configs/team/filter.ron"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let dot = text(&out.stdout);
+    assert!(dot.starts_with("digraph \"filter\" {"), "{dot}");
+    // One box per module, one dashed box per module of another agent that a link reads.
+    assert!(dot.contains("[ label = \"scale\\ndemo.scale\"]"), "{dot}");
+    assert!(
+        dot.contains("[ label = \"sensor/producer\", style = dashed]"),
+        "{dot}"
+    );
+    // A remote queue link is bold (a queue) and dashed (remote).
+    assert!(
+        dot.contains("label = \"out/items → in/items\", style = \"bold,dashed\""),
+        "{dot}"
+    );
+    assert_eq!(dot.matches(" -> ").count(), 2, "{dot}");
+
+    let local = text(&petrel(&["graph", "configs/pipeline.ron"]).stdout);
+    assert_eq!(local.matches(" -> ").count(), 3, "3 links: {local}");
+    assert!(!local.contains("dashed"), "no remote link: {local}");
+
+    let out = petrel(&["graph", "configs/does-not-exist.ron"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("does-not-exist.ron"));
+}
+
+#[test]
+fn a_module_panic_is_one_error_event_in_its_span_and_nothing_beside_the_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("panics.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r", modules: [
+    (name: "c", type: "demo.counter", restart: temporary, values: {"params/period_ms": 10}),
+    (name: "chaos", type: "demo.chaos",
+     values: {"params/targets": "c", "params/faults": "panic", "params/mean_interval_ms": 20}),
+])"#,
+    )
+    .unwrap();
+    let out = bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", config.to_str().unwrap(), "--for", "3s"])
+            .args(["--log-format", "json", "--no-remote"])
+            .env("RUST_LOG", "info")
+            .env("RUST_BACKTRACE", "1"),
+    );
+    // `c` is temporary: it stays failed, and the run says so with exit code 1.
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    let lines: Vec<serde_json::Value> = text(&out.stderr)
+        .lines()
+        .map(|l| {
+            serde_json::from_str(l).unwrap_or_else(|e| panic!("not a JSON log line ({e}): {l}"))
+        })
+        .collect();
+    let panics: Vec<&serde_json::Value> = lines
+        .iter()
+        .filter(|l| {
+            l["fields"]["message"]
+                .as_str()
+                .is_some_and(|m| m.starts_with("panicked: "))
+        })
+        .collect();
+    assert_eq!(panics.len(), 1, "one report for one panic: {panics:?}");
+    let panic = panics[0];
+    assert_eq!(panic["level"], "ERROR");
+    assert_eq!(panic["span"]["module"], "c", "{panic}");
+    assert_eq!(
+        panic["fields"]["message"],
+        "panicked: fault injected through control/fault: panic"
+    );
+    let location = panic["fields"]["panic.location"].as_str().unwrap();
+    assert!(location.contains("module_actor"), "{location}");
+    assert!(
+        panic["fields"]["backtrace"]
+            .as_str()
+            .is_some_and(|b| !b.is_empty()),
+        "RUST_BACKTRACE asks for a backtrace field: {panic}"
+    );
+    let failed = lines
+        .iter()
+        .find(|l| l["fields"]["message"] == "module failed")
+        .expect("the supervisor reports the failure");
+    let error = failed["fields"]["error"].as_str().unwrap();
+    assert!(
+        error.starts_with(&format!("panicked at {location}: ")),
+        "the failure names where the panic was: {error}"
+    );
+}
+
+#[test]
+fn a_world_file_that_does_not_parse_is_refused_by_check_and_run_before_anything_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("broken.txt"), "#####\n#R Z#\n#####\n").unwrap();
+    let config = dir.path().join("robot.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r", modules: [
+    (name: "robot", type: "sim.world", values: {"params/world": "broken.txt"}),
+])"#,
+    )
+    .unwrap();
+    for command in ["check", "run"] {
+        let out = petrel(&[command, config.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{command}");
+        let err = text(&out.stderr);
+        let at = format!("{}:2:", config.display());
+        assert!(
+            err.starts_with(&at),
+            "{command}: located in the config: {err}"
+        );
+        assert!(
+            err.contains("`params/world`: ")
+                && err.contains("broken.txt:2: unexpected character 'Z'"),
+            "{command}: names the world file's line: {err}"
+        );
+        assert!(
+            err.ends_with("1 error found; nothing was started\n"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn a_module_that_wakes_itself_starves_neither_the_others_nor_the_stop_on_one_worker() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("self.ron");
+    // `s` reads its own output: every step wakes it again, forever.
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r", modules: [
+    (name: "s", type: "demo.scale", links: {"in/value": "s/out/value"}, values: {"params/factor": 1.0001}),
+    (name: "c", type: "demo.counter", values: {"params/period_ms": 100}),
+])"#,
+    )
+    .unwrap();
+    let out = petrel(&[
+        "run",
+        config.to_str().unwrap(),
+        "--for",
+        "1s",
+        "--workers",
+        "1",
+        "--no-remote",
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    let steps = |module: &str| -> u64 {
+        let line = summary
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(module))
+            .unwrap_or_else(|| panic!("no summary line for {module}: {summary}"));
+        line.split_whitespace().nth(3).unwrap().parse().unwrap()
+    };
+    assert!(steps("s") > 1000, "the busy module ran: {summary}");
+    assert!(
+        steps("c") >= 1,
+        "the periodic module ran beside it: {summary}"
+    );
+}
+
+/// Runs petrel with its standard output a pipe whose reading end is already closed, so every
+/// write to it fails (as `petrel … | head -1` after `head` has exited).
+fn petrel_into_a_closed_pipe(args: &[&str]) -> Output {
+    use std::os::fd::{FromRawFd, OwnedFd};
+    let mut fds = [0; 2];
+    // SAFETY: `pipe` fills two fresh descriptors; the reading one is closed at once and the
+    // writing one is owned by the `Stdio` handed to the child.
+    let stdout = unsafe {
+        assert_eq!(libc::pipe(fds.as_mut_ptr()), 0, "pipe");
+        libc::close(fds[0]);
+        std::process::Stdio::from(OwnedFd::from_raw_fd(fds[1]))
+    };
+    let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(args)
+        .env("RUST_LOG", "info")
+        .stdin(std::process::Stdio::null())
+        .stdout(stdout)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    bounded::wait_within_deadline(child, &format!("petrel {args:?}"))
+}
+
+#[test]
+fn a_closed_standard_output_ends_tools_quietly_and_a_run_goes_on() {
+    use std::os::unix::process::ExitStatusExt;
+    for args in [
+        &["check", "configs/pipeline.ron"][..],
+        &["plan", "dot", "plans/tests/fixtures/delivery.plan"],
+        &["plan", "check", "plans/tests/fixtures/delivery.plan"],
+        &["graph", "configs/navigate.ron"],
+        &["modules"],
+    ] {
+        let out = petrel_into_a_closed_pipe(args);
+        let err = text(&out.stderr);
+        assert_eq!(
+            out.status.signal(),
+            Some(libc::SIGPIPE),
+            "{args:?} ends by SIGPIPE like other Unix tools: {:?} {err}",
+            out.status
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    // A run keeps going to its end (cleanup, summary attempt) with its printer quiet.
+    let out =
+        petrel_into_a_closed_pipe(&["run", "configs/pipeline.ron", "--for", "1s", "--no-remote"]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert_eq!(
+        err.matches("standard output was closed: nothing more is printed")
+            .count(),
+        1,
+        "said once: {err}"
+    );
+    assert!(
+        !err.contains("panicked") && !err.contains("module failed"),
+        "{err}"
     );
 }

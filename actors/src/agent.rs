@@ -76,6 +76,8 @@ impl Agent {
     /// Checks `config` against `types` and, if it is sound, starts the agent: the blackboard
     /// with every property, value and link in place, then each module in config order.
     pub async fn start(config: &ConfigFile, types: &ModuleRegistry) -> Result<Agent, StartError> {
+        // A module's panic is then one ERROR event in its span, not a print beside the log.
+        crate::panic_report::install();
         let registry = config.build(types)?;
         let events = registry.events_writer();
         let cfg = &config.config;

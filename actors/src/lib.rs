@@ -17,9 +17,11 @@ mod handle;
 mod module;
 mod module_actor;
 mod module_types;
+mod panic_report;
 mod ports;
 mod queue;
 mod snapshot;
+pub mod stdout;
 mod step_clock;
 mod summary;
 pub mod supervision;
@@ -31,13 +33,14 @@ mod value;
 
 pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{
-    AgentListing, Blackboard, BlackboardError, ModuleListing, PropertyListing, Registry,
+    AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph, ModuleListing,
+    PropertyListing, Registry,
 };
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{
     AnyHandle, Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
 };
-pub use module::{Cause, Context, Module, Schedule, Watchable};
+pub use module::{Cause, CheckProblem, Context, Module, Schedule, Unrecoverable, Watchable};
 pub use module_actor::status;
 pub use module_types::{ModuleRegistry, ModuleType};
 pub use ports::{Ports, PropertyDecl, PropertyKind};

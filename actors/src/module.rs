@@ -64,7 +64,18 @@ pub trait Module: Send + Sized + 'static {
     /// when a step calls [`Context::reschedule`].
     fn schedule(&self) -> Schedule;
 
-    /// Prepares the module after config values and links are in place; an error stops it cleanly.
+    /// Checks, before anything runs, what [`init`](Module::init) will read from the configured
+    /// values (a world file that must parse, a range two parameters must respect): `petrel
+    /// check` and `petrel run` call it on an instance declared over the config's values, and
+    /// report each problem at the property it names, in the config file. Must not have side
+    /// effects. The default finds nothing.
+    fn check(&self) -> Vec<CheckProblem> {
+        Vec::new()
+    }
+
+    /// Prepares the module after config values and links are in place; an error stops it
+    /// cleanly. Return an [`Unrecoverable`] error for what a restart cannot fix (a file that
+    /// does not parse): the supervisor then reports it once and does not restart the module.
     fn init(&mut self, _ctx: &mut Context) -> impl Future<Output = anyhow::Result<()>> + Send {
         async { Ok(()) }
     }
@@ -77,6 +88,31 @@ pub trait Module: Send + Sized + 'static {
         async { Ok(()) }
     }
 }
+
+/// A problem [`Module::check`] found in a configured value.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CheckProblem {
+    /// The property it is about (`params/world`), where the config file is pointed at.
+    pub path: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl CheckProblem {
+    /// A problem with the value of `path`.
+    pub fn new(path: &str, message: impl Into<String>) -> Self {
+        CheckProblem {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// An error from [`Module::init`] that a restart cannot fix: the module is reported failed
+/// once and not restarted (restarting would fail the same way, in a loop).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Unrecoverable(pub String);
 
 /// Something a module can wait on: an input, parameter or output (a change of its value),
 /// or a queue reader (new items).

@@ -8,11 +8,19 @@ use std::pin::Pin;
 use ractor::{Actor, ActorCell, ActorRef};
 use tokio::task::JoinHandle;
 
-use crate::module::Module;
+use crate::blackboard::Registry;
+use crate::module::{CheckProblem, Module, Unrecoverable};
 use crate::module_actor::{declare_builtins, ModuleActor, ModuleArgs, RunLoop};
 use crate::ports::{Ports, PropertyDecl};
 
-type SpawnResult = Result<(ActorCell, JoinHandle<()>), String>;
+type SpawnResult = Result<(ActorCell, JoinHandle<()>), SpawnFailure>;
+
+/// Why a module instance could not start.
+pub(crate) struct SpawnFailure {
+    pub reason: String,
+    /// The module said a restart cannot fix it ([`crate::Unrecoverable`]).
+    pub unrecoverable: bool,
+}
 type SpawnFuture = Pin<Box<dyn Future<Output = SpawnResult> + Send>>;
 
 /// A registered module type.
@@ -21,6 +29,7 @@ pub struct ModuleType {
     name: &'static str,
     description: &'static str,
     declare: fn(&str) -> Ports,
+    check: fn(&Registry, &str) -> Vec<CheckProblem>,
     spawn: fn(ModuleArgs, ActorCell) -> SpawnFuture,
 }
 
@@ -36,6 +45,18 @@ impl ModuleType {
                 drop(M::declare(&mut ports));
                 ports
             },
+            check: |registry, name| {
+                let Some(handles) = registry.handles(name) else {
+                    return Vec::new();
+                };
+                let mut ports = Ports::bound(name, handles);
+                declare_builtins(&mut ports);
+                let module = M::declare(&mut ports);
+                if !ports.errors.is_empty() {
+                    return Vec::new(); // the registry reports declaration errors itself
+                }
+                module.check()
+            },
             spawn: |args, supervisor| {
                 Box::pin(async move {
                     // Unnamed: ractor's actor names are process-global, and two agents (or
@@ -44,8 +65,14 @@ impl ModuleType {
                         .await
                         .map(|(actor, join): (ActorRef<RunLoop>, _)| (actor.get_cell(), join))
                         .map_err(|e| match e {
-                            ractor::SpawnErr::StartupFailed(reason) => reason.to_string(),
-                            other => other.to_string(),
+                            ractor::SpawnErr::StartupFailed(reason) => SpawnFailure {
+                                unrecoverable: reason.downcast_ref::<Unrecoverable>().is_some(),
+                                reason: reason.to_string(),
+                            },
+                            other => SpawnFailure {
+                                reason: other.to_string(),
+                                unrecoverable: false,
+                            },
                         })
                 })
             },
@@ -70,6 +97,12 @@ impl ModuleType {
     /// A fresh declaration of an instance called `name`.
     pub(crate) fn declare(&self, name: &str) -> Ports {
         (self.declare)(name)
+    }
+
+    /// What [`Module::check`] finds in the values `registry` holds for instance `name` (nothing
+    /// runs: the instance is declared over those values and asked).
+    pub fn check(&self, registry: &Registry, name: &str) -> Vec<CheckProblem> {
+        (self.check)(registry, name)
     }
 
     pub(crate) fn spawn(&self, args: ModuleArgs, supervisor: ActorCell) -> SpawnFuture {

@@ -38,7 +38,7 @@ pub(crate) fn write(registry: &Registry) -> String {
                 links.push(format!("{path:?}: {}", remote.to_ron()));
                 continue;
             }
-            if let Some(target) = &entry.link {
+            if let Some(target) = registry.link_of(key) {
                 links.push(format!("{path:?}: {target:?}"));
                 continue;
             }

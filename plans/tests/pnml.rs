@@ -88,6 +88,7 @@ fn write_then_read_keeps_the_net() {
             );
             assert!(y.position.is_some());
         }
+        assert_eq!(b.transitions().len(), a.transitions().len(), "{f}");
         for (x, y) in a.transitions().iter().zip(b.transitions()) {
             assert_eq!(
                 (&x.id, &x.label, &x.inputs, &x.outputs, &x.guard),

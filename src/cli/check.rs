@@ -143,6 +143,16 @@ pub(crate) fn check_all(
     let built = file.build(registry)?;
     let (mut errors, missing) = check_files(file, &built);
     let without_missing_files = |module: &str| !missing.iter().any(|m| m == module);
+    // What each module type checks itself (a world file that must parse, ...).
+    for module in built.modules().iter().filter(|m| without_missing_files(m)) {
+        let Some(module_type) = built.module_type(module).and_then(|t| registry.get(t)) else {
+            continue;
+        };
+        for problem in module_type.check(&built, module) {
+            let message = format!("module `{module}`: `{}`: {}", problem.path, problem.message);
+            errors.push(file.error(module, Some(&problem.path), message));
+        }
+    }
     for m in file
         .config
         .modules

@@ -4,6 +4,7 @@
 mod check;
 mod chrome;
 mod follow;
+mod graph;
 mod listing;
 mod logging;
 mod modules;
@@ -53,6 +54,15 @@ enum Command {
         /// The agent configs (RON).
         #[arg(required = true)]
         configs: Vec<PathBuf>,
+        /// Configs or snapshots laid over CONFIG, in order.
+        #[arg(long)]
+        overlay: Vec<PathBuf>,
+    },
+    /// Prints an agent's modules and links as a Graphviz DOT graph (`| dot -Tsvg > g.svg`):
+    /// a box per module, an edge per link; queues bold, links to other agents dashed.
+    Graph {
+        /// The agent config (RON).
+        config: PathBuf,
         /// Configs or snapshots laid over CONFIG, in order.
         #[arg(long)]
         overlay: Vec<PathBuf>,
@@ -179,7 +189,7 @@ pub(crate) struct RunArgs {
     log_format: LogFormat,
     /// Worker threads the modules run on (default: one per core). One keeps a serial chain of
     /// modules on one core, where a hand-over between modules costs no thread wake-up.
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=MAX_WORKERS as i64))]
     workers: Option<u16>,
     /// Do not join the teams the configs name (links to other agents stay `waiting`), and
     /// do not answer tools (`petrel ls|get|set|echo|hz|top|events`).
@@ -191,6 +201,10 @@ pub(crate) struct RunArgs {
     #[arg(long)]
     trace_out: Option<PathBuf>,
 }
+
+/// The most worker threads `--workers` takes (more threads than this only cost memory on any
+/// machine a robot carries).
+const MAX_WORKERS: u16 = 256;
 
 /// How logs are written.
 #[derive(Clone, Copy, ValueEnum)]
@@ -214,9 +228,13 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             };
         }
     };
+    if !matches!(cli.command, Command::Run(_)) {
+        stop_quietly_on_a_closed_pipe();
+    }
     match cli.command {
         Command::Run(args) => run::run(&registry, args),
         Command::Check { configs, overlay } => check::check(&registry, &configs, &overlay),
+        Command::Graph { config, overlay } => graph::graph(&registry, &config, &overlay),
         Command::Modules { command: None } => modules::list(&registry),
         Command::Modules {
             command: Some(ModulesCommand::Describe { type_name }),
@@ -245,6 +263,19 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
         Command::Set { url, value, reach } => {
             remote::property(&reach, &url, remote::Request::Set(value))
         }
+    }
+}
+
+/// Lets a closed standard output (`petrel plan dot x.plan | head -1`) end the command as it
+/// ends other Unix tools, by SIGPIPE (exit status 141 in a shell), instead of a panic in
+/// `println!`. Not for `run`: a run keeps going and stops cleanly (cleanup, snapshot); its
+/// printing goes through `outln!`, which stops printing on a closed pipe.
+fn stop_quietly_on_a_closed_pipe() {
+    // SAFETY: restores the default disposition of one signal before any thread that could
+    // race on it exists; no handler is installed.
+    #[cfg(unix)]
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

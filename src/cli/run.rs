@@ -6,7 +6,7 @@ use std::pin::Pin;
 use std::process::ExitCode;
 use std::task::Poll;
 
-use petrel_actors::{status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
+use petrel_actors::{outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
@@ -63,6 +63,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     // Listen before the agents start, so a SIGHUP sent as soon as the rules are loaded is a
     // reload, not the default "terminate".
     let hangups = Hangups::listen();
+    let workers = tokio::runtime::Handle::current().metrics().num_workers();
+    tracing::info!(workers, "modules run on {workers} worker thread(s)");
     let mut agents = Vec::new();
     let mut teams = Vec::new();
     let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
@@ -108,7 +110,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             .map_err(|e| e.to_string())
             .and_then(|s| std::fs::write(path, s).map_err(|e| e.to_string()))
         {
-            Ok(()) => println!("snapshot written to {}", path.display()),
+            Ok(()) => outln!("snapshot written to {}", path.display()),
             Err(e) => {
                 eprintln!(
                     "error: could not write the snapshot to {}: {e}",
@@ -121,16 +123,17 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     for agent in agents {
         agent.shutdown().await;
     }
-    println!("\n{why}");
+    outln!("\n{why}");
     for summary in &summaries {
-        println!("{summary}");
+        outln!("{summary}");
     }
     let failed = summaries
         .iter()
         .flat_map(|s| &s.modules)
         .any(|m| m.status == status::FAILED);
     if failed {
-        eprintln!("some modules failed: see the summary above and the log");
+        // A log event, so `--log-format json` consumers see it too.
+        tracing::error!("some modules failed: see the summary and the log");
         // A more specific reason (the supervisor gave up, a mission failed) keeps its code.
         if code == 0 {
             code = EXIT_FAILED;

@@ -161,6 +161,17 @@ fn all_errors_are_reported_in_one_pass() {
         ])"#,
     );
     assert_eq!(e.len(), 4, "{e:#?}");
+    // Which four: each at its place, in petrel's words (what follows a dependency's wording
+    // is not pinned).
+    let expected = [
+        "bad.ron:2:31: error: module `a`: unknown module type `demo.nope`",
+        "bad.ron:3:54: error: module `b`, `params/factor`",
+        "bad.ron:3:77: error: module `b` has no property `params/gain`; it has: enabled, in/value,",
+        "bad.ron:4:22: error: module `b`, `in/value`: no module `a` in agent `r1`",
+    ];
+    for (error, start) in e.iter().zip(expected) {
+        assert!(error.starts_with(start), "{error}\n(expected {start}...)");
+    }
 }
 
 #[test]

@@ -90,3 +90,32 @@ async fn a_lagging_reader_loses_the_oldest_items_and_the_loss_is_visible() {
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn every_reader_gets_the_pushed_image_itself_never_a_copy() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "camera", type: "test.image_source"),
+            (name: "a", type: "test.image_sink", links: {"in/images": "camera/out/images"}),
+            (name: "b", type: "test.image_sink", links: {"in/images": "camera/out/images"}),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard().clone();
+    advance(55).await;
+    bb.set("camera/enabled", false).await.unwrap();
+    advance(20).await;
+    let pushed = bb.get::<Vec<f64>>("camera/out/addresses").await.unwrap();
+    assert!(pushed.len() >= 5, "{pushed:?}");
+    for reader in ["a", "b"] {
+        let seen = bb
+            .get::<Vec<f64>>(&format!("{reader}/out/addresses"))
+            .await
+            .unwrap();
+        assert_eq!(
+            *seen, *pushed,
+            "{reader} read the very bytes that were pushed"
+        );
+    }
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

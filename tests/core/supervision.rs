@@ -153,7 +153,11 @@ async fn beyond_the_intensity_stop_agent_ends_the_run_naming_the_module() {
             modules: [{ALWAYS_FAILING}])"#
     ))
     .await;
-    let exit = agent.finished().await;
+    // Bounded: an agent that never gave up would fail the test, not hang it (paused clock:
+    // the minute passes as soon as nothing else is due).
+    let exit = tokio::time::timeout(std::time::Duration::from_secs(60), agent.finished())
+        .await
+        .expect("the supervisor gives up within a minute");
     assert_eq!(exit.code, EXIT_GAVE_UP);
     assert!(
         exit.reason.contains(

@@ -14,7 +14,9 @@ pub fn registry() -> ModuleRegistry {
         .register::<Faulty>()
         .register::<EventLog>()
         .register::<StopOrder>()
-        .register::<FlakyConsumer>();
+        .register::<FlakyConsumer>()
+        .register::<ImageSource>()
+        .register::<ImageSink>();
     r
 }
 
@@ -115,7 +117,11 @@ impl Module for Faulty {
     const DESCRIPTION: &'static str = "Fails on purpose.";
     fn declare(ports: &mut Ports) -> Self {
         Faulty {
-            mode: ports.param("params/mode", "panic".to_string(), "panic, error or init"),
+            mode: ports.param(
+                "params/mode",
+                "panic".to_string(),
+                "panic, error, init or bad_file",
+            ),
             fail_at: ports.param("params/fail_at", 3, "step that fails"),
             steps: ports.state("state/steps", 0, "steps so far"),
         }
@@ -125,6 +131,10 @@ impl Module for Faulty {
     }
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         anyhow::ensure!(*self.mode.get() != "init", "no such device /dev/laser0");
+        if *self.mode.get() == "bad_file" {
+            let why = "calibration.yaml:3:1: expected a number";
+            return Err(petrel::actors::Unrecoverable(why.into()).into());
+        }
         Ok(())
     }
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
@@ -256,6 +266,71 @@ impl Module for FlakyConsumer {
         // Progress is committed when the step completes, as the runtime acknowledges the batch.
         self.next.set(next);
         self.errors.set(errors);
+        Ok(())
+    }
+}
+
+/// The address of an image's pixel bytes, to tell a shared buffer from a copy.
+fn address(image: &petrel::actors::Image) -> i64 {
+    image.data.as_ptr() as i64
+}
+
+/// `test.image_source`: pushes a fresh 640×480 image per step, and publishes where its pixel
+/// bytes live.
+pub struct ImageSource {
+    out: petrel::actors::QueueWriter<petrel::actors::Image>,
+    addresses: Output<Vec<f64>>,
+}
+
+impl Module for ImageSource {
+    const TYPE: &'static str = "test.image_source";
+    const DESCRIPTION: &'static str = "Pushes images, publishing their byte addresses.";
+    fn declare(ports: &mut Ports) -> Self {
+        ImageSource {
+            out: ports.queue_out("out/images", 16, "images"),
+            addresses: ports.output("out/addresses", Vec::new(), "byte addresses pushed"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::every(Duration::from_millis(10))
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let image = petrel::actors::Image {
+            width: 640,
+            height: 480,
+            encoding: "mono8".into(),
+            data: vec![7; 640 * 480].into(),
+        };
+        let mut addresses = self.addresses.get().to_vec();
+        addresses.push(address(&image) as f64);
+        self.out.push(image);
+        self.addresses.set(addresses);
+        Ok(())
+    }
+}
+
+/// `test.image_sink`: publishes where the pixel bytes of each image it receives live.
+pub struct ImageSink {
+    input: petrel::actors::QueueReader<petrel::actors::Image>,
+    addresses: Output<Vec<f64>>,
+}
+
+impl Module for ImageSink {
+    const TYPE: &'static str = "test.image_sink";
+    const DESCRIPTION: &'static str = "Publishes the byte addresses of the images it receives.";
+    fn declare(ports: &mut Ports) -> Self {
+        ImageSink {
+            input: ports.queue_in("in/images", "images"),
+            addresses: ports.output("out/addresses", Vec::new(), "byte addresses received"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.input)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let mut addresses = self.addresses.get().to_vec();
+        addresses.extend(self.input.drain().iter().map(|i| address(&i.value) as f64));
+        self.addresses.set(addresses);
         Ok(())
     }
 }

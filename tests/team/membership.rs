@@ -32,13 +32,15 @@ async fn three_agents_see_each_other_and_a_departure_makes_links_stale_until_rej
     }
     let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
     wait_for(&status, "a live link to c", |s| s.state == "live").await;
+    // The first sample may be c's initial 0: wait for a count, so "kept" below means something.
+    let input = b.handle::<f64>("scale/in/value").await;
+    wait_for(&input, "a count from c", |v| *v > 0.0).await;
     let Ok(Tap::Queue(mut events)) = a.agent.blackboard().tap("_team/events").await else {
         panic!("_team/events is a queue");
     };
 
     c.stop().await;
     let s = wait_for(&status, "a stale link once c left", |s| s.state == "stale").await;
-    let input = b.handle::<f64>("scale/in/value").await;
     assert!(input.value() > 0.0, "the last value is kept: {s:?}");
     let members = a.handle::<TeamMembers>("_team/members").await;
     wait_for(&members, "c gone from a's members", |l| {

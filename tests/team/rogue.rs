@@ -127,7 +127,8 @@ async fn garbage_wrong_types_and_impostors_are_refused_and_counted() {
         .await
         .unwrap();
     wait_for(&input, "a's new value after the rogue", |v| *v == 7.0).await;
-    let s = status.get();
+    // The status is written after the value: wait for it rather than read it at once.
+    let s = wait_for(&status, "the link live again", |s| s.state == "live").await;
     assert_eq!((s.state.as_str(), s.rejected), ("live", 5005), "{s:?}");
     drop(token);
     rogue.close().await.unwrap();

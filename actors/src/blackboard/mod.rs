@@ -22,7 +22,7 @@ use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
 
 pub use error::BlackboardError;
-pub use registry::Registry;
+pub use registry::{GraphLink, GraphNode, ModuleGraph, Registry};
 pub use team::{AgentListing, ModuleListing, PropertyListing};
 
 /// What a (re)starting module instance needs from the blackboard.

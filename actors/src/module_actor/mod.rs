@@ -17,7 +17,8 @@ use tracing::Instrument;
 use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
-use crate::module::{Cause, Context, Module, Schedule, WatchTarget};
+use crate::module::{Cause, Context, Module, Schedule, Unrecoverable, WatchTarget};
+use crate::panic_report::catching;
 use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
 
@@ -92,6 +93,15 @@ pub(crate) struct Running<M> {
     stats: StepStats,
 }
 
+/// Why module code failed, if it did: its error, or the panic the hook reported.
+fn failure(outcome: Result<anyhow::Result<()>, String>) -> Option<String> {
+    match outcome {
+        Ok(Ok(())) => None,
+        Ok(Err(e)) => Some(format!("{e:#}")),
+        Err(panic) => Some(panic),
+    }
+}
+
 /// The message that starts the step loop; the loop then owns the handler until it stops.
 pub(crate) struct RunLoop;
 
@@ -134,9 +144,16 @@ impl<M: Module> Actor for ModuleActor<M> {
             args.control,
             ports.clock.clone(),
         );
-        if let Err(e) = module.init(&mut ctx).instrument(span.clone()).await {
+        let init = catching(module.init(&mut ctx).instrument(span.clone())).await;
+        let unrecoverable =
+            matches!(&init, Ok(Err(e)) if e.downcast_ref::<Unrecoverable>().is_some());
+        if let Some(reason) = failure(init) {
             builtins.status.set(status::FAILED.into());
-            return Err(format!("init failed: {e:#}").into());
+            let reason = format!("init failed: {reason}");
+            return Err(match unrecoverable {
+                true => Box::new(Unrecoverable(reason)),
+                false => reason.into(),
+            });
         }
         span.in_scope(|| tracing::info!("initialized"));
         let fault_seen = builtins.fault.read().version;
@@ -171,20 +188,19 @@ impl<M: Module> Actor for ModuleActor<M> {
         state: &mut Running<M>,
     ) -> Result<(), ActorProcessingErr> {
         let span = state.span.clone();
-        match state.run().instrument(span.clone()).await {
-            Ok(()) => {
-                let cleanup = state
-                    .module
-                    .cleanup(&mut state.ctx)
-                    .instrument(span.clone())
-                    .await;
+        match failure(catching(state.run().instrument(span.clone())).await) {
+            None => {
+                let cleanup = catching(state.module.cleanup(&mut state.ctx).instrument(span)).await;
                 state.publish(status::STOPPED);
                 me.stop(None);
-                cleanup.map_err(|e| format!("cleanup failed: {e:#}").into())
+                match failure(cleanup) {
+                    None => Ok(()),
+                    Some(reason) => Err(format!("cleanup failed: {reason}").into()),
+                }
             }
-            Err(e) => {
+            Some(reason) => {
                 state.publish(status::FAILED);
-                Err(format!("{e:#}").into())
+                Err(reason.into())
             }
         }
     }
@@ -216,6 +232,11 @@ impl<M: Module> Running<M> {
             if enabled {
                 if let Some(causes) = pending.take() {
                     self.step(causes).await?;
+                    // A module that wakes itself (an input linked to its own output, a busy
+                    // producer) finds its signal already raised, so its waits never suspend:
+                    // spend tokio's cooperative budget, so that every so many steps it yields
+                    // to the other modules and to the stop path, on any number of workers.
+                    tokio::task::consume_budget().await;
                     if timeout.is_some() {
                         last_step = Instant::now();
                     }

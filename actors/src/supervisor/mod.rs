@@ -134,7 +134,7 @@ pub(crate) enum SupervisorMsg {
     /// Scheduled restarts are due: (slot, generation) pairs.
     Restart(Vec<(usize, u64)>),
     /// A module instance could not be started.
-    StartFailed(usize, u64, String),
+    StartFailed(usize, u64, crate::module_types::SpawnFailure),
     /// Stop, start or restart a module on request.
     Control(ControlRequest, RpcReplyPort<Result<(), String>>),
 }
@@ -200,11 +200,13 @@ impl Actor for AgentSupervisor {
                 let _ = reply.send(state.report().await);
             }
             SupervisorMsg::Restart(due) => state.restart_now(due).await,
-            SupervisorMsg::StartFailed(i, generation, reason) => {
+            SupervisorMsg::StartFailed(i, generation, failure) => {
                 if state.slots[i].generation == generation {
-                    state
-                        .on_exit(i, true, format!("could not start: {reason}"))
-                        .await;
+                    let reason = format!("could not start: {}", failure.reason);
+                    match failure.unrecoverable {
+                        true => state.on_unrecoverable(i, reason).await,
+                        false => state.on_exit(i, true, reason).await,
+                    }
                 }
             }
             SupervisorMsg::Control(request, reply) => {

@@ -18,14 +18,7 @@ impl SupervisorState {
         }
         let (name, restarts) = (slot.spec.name.clone(), slot.restarts);
         if failure {
-            slot.failures += 1;
-            slot.last_error = Some(reason.clone());
-            let failures = slot.failures as i64;
-            tracing::error!(agent = %self.agent, module = %name, failures, restarts, error = %reason, "module failed");
-            self.event(&name, "failed", &reason, restarts);
-            self.set_stat(i, "stats/failures", failures).await;
-            self.set_stat(i, "stats/status", status::FAILED.to_string())
-                .await;
+            self.record_failure(i, &reason).await;
         }
         let members: Vec<Member> = self
             .slots
@@ -73,6 +66,30 @@ impl SupervisorState {
         {
             self.execute(i, stop, restart).await;
         }
+    }
+
+    /// A module could not start for a reason a restart cannot fix: reported once, left failed,
+    /// and nothing else restarted for it.
+    pub(super) async fn on_unrecoverable(&mut self, i: usize, reason: String) {
+        if self.stopping {
+            return;
+        }
+        self.record_failure(i, &reason).await;
+        self.slots[i].state = SlotState::Failed;
+        tracing::error!(agent = %self.agent, module = %self.slots[i].spec.name, "not restarted: a restart cannot fix this; fix the cause and start the module again");
+    }
+
+    async fn record_failure(&mut self, i: usize, reason: &str) {
+        let slot = &mut self.slots[i];
+        let (name, restarts) = (slot.spec.name.clone(), slot.restarts);
+        slot.failures += 1;
+        slot.last_error = Some(reason.to_string());
+        let failures = slot.failures as i64;
+        tracing::error!(agent = %self.agent, module = %name, failures, restarts, error = %reason, "module failed");
+        self.event(&name, "failed", reason, restarts);
+        self.set_stat(i, "stats/failures", failures).await;
+        self.set_stat(i, "stats/status", status::FAILED.to_string())
+            .await;
     }
 
     async fn give_up(&mut self, i: usize) {

@@ -84,7 +84,7 @@ impl Consumer {
         if now {
             let (received, last) = (self.received.value(), self.last.value());
             let (gaps, dups) = (self.gaps.value(), self.duplicates.value());
-            println!(
+            petrel_actors::outln!(
                 "[{}] received {received} items, last #{last}, gaps {gaps}, duplicates {dups}",
                 ctx.module()
             );

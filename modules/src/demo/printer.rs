@@ -54,7 +54,7 @@ impl Module for Printer {
             label.as_str()
         };
         let sample = self.input.read();
-        println!("[{label}] {:.3} (#{})", *sample, sample.version);
+        petrel_actors::outln!("[{label}] {:.3} (#{})", *sample, sample.version);
         Ok(())
     }
 }

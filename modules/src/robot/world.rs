@@ -5,15 +5,15 @@ use std::time::Duration;
 use anyhow::{bail, Context as _};
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    Context, FilePath, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter, Schedule,
-    Twist2,
+    CheckProblem, Context, FilePath, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter,
+    Schedule, Twist2, Unrecoverable,
 };
 use tokio::time::Instant;
 
 use super::{check_params, count, param_error};
 use crate::sim::error::{non_negative, positive};
 use crate::sim::{
-    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
+    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World, WorldMap,
 };
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
@@ -82,6 +82,18 @@ struct Sim {
     command_seen: (u64, f64),
 }
 
+impl SimWorld {
+    fn load_map(&self) -> Result<WorldMap, Unrecoverable> {
+        let file = self.world_file.get();
+        if file.is_empty() {
+            let expected =
+                "params/world is empty; expected the path of a world file (`.txt` or `.yaml`)";
+            return Err(Unrecoverable(expected.into()));
+        }
+        load_world(file.as_path()).map_err(|e| Unrecoverable(e.to_string()))
+    }
+}
+
 impl Module for SimWorld {
     const TYPE: &'static str = "sim.world";
     const DESCRIPTION: &'static str =
@@ -128,12 +140,18 @@ impl Module for SimWorld {
         Schedule::every(Duration::from_secs_f64(period))
     }
 
+    /// The world file must parse: `petrel check` says so before anything runs.
+    fn check(&self) -> Vec<CheckProblem> {
+        match self.load_map() {
+            Ok(_) => Vec::new(),
+            Err(e) => vec![CheckProblem::new("params/world", e.0)],
+        }
+    }
+
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let file = self.world_file.get();
-        if file.is_empty() {
-            bail!("params/world is empty; expected the path of a world file (`.txt` or `.yaml`)");
-        }
-        let map = load_world(file.as_path())?;
+        // A file that does not parse will not parse after a restart either.
+        let map = self.load_map()?;
         let start = match self.start.get().as_slice() {
             [] => *map.starts.first().with_context(|| {
                 format!("{file} has no `R` start marker; set params/start to `[x, y, heading_deg]`")

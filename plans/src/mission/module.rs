@@ -185,7 +185,7 @@ impl Module for Mission {
             if self.is_mission.value() && !run.memory.actions.is_empty() {
                 // The run summary of a plan-driven mission: the plan's result and what each
                 // action did (printed as the run stops, like the recorder's summary).
-                println!(
+                petrel_actors::outln!(
                     "\n── plan `{}`: {} ─────────────────────\n{}",
                     run.plan.name(),
                     run.state.status(&run.plan).as_str(),

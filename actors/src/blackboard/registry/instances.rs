@@ -93,14 +93,7 @@ impl Registry {
             return Err(self.key_of(&format!("{module}/enabled")).unwrap_err());
         }
         let prefix = format!("{module}/");
-        let links: Vec<String> = self
-            .entries
-            .iter()
-            .filter(|(k, e)| {
-                !k.starts_with(&prefix) && e.link.as_ref().is_some_and(|t| t.starts_with(&prefix))
-            })
-            .map(|(k, _)| k.clone())
-            .collect();
+        let links = self.links.linked_into(&prefix);
         if !links.is_empty() {
             return Err(BlackboardError::InUse {
                 module: module.into(),
@@ -108,6 +101,7 @@ impl Registry {
             });
         }
         self.entries.retain(|k, _| !k.starts_with(&prefix));
+        self.links.remove_prefix(&prefix);
         self.remote.remove_module(module);
         self.forget_outbox(module);
         self.order.retain(|m| m != module);
@@ -134,7 +128,6 @@ impl Registry {
             Entry {
                 decl,
                 handle,
-                link: None,
                 remote: None,
                 own_queue: None,
             },

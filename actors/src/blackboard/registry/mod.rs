@@ -12,16 +12,19 @@ use crate::ports::{Handle, Ports, PropertyDecl, PropertyKind};
 use super::error::BlackboardError;
 
 mod instances;
+mod links;
+mod module_graph;
+pub use module_graph::{GraphLink, GraphNode, ModuleGraph};
 mod remote;
 use crate::queue::{dropped_path, QueueCore};
 use crate::team::{LinkTarget, RemoteLinks};
 use crate::url::PropertyUrl;
 use crate::value::{AnyValue, TypeInfo};
+use links::LinkGraph;
 
 pub(crate) struct Entry {
     pub decl: PropertyDecl,
     pub handle: Handle,
-    pub link: Option<String>,
     /// A link to another agent's property: the input reads its own cell (or private queue),
     /// which the team transport feeds.
     pub remote: Option<LinkTarget>,
@@ -51,6 +54,8 @@ pub struct Registry {
     order: Vec<String>,
     modules: HashMap<String, ModuleEntry>,
     entries: BTreeMap<String, Entry>,
+    /// Local links between entries (`module/path` keys).
+    links: LinkGraph,
     /// Inputs linked to other agents, shared with the team transport.
     remote: Arc<RemoteLinks>,
     /// The team the agent joins, for snapshots.
@@ -69,6 +74,7 @@ impl Registry {
             order: Vec::new(),
             modules: HashMap::new(),
             entries: BTreeMap::new(),
+            links: LinkGraph::default(),
             remote: Arc::default(),
             team: None,
             pending_outboxes: Vec::new(),
@@ -120,7 +126,6 @@ impl Registry {
                     let entry = Entry {
                         decl: dropped,
                         handle: Handle::Value(reader.dropped.clone()),
-                        link: None,
                         remote: None,
                         own_queue: None,
                     };
@@ -135,7 +140,6 @@ impl Registry {
                 Entry {
                     decl,
                     handle,
-                    link: None,
                     remote: None,
                     own_queue,
                 },
@@ -274,20 +278,11 @@ impl Registry {
                 to_type,
             });
         }
-        let mut chain = vec![from.clone(), to.clone()];
-        let mut at = to.clone();
-        while let Some(next) = self.entries[&at].link.clone() {
-            chain.push(next.clone());
-            if next == from {
-                return Err(BlackboardError::Cycle(chain));
-            }
-            at = next;
-        }
-        if from == to {
-            return Err(BlackboardError::Cycle(vec![from.clone(), from]));
+        if let Some(chain) = self.links.cycle(&from, &to) {
+            return Err(BlackboardError::Cycle(chain));
         }
         self.drop_remote(&from);
-        self.entries.get_mut(&from).expect("checked above").link = Some(to);
+        self.links.set(&from, Some(&to));
         self.resolve(&from);
         Ok(())
     }
@@ -296,7 +291,7 @@ impl Registry {
     pub fn unlink(&mut self, from: &str) -> Result<(), BlackboardError> {
         let from = self.key_of(from)?;
         self.drop_remote(&from);
-        self.entries.get_mut(&from).expect("key_of checked it").link = None;
+        self.links.set(&from, None);
         self.resolve(&from);
         Ok(())
     }
@@ -308,31 +303,16 @@ impl Registry {
             .remote
             .as_ref()
             .map(|r| r.url.as_str())
-            .or(entry.link.as_deref())
+            .or_else(|| self.links.target(key))
     }
 
     /// Points every endpoint and queue reader whose link chain passes through `changed` (the
-    /// property whose link just changed) at the end of its chain. Entries that are linked
-    /// nowhere near it are not touched, so building a config with N links costs N scans of
-    /// cheap checks, not N times every endpoint.
+    /// property whose link just changed) at the end of its chain. Only those are touched (a
+    /// walk back along the links into `changed`), so building N links costs what they link.
     fn resolve(&self, changed: &str) {
-        for (key, entry) in &self.entries {
-            if key != changed && entry.link.is_none() {
-                continue;
-            }
-            let mut at = key.as_str();
-            let mut end = key;
-            let mut affected = at == changed;
-            while let Some(next) = &self.entries[at].link {
-                at = next;
-                end = next;
-                affected |= at == changed;
-            }
-            if !affected {
-                continue;
-            }
-            let target = &self.entries[end];
-            match (&entry.handle, &target.handle) {
+        let target = &self.entries[self.links.end(changed)];
+        for key in self.links.through(changed) {
+            match (&self.entries[key].handle, &target.handle) {
                 (Handle::Value(ep), Handle::Value(t)) => ep.retarget(t.own.clone()),
                 (Handle::QueueIn(reader), Handle::QueueOut(core)) => reader.retarget(core.clone()),
                 (Handle::QueueIn(reader), Handle::QueueIn(_)) => {

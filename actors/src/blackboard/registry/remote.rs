@@ -65,7 +65,6 @@ impl Registry {
                     Entry {
                         decl,
                         handle: Handle::Value(ep.clone()),
-                        link: None,
                         remote: None,
                         own_queue: None,
                     },
@@ -79,8 +78,8 @@ impl Registry {
             source: source.to_string(),
             ..LinkStatus::default()
         });
+        self.links.set(&from, None);
         let entry = self.entries.get_mut(&from).expect("checked above");
-        entry.link = None;
         entry.remote = Some(LinkTarget {
             url: source.to_string(),
             qos: Some(qos),
@@ -267,7 +266,6 @@ impl Registry {
         let entry = Entry {
             decl,
             handle,
-            link: None,
             remote: None,
             own_queue: None,
         };

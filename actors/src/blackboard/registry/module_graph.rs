@@ -1,0 +1,97 @@
+//! An agent's modules and the links between them as a graph, for pictures (`petrel graph`).
+
+use petgraph::graph::{DiGraph, NodeIndex};
+use std::collections::HashMap;
+
+use super::Registry;
+use crate::url::PropertyUrl;
+
+/// A node of a [`ModuleGraph`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GraphNode {
+    /// A module of this agent.
+    Module {
+        /// Instance name.
+        name: String,
+        /// Module type, e.g. `nav.mapper`.
+        type_name: String,
+    },
+    /// A module of another agent that a link reads from.
+    Remote {
+        /// The other agent's name.
+        agent: String,
+        /// The module's name there.
+        module: String,
+    },
+}
+
+/// An edge of a [`ModuleGraph`]: data flows from the module owning `source` to the one owning
+/// `reader`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GraphLink {
+    /// The linked property's path in the reading module (`in/pose`).
+    pub reader: String,
+    /// The path read, in the source module (`out/estimatedPose`).
+    pub source: String,
+    /// A queue link (a stream of items) rather than a value.
+    pub queue: bool,
+    /// A link to another agent's property, carried by the team transport.
+    pub remote: bool,
+}
+
+/// Modules as nodes, links as edges from the module read to the module reading.
+pub type ModuleGraph = DiGraph<GraphNode, GraphLink>;
+
+impl Registry {
+    /// The agent's modules and links as a graph (the runtime's own `_...` modules left out).
+    pub fn module_graph(&self) -> ModuleGraph {
+        let mut graph = ModuleGraph::new();
+        let mut nodes: HashMap<(Option<String>, String), NodeIndex> = HashMap::new();
+        for module in self.order.iter().filter(|m| !m.starts_with('_')) {
+            let node = graph.add_node(GraphNode::Module {
+                name: module.clone(),
+                type_name: self.modules[module].type_name.clone(),
+            });
+            nodes.insert((None, module.clone()), node);
+        }
+        for (key, entry) in &self.entries {
+            let Some(target) = self.link_of(key) else {
+                continue;
+            };
+            let (reader_module, reader) = key.split_once('/').expect("keys are module/path");
+            let Some(&to) = nodes.get(&(None, reader_module.to_string())) else {
+                continue;
+            };
+            let remote = entry.remote.is_some();
+            let (agent, module, source) = match PropertyUrl::parse(target) {
+                Ok(url) => (
+                    url.agent().filter(|_| remote).map(str::to_string),
+                    url.module().to_string(),
+                    url.path().to_string(),
+                ),
+                Err(_) => continue,
+            };
+            let from =
+                *nodes
+                    .entry((agent.clone(), module.clone()))
+                    .or_insert_with(|| match &agent {
+                        Some(agent) => graph.add_node(GraphNode::Remote {
+                            agent: agent.clone(),
+                            module: module.clone(),
+                        }),
+                        None => graph.add_node(GraphNode::Module {
+                            type_name: self.module_type(&module).unwrap_or("").to_string(),
+                            name: module.clone(),
+                        }),
+                    });
+            let link = GraphLink {
+                reader: reader.to_string(),
+                source,
+                queue: entry.decl.kind.is_queue(),
+                remote,
+            };
+            graph.add_edge(from, to, link);
+        }
+        graph
+    }
+}
