@@ -286,6 +286,7 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
     for overlay in overlays {
         file.overlay(ConfigFile::load(overlay)?);
     }
+    link_mission_clocks(&mut file);
     if let Some(rules) = file.config.contexts.clone() {
         // Relative to the config file, like every file path in it (resolved when built).
         let exists = file
@@ -313,6 +314,31 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
         }
     }
     Ok(file)
+}
+
+/// The agent's clock is its simulator's when one drives it: a mission whose `in/clock` the
+/// config leaves unlinked, in an agent with exactly one `sim.world`, runs on that world's
+/// `out/simTime` (so `held(x, 2s)` is two simulated seconds, as the robot lives them).
+fn link_mission_clocks(file: &mut ConfigFile) {
+    let mut worlds = file
+        .config
+        .modules
+        .iter()
+        .filter(|m| m.type_name == "sim.world");
+    let (Some(world), None) = (worlds.next(), worlds.next()) else {
+        return;
+    };
+    let sim_time = format!("{}/out/simTime", world.name);
+    for m in file
+        .config
+        .modules
+        .iter_mut()
+        .filter(|m| m.type_name == "mission.pnp")
+    {
+        m.links
+            .entry("in/clock".to_string())
+            .or_insert_with(|| sim_time.as_str().into());
+    }
 }
 
 /// The name of the context manager that an agent's `contexts:` field adds.

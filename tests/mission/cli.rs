@@ -178,3 +178,39 @@ fn check_warns_about_a_binding_no_action_uses_with_the_nearest_name() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_simulator_drives_mission_time_without_a_link() {
+    // wait_5 is 5 simulated seconds: half a second of wall time at time_scale 10.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("w.plan"), "wait_5").unwrap();
+    let world = std::path::Path::new("configs/worlds/cluttered.txt")
+        .canonicalize()
+        .unwrap();
+    let config = dir.path().join("w.ron");
+    std::fs::write(
+        &config,
+        format!(
+            r#"Agent(name: "r1", modules: [
+            (name: "robot", type: "sim.world", values: {{"params/world": {:?}, "params/time_scale": 10.0}}),
+            (name: "m", type: "mission.pnp", values: {{"params/plan": "w.plan", "params/is_mission": true}}),
+        ])"#,
+            world.display().to_string()
+        ),
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args([
+            "run",
+            &config.display().to_string(),
+            "--for",
+            "3s",
+            "--no-remote",
+        ])
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("petrel runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "ended before --for: {stdout}");
+    assert!(stdout.contains("mission `w` ended: goal"), "{stdout}");
+}
