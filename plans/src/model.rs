@@ -194,6 +194,12 @@ impl Plan {
         Some(format!("{}:{line}", self.sources.file))
     }
 
+    /// Whether the plan was compiled from the text language (its node ids are made up, so
+    /// messages name labels, actions and rules instead).
+    pub(crate) fn from_text(&self) -> bool {
+        !self.sources.file.is_empty()
+    }
+
     /// What the user wrote that made transition `t` (text plans): "the rule at r.er:2 (...)".
     pub fn origin(&self, t: usize) -> Option<&str> {
         self.sources.origins.get(&t).map(String::as_str)

@@ -179,7 +179,7 @@ fn livelocks_are_reported_with_a_witness() {
         .collect();
     assert_eq!(live.len(), 1, "{r}");
     assert!(
-        live[0].starts_with("from {'X6': 1} the plan can never reach its goal or fail: it stays among 3 markings forever; reached by step 1: t0 ('a.start'); step 2: t1 ('a.end'); step 3: t5 ('[y]')"),
+        live[0].starts_with("from {'X6': 1} the plan can never reach its goal or fail: it stays among 3 markings forever; reached by step 1: 'a.start'; step 2: 'a.end'; step 3: '[y]'"),
         "{}",
         live[0]
     );

@@ -122,7 +122,11 @@ fn finding(code: &'static str, message: String) -> Finding {
 
 fn place_name(plan: &Plan, p: usize) -> String {
     let pl = &plan.places()[p];
-    format!("place '{}' ('{}')", pl.id, pl.label)
+    match plan.from_text() {
+        // A text plan's ids are made up: its labels are what `plan dot` and `simulate` show.
+        true => format!("place '{}'", pl.label),
+        false => format!("place '{}' ('{}')", pl.id, pl.label),
+    }
 }
 
 /// Checks a plan and its sub-plans (their findings are prefixed with
