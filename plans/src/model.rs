@@ -196,7 +196,7 @@ impl Plan {
 
     /// Whether the plan was compiled from the text language (its node ids are made up, so
     /// messages name labels, actions and rules instead).
-    pub(crate) fn from_text(&self) -> bool {
+    pub(crate) fn is_text_plan(&self) -> bool {
         !self.sources.file.is_empty()
     }
 

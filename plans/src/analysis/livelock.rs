@@ -73,7 +73,7 @@ fn show_steps(plan: &Plan, steps: &[Vec<usize>]) -> String {
             .iter()
             .map(|&t| {
                 let t = &plan.transitions()[t];
-                match plan.from_text() {
+                match plan.is_text_plan() {
                     true => format!("'{}'", t.label),
                     false => format!("{} ('{}')", t.id, t.label),
                 }

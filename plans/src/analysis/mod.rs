@@ -122,7 +122,7 @@ fn finding(code: &'static str, message: String) -> Finding {
 
 fn place_name(plan: &Plan, p: usize) -> String {
     let pl = &plan.places()[p];
-    match plan.from_text() {
+    match plan.is_text_plan() {
         // A text plan's ids are made up: its labels are what `plan dot` and `simulate` show.
         true => format!("place '{}'", pl.label),
         false => format!("place '{}' ('{}')", pl.id, pl.label),
