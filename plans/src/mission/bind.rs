@@ -12,6 +12,7 @@ use super::config::{
     config_form, match_action, max_param, substitute, substitute_value, ActionBindings, ActionName,
     ConditionBindings, Places,
 };
+use super::hints::{nearest, place_hint, unused_bindings};
 use crate::model::Plan;
 
 /// One plan action bound to modules and properties.
@@ -280,32 +281,6 @@ impl Binder<'_> {
     }
 }
 
-/// For a `"$N"` value whose parameter names no place: say which places there are.
-fn place_hint(value: &ron::Value, params: &[String], places: &Places) -> String {
-    let ron::Value::String(s) = value else {
-        return String::new();
-    };
-    let Some(param) = s
-        .strip_prefix('$')
-        .and_then(|n| n.parse::<usize>().ok())
-        .and_then(|n| params.get(n.wrapping_sub(1)))
-    else {
-        return String::new();
-    };
-    if places.0.contains_key(param) || param.parse::<f64>().is_ok() {
-        return String::new();
-    }
-    let known: Vec<&str> = places.0.keys().map(String::as_str).collect();
-    format!(
-        "; `{param}` is not a place in params/places (places: {})",
-        if known.is_empty() {
-            "none".to_string()
-        } else {
-            known.join(", ")
-        }
-    )
-}
-
 /// Binds every action and condition of `plan`; all problems at once in the error.
 pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding {
     let (action_names, cond_names) = plan_names(plan);
@@ -396,54 +371,4 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
         }),
         warnings,
     }
-}
-
-/// Bindings no plan action uses (a typo such as `reprot_dock`), each with the nearest name.
-fn unused_bindings(
-    module: &str,
-    bindings: &ActionBindings,
-    actions: &BTreeSet<String>,
-) -> Vec<BindingProblem> {
-    let locals: Vec<String> = actions.iter().map(|a| ActionName::parse(a).local).collect();
-    bindings
-        .0
-        .keys()
-        .filter(|key| {
-            !locals
-                .iter()
-                .any(|l| match_action(std::iter::once(key.as_str()), l).is_some())
-        })
-        .map(|key| BindingProblem {
-            needle: key.clone(),
-            message: format!(
-                "{module}/params/actions[\"{key}\"]: the plan has no action `{key}` (nor `{key}_...`){}",
-                nearest(key, locals.iter().map(String::as_str))
-            ),
-        })
-        .collect()
-}
-
-/// `; did you mean `x`?` for the candidate nearest to `name`, if one is close.
-fn nearest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
-    candidates
-        .map(|c| (edit_distance(name, c), c))
-        .filter(|(d, c)| *d <= name.len().max(c.len()) / 2)
-        .min()
-        .map_or(String::new(), |(_, c)| format!("; did you mean `{c}`?"))
-}
-
-/// Levenshtein distance over characters.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
 }

@@ -52,8 +52,10 @@ mod bind;
 mod builtin;
 mod config;
 mod env;
+mod hints;
 mod memory;
 mod module;
+mod prepare;
 
 pub use bind::BindingProblem;
 pub use config::{
@@ -61,7 +63,8 @@ pub use config::{
     Places,
 };
 pub use memory::{ActionStats, MissionMemory, RunningAction};
-pub use module::{check_mission, Mission};
+pub use module::Mission;
+pub use prepare::check_mission;
 
 use petrel_actors::ModuleRegistry;
 
