@@ -51,4 +51,4 @@ pub use supervision::SupervisorEvent;
 pub use supervisor::EXIT_GAVE_UP;
 pub use types::{FilePath, Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};
 pub use url::PropertyUrl;
-pub use value::{AnyValue, TypeInfo};
+pub use value::{config_form, config_value_error, spaced_ron, AnyValue, TypeInfo};

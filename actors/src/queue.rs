@@ -73,6 +73,10 @@ pub(crate) struct QueueCore {
     pub key: Arc<str>,
     pub type_info: TypeInfo,
     inner: Mutex<Inner>,
+    /// The latest item as a value property, made when something first reads the queue as a
+    /// value (an expression: `min(robot/out/laserScan.ranges) < 0.6`); until then a push
+    /// costs nothing more.
+    latest: std::sync::OnceLock<Arc<crate::cell::Endpoint>>,
 }
 
 impl QueueCore {
@@ -86,7 +90,24 @@ impl QueueCore {
                 next_seq: 0,
                 readers: Vec::new(),
             }),
+            latest: std::sync::OnceLock::new(),
         })
+    }
+
+    /// The latest item as a value endpoint (written at every push from now on, with the push
+    /// time), starting from the newest item held, else from `sample`; `None` when there is
+    /// neither (a type without a known sample, nothing pushed yet).
+    pub fn latest(&self, sample: Option<AnyValue>) -> Option<Arc<crate::cell::Endpoint>> {
+        if let Some(ep) = self.latest.get() {
+            return Some(ep.clone());
+        }
+        let newest = self.inner.lock().items.back().map(|i| i.value.clone());
+        let first = newest.or(sample)?;
+        Some(
+            self.latest
+                .get_or_init(|| crate::cell::Endpoint::new(&self.key, self.type_info, first))
+                .clone(),
+        )
     }
 
     pub fn set_capacity(&self, capacity: usize) {
@@ -103,6 +124,9 @@ impl QueueCore {
     }
 
     pub fn push(&self, value: AnyValue, stamp: Instant) {
+        if let Some(latest) = self.latest.get() {
+            latest.write_at(value.clone(), stamp);
+        }
         let mut lagging = Vec::new();
         {
             let mut inner = self.inner.lock();

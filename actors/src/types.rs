@@ -53,6 +53,29 @@ property_types! {
     FilePath => "path",
 }
 
+/// A default value of the built-in structured types, so that an expression can learn a queue's
+/// item fields before the first item is pushed (`None` for other types).
+pub(crate) fn sample_of(info: crate::TypeInfo) -> Option<crate::AnyValue> {
+    fn any<T: PropertyType + Default>() -> crate::AnyValue {
+        std::sync::Arc::new(T::default())
+    }
+    Some(match () {
+        _ if info.is::<Pose2>() => any::<Pose2>(),
+        _ if info.is::<Point2>() => any::<Point2>(),
+        _ if info.is::<Twist2>() => any::<Twist2>(),
+        _ if info.is::<LaserScan>() => any::<LaserScan>(),
+        _ if info.is::<Image>() => any::<Image>(),
+        _ if info.is::<OccupancyGrid>() => any::<OccupancyGrid>(),
+        _ if info.is::<Path2>() => any::<Path2>(),
+        _ if info.is::<f64>() => any::<f64>(),
+        _ if info.is::<i64>() => any::<i64>(),
+        _ if info.is::<bool>() => any::<bool>(),
+        _ if info.is::<String>() => any::<String>(),
+        _ if info.is::<Vec<f64>>() => any::<Vec<f64>>(),
+        _ => return None,
+    })
+}
+
 /// A file a module reads or writes, written in configs as a plain string. A relative path in a
 /// config file is taken relative to the directory of that file (made absolute when the config
 /// is built), so `petrel run` behaves the same from any working directory.

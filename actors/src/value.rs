@@ -123,6 +123,90 @@ impl fmt::Debug for TypeInfo {
     }
 }
 
+/// A value written as in a config file: structs as `(x: 1.0, y: 2.0)`, lists as `[..]`, so
+/// that messages show the form a user writes, never a type's name in the code.
+pub fn config_form(v: &ron::Value) -> String {
+    match v {
+        ron::Value::Map(m) if m.keys().all(|k| matches!(k, ron::Value::String(_))) => {
+            let fields: Vec<String> = m
+                .iter()
+                .map(|(k, v)| match k {
+                    ron::Value::String(k) => format!("{k}: {}", config_form(v)),
+                    _ => unreachable!("keys checked above"),
+                })
+                .collect();
+            format!("({})", fields.join(", "))
+        }
+        ron::Value::Seq(xs) if xs.len() > 4 => {
+            let head: Vec<String> = xs.iter().take(3).map(config_form).collect();
+            format!("[{}, ...]", head.join(", "))
+        }
+        ron::Value::Seq(xs) => format!(
+            "[{}]",
+            xs.iter().map(config_form).collect::<Vec<_>>().join(", ")
+        ),
+        ron::Value::Number(n) => {
+            let x = n.into_f64();
+            if x.fract() == 0.0
+                && matches!(n, ron::value::Number::F32(_) | ron::value::Number::F64(_))
+            {
+                format!("{x:.1}")
+            } else {
+                x.to_string()
+            }
+        }
+        other => ron::to_string(other).unwrap_or_default(),
+    }
+}
+
+/// RON text as a person writes it in a config: a space after each `,` and `:` outside strings
+/// (`(x:1.0,y:2.0)` becomes `(x: 1.0, y: 2.0)`), so messages show values in config syntax
+/// with fields in their declared order.
+pub fn spaced_ron(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + text.len() / 4);
+    let (mut in_string, mut escaped) = (false, false);
+    for c in text.chars() {
+        out.push(c);
+        if in_string {
+            match c {
+                _ if escaped => escaped = false,
+                '\\' => escaped = true,
+                '"' => in_string = false,
+                _ => {}
+            }
+        } else if c == '"' {
+            in_string = true;
+        } else if c == ',' || c == ':' {
+            out.push(' ');
+        }
+    }
+    out
+}
+
+/// A conversion error from serde in the terms of a config file: what was expected, as a value
+/// written like `example` (the property's current value), never a type's name in the code.
+pub fn config_value_error(reason: &str, example: &str, given: &ron::Value) -> String {
+    let form = example;
+    let words = [
+        ("Expected f64", "expected a number"),
+        ("Expected f32", "expected a number"),
+        ("Expected i64", "expected an integer"),
+        ("Expected u64", "expected a non-negative integer"),
+        ("Expected u32", "expected a non-negative integer"),
+        ("Expected bool", "expected true or false"),
+        ("Expected String", "expected a string"),
+        ("Unexpected missing field named", "missing field"),
+    ];
+    if reason.contains("Expected struct") || reason.contains("Repr") {
+        return format!("expected a value like {form}, found {}", config_form(given));
+    }
+    let mut reason = reason.to_string();
+    for (from, to) in words {
+        reason = reason.replace(from, to);
+    }
+    format!("{reason}; a value looks like {form}")
+}
+
 fn shorten(mut s: String) -> String {
     if s.len() > SHORT_LEN {
         let mut cut = SHORT_LEN;
@@ -139,6 +223,31 @@ fn shorten(mut s: String) -> String {
 mod tests {
     use super::*;
     use crate::types::Pose2;
+
+    #[test]
+    fn value_errors_speak_config_syntax() {
+        assert_eq!(
+            spaced_ron(r#"(x:1.0,y:2.0,name:"a,b:c")"#),
+            r#"(x: 1.0, y: 2.0, name: "a,b:c")"#
+        );
+        let given = ron::Value::String("big".into());
+        assert_eq!(
+            config_value_error(
+                "Expected struct PointRepr but found a string",
+                "(x: 0.0, y: 0.0)",
+                &given
+            ),
+            "expected a value like (x: 0.0, y: 0.0), found \"big\""
+        );
+        assert_eq!(
+            config_value_error(
+                "Expected f64 but found the string \"a\" instead",
+                "1.0",
+                &given
+            ),
+            "expected a number but found the string \"a\" instead; a value looks like 1.0"
+        );
+    }
 
     #[test]
     fn converts_config_values_and_reports_type_errors() {

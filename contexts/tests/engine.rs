@@ -355,3 +355,22 @@ fn a_switch_is_explained_by_what_its_conditions_read() {
     assert_eq!(names("lost"), ["loc/out/q"], "not what its effects read");
     assert!(names("nope").is_empty());
 }
+
+#[test]
+fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active() {
+    let mut old = engine(
+        r#"Contexts(contexts: [(name: "slow", when: "speed/out/v > 1", set: {"oa/params/maxSpeed": "0.3"})])"#,
+    );
+    let t0 = Instant::now();
+    at(&mut old, t0, 0, "speed/out/v", 2.0);
+    let mut new = engine(
+        r#"Contexts(contexts: [(name: "slow", when: "speed/out/v > 1", set: {"oa/params/maxSpeed": "0.1"})])"#,
+    );
+    new.adopt(old);
+    // Nothing the rules read changes: the reload alone must bring the new value.
+    let actions = new.step(t0 + Duration::from_millis(10));
+    assert_eq!(
+        actions,
+        [set("oa/params/maxSpeed", Value::Num(0.1), "slow")]
+    );
+}

@@ -221,6 +221,7 @@ impl Builder<'_> {
             goal,
             fail,
             comments,
+            sources: Default::default(),
         })
     }
 

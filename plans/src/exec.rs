@@ -3,7 +3,9 @@
 //!
 //! One step: (1) nothing if the plan is in its goal or fail state; (2) step
 //! once every executable with a marked execution place (shared by name; a
-//! sub-plan steps its own net); (3) compute the enabled transitions once, on
+//! sub-plan steps its own net); (2b) if a running executable failed where no
+//! output transition of its execution place asks `A.failed`, the plan fails
+//! (nothing else would ever take that token); (3) compute the enabled transitions once, on
 //! the marking after (2); (4) fire them in document order, skipping those an
 //! earlier firing of this step disabled, each firing moving the tokens and
 //! then making its calls in label order. Transitions enabled by this step's
@@ -88,6 +90,9 @@ pub struct StepReport {
     pub calls: Vec<CallRecord>,
     /// External conditions found unknown for the first time.
     pub unknown_conditions: Vec<String>,
+    /// The action whose failure no transition handles, which failed the plan in this step
+    /// (a sub-plan's action named as `sub/action`).
+    pub unhandled_failure: Option<String>,
 }
 
 /// The run-time state of a plan: marking and sub-plan states.
@@ -99,6 +104,11 @@ pub struct PlanState {
     /// The executables that are sub-plans (the `Some`s of `subs`), so that walking the
     /// sub-plan states does not cost the number of executables.
     sub_execs: Vec<usize>,
+    /// The executable whose unhandled failure failed the plan.
+    failed: Option<u32>,
+    /// Unhandled failures are not looked for (the analysis: "any action may fail" would make
+    /// every marking reach fail, hiding livelocks).
+    pub(crate) ignore_unhandled: bool,
     reported: HashSet<String>,
     scratch: Scratch,
 }
@@ -132,6 +142,8 @@ impl PlanState {
             marked,
             subs,
             sub_execs,
+            failed: None,
+            ignore_unhandled: false,
             reported: HashSet::new(),
             scratch: Scratch::default(),
         }
@@ -168,9 +180,26 @@ impl PlanState {
         out
     }
 
-    /// Goal, fail or running, from the current marking.
+    /// Goal, fail or running, from the current marking; fail after an unhandled failure.
     pub fn status(&self, plan: &Plan) -> PlanStatus {
+        if self.failed.is_some() {
+            return PlanStatus::Fail;
+        }
         status_of(plan, &self.tokens)
+    }
+
+    /// The action whose failure no transition handled, if that failed the plan
+    /// (`sub/action` inside a sub-plan).
+    pub fn unhandled_failure(&self, plan: &Plan) -> Option<String> {
+        let e = self.failed? as usize;
+        let exe = &plan.executables()[e];
+        match (&exe.subplan, self.subs[e].as_deref()) {
+            (Some(sp), Some(sub)) => Some(match sub.unhandled_failure(sp) {
+                Some(inner) => format!("{}/{inner}", exe.name),
+                None => exe.name.clone(),
+            }),
+            _ => Some(exe.name.clone()),
+        }
     }
 
     fn add(&mut self, place: usize, n: u32) {
@@ -208,13 +237,61 @@ impl PlanState {
     }
 }
 
+/// A state saved and restored (a mission module keeps its plan's marking across restarts).
+impl PlanState {
+    /// The marking as a compact list of numbers (sub-plans included), for
+    /// [`restore`](PlanState::restore).
+    pub fn save(&self) -> Vec<u32> {
+        let mut key = Vec::new();
+        self.encode(&mut key);
+        key
+    }
+
+    /// Sets the marking saved by [`save`](PlanState::save) from a state of the same plan.
+    /// A list that does not fit the plan (another plan, an edited snapshot) is refused and
+    /// the state left unchanged.
+    pub fn restore(&mut self, plan: &Plan, saved: &[u32]) -> Result<(), String> {
+        match fits(plan, saved) {
+            Some(used) if used == saved.len() => {
+                self.decode(saved);
+                Ok(())
+            }
+            _ => Err(format!(
+                "the saved marking does not fit plan `{}` (was the plan changed?)",
+                plan.name()
+            )),
+        }
+    }
+}
+
+/// How many words of `key` a state of `plan` takes, if they are a valid key for it.
+fn fits(plan: &Plan, key: &[u32]) -> Option<usize> {
+    let n = (*key.first()? & !FAILED_BIT) as usize;
+    let pairs = key.get(1..1 + 2 * n)?;
+    if pairs
+        .chunks_exact(2)
+        .any(|p| p[0] as usize >= plan.places().len() || p[1] == 0)
+    {
+        return None;
+    }
+    let mut used = 1 + 2 * n;
+    for e in plan.executables() {
+        if let Some(sp) = &e.subplan {
+            used += fits(sp, key.get(used..)?)?;
+        }
+    }
+    Some(used)
+}
+
 /// The analysis' view of a state: its marking as a compact key, and back.
 impl PlanState {
     /// Appends the marking: the number of marked places, then `place, tokens` for each in
     /// place order, then each sub-plan's own key in executable order. Equal states give equal
     /// keys, and a key costs what is marked, not the net size.
     pub(crate) fn encode(&self, out: &mut Vec<u32>) {
-        out.push(self.marked.len() as u32);
+        // An unhandled failure sets the top bit of the count, so it never matches a running key.
+        let failed = if self.failed.is_some() { FAILED_BIT } else { 0 };
+        out.push(self.marked.len() as u32 | failed);
         for &p in &self.marked {
             out.extend([p, self.tokens[p as usize]]);
         }
@@ -232,7 +309,9 @@ impl PlanState {
             self.tokens[p as usize] = 0;
         }
         self.marked.clear();
-        let n = key[0] as usize;
+        // Which executable failed does not matter to the analysis, only that one did.
+        self.failed = (key[0] & FAILED_BIT != 0).then_some(0);
+        let n = (key[0] & !FAILED_BIT) as usize;
         for pair in key[1..1 + 2 * n].chunks_exact(2) {
             self.tokens[pair[0] as usize] = pair[1];
             self.marked.insert(pair[0]);
@@ -246,6 +325,29 @@ impl PlanState {
         rest
     }
 
+    /// Stops looking for unhandled failures, here and in sub-plans (see `ignore_unhandled`).
+    pub(crate) fn for_analysis(mut self) -> Self {
+        self.ignore_unhandled = true;
+        for sub in self.subs.iter_mut().flatten() {
+            let s = std::mem::replace(sub.as_mut(), PlanState::empty());
+            **sub = s.for_analysis();
+        }
+        self
+    }
+
+    fn empty() -> PlanState {
+        PlanState {
+            tokens: Vec::new(),
+            marked: BTreeSet::new(),
+            subs: Vec::new(),
+            sub_execs: Vec::new(),
+            failed: None,
+            ignore_unhandled: false,
+            reported: HashSet::new(),
+            scratch: Scratch::default(),
+        }
+    }
+
     /// Whether some transition has the tokens it needs (guards aside).
     pub(crate) fn token_enabled(&self, plan: &Plan) -> bool {
         let hot = plan.hot();
@@ -256,6 +358,9 @@ impl PlanState {
         })
     }
 }
+
+/// Set in the first word of a key ([`PlanState::encode`]) when an unhandled failure failed the plan.
+pub(crate) const FAILED_BIT: u32 = 1 << 31;
 
 /// Goal, fail or running for marking `tokens` of `plan`: goal when every goal place holds exactly
 /// its goal marking (checked first), fail likewise.
@@ -301,6 +406,25 @@ fn step_into(
             _ => env.step_action(&exe.name),
         }
     }
+    // A failure no transition asks about would leave its action running for ever: it fails
+    // the plan instead (before any transition fires, so a recovery cannot race it).
+    let hot = plan.hot();
+    let unhandled = match state.ignore_unhandled {
+        true => None,
+        false => unhandled_failure(plan, state, env, hot),
+    };
+    if let Some(e) = unhandled {
+        state.failed = Some(e as u32);
+        if report.unhandled_failure.is_none() {
+            report.unhandled_failure = state.unhandled_failure(plan);
+        }
+        state.scratch = Scratch {
+            running,
+            candidates,
+            enabled,
+        };
+        return;
+    }
     candidates.clear();
     candidates.extend(
         state
@@ -310,7 +434,6 @@ fn step_into(
     );
     candidates.sort_unstable();
     candidates.dedup();
-    let hot = plan.hot();
     enabled.clear();
     for &ti in &candidates {
         let h = hot.trans[ti as usize];
@@ -345,6 +468,27 @@ fn step_into(
         candidates,
         enabled,
     };
+}
+
+/// The first running executable (in place order) that failed where no transition handles it.
+fn unhandled_failure(
+    plan: &Plan,
+    state: &PlanState,
+    env: &mut dyn Environment,
+    hot: &Hot,
+) -> Option<usize> {
+    state
+        .marked
+        .iter()
+        .filter(|&&p| hot.unhandled_fail[p as usize])
+        .map(|&p| hot.place_exec[p as usize] as usize)
+        .find(|&e| {
+            let exe = &plan.executables()[e];
+            match (&exe.subplan, state.subs[e].as_deref()) {
+                (Some(sp), Some(sub)) => sub.status(sp) == PlanStatus::Fail,
+                _ => env.action_failed(&exe.name),
+            }
+        })
 }
 
 fn has_tokens(state: &PlanState, inputs: &[crate::model::Edge]) -> bool {

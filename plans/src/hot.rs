@@ -1,7 +1,7 @@
 //! The step's working set: flat arrays built once per plan.
 
 use crate::condition::Cond;
-use crate::model::{Edge, Place, Transition};
+use crate::model::{Atom, Edge, Place, Transition};
 
 /// The step's working set, laid out flat so that a step touches a few
 /// small arrays per marked place, whatever the net size.
@@ -9,6 +9,9 @@ use crate::model::{Edge, Place, Transition};
 pub(crate) struct Hot {
     /// Per place, its executable or [`Hot::NO_EXEC`].
     pub place_exec: Vec<u32>,
+    /// Per place: an execution place none of whose output transitions asks whether its
+    /// executable failed. A failure there has nobody to handle it, so it fails the plan.
+    pub unhandled_fail: Vec<bool>,
     /// `out_list[out_start[p]..out_start[p + 1]]`: transitions fed by place `p`.
     pub out_start: Vec<u32>,
     pub out_list: Vec<u32>,
@@ -45,6 +48,20 @@ impl Hot {
             .iter()
             .map(|p| p.exec.map_or(Hot::NO_EXEC, |e| e as u32))
             .collect();
+        // One pass over the transitions: each input place of a transition that asks `A.failed`
+        // is handled for `A` (so this costs the arcs, not places times transitions).
+        let mut unhandled_fail: Vec<bool> = places.iter().map(|p| p.exec.is_some()).collect();
+        for t in transitions {
+            t.guard.for_each_atom(&mut |a| {
+                if let Atom::Failed(e) = *a {
+                    for i in &t.inputs {
+                        if places[i.place].exec == Some(e) {
+                            unhandled_fail[i.place] = false;
+                        }
+                    }
+                }
+            });
+        }
         let mut count = vec![0u32; places.len() + 1];
         for t in transitions {
             for e in &t.inputs {
@@ -73,6 +90,7 @@ impl Hot {
         }
         Hot {
             place_exec,
+            unhandled_fail,
             out_start,
             out_list,
             trans,

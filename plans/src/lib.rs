@@ -43,6 +43,11 @@
 //!   neither goal nor fail can be reached) and an unreachable goal marking
 //!   are warnings.
 //! * Execution rules only apply to text plans (an error with a `.pnml`).
+//! * An action that failed where no transition asks about its failure fails the
+//!   plan ([`StepReport::unhandled_failure`]); `check` leaves such failures out
+//!   of its exploration (any action may fail, which would hide livelocks).
+//! * Timed actions `A|N` join when both the action and its timer end in the
+//!   same step, so they cannot deadlock; `{ ... } * N` writes a block N times.
 #![warn(missing_docs)]
 
 mod analysis;

@@ -122,6 +122,19 @@ pub struct Plan {
     pub(crate) goal: Vec<(usize, u32)>,
     pub(crate) fail: Vec<(usize, u32)>,
     pub(crate) comments: Vec<Comment>,
+    /// Where the plan's parts were written (text plans only).
+    pub(crate) sources: Sources,
+}
+
+/// Where a text plan's actions and transitions come from, for messages in the user's terms.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Sources {
+    /// The plan file.
+    pub file: String,
+    /// Line of each action's first occurrence in the plan file.
+    pub action_lines: std::collections::HashMap<String, u32>,
+    /// Per transition index, what the user wrote that made it (an action, a rule).
+    pub origins: std::collections::HashMap<usize, String>,
 }
 
 impl Plan {
@@ -173,6 +186,23 @@ impl Plan {
     /// The executable of this name.
     pub fn executable(&self, name: &str) -> Option<usize> {
         self.executables.iter().position(|e| e.name == name)
+    }
+
+    /// `file:line` where action `name` is first written, for text plans.
+    pub fn action_line(&self, name: &str) -> Option<String> {
+        let line = self.sources.action_lines.get(name)?;
+        Some(format!("{}:{line}", self.sources.file))
+    }
+
+    /// Whether the plan was compiled from the text language (its node ids are made up, so
+    /// messages name labels, actions and rules instead).
+    pub(crate) fn is_text_plan(&self) -> bool {
+        !self.sources.file.is_empty()
+    }
+
+    /// What the user wrote that made transition `t` (text plans): "the rule at r.er:2 (...)".
+    pub fn origin(&self, t: usize) -> Option<&str> {
+        self.sources.origins.get(&t).map(String::as_str)
     }
 
     pub(crate) fn set_subplan(&mut self, exec: usize, plan: Arc<Plan>) {

@@ -2,7 +2,9 @@
 mod common;
 
 use common::*;
-use petrel_plans::{check, check_with, compile_text, load_plan, to_dot, CheckOptions};
+use petrel_plans::{
+    check, check_with, compile_text, load_plan, simulate, to_dot, CheckOptions, PlanStatus, Script,
+};
 
 fn codes(r: &petrel_plans::CheckReport) -> (Vec<&str>, Vec<&str>) {
     (
@@ -103,10 +105,25 @@ fn structural_errors() {
 }
 
 #[test]
-fn timed_actions_that_end_together_block() {
+fn timed_actions_cannot_deadlock_whichever_ends_first() {
     let p = compile_text("a|5", "t.plan", "t", None).unwrap();
     let r = check(&p);
-    assert!(r.warnings.iter().any(|w| w.code == "deadlock"), "{r}");
+    assert_eq!(codes(&r), (vec![], vec![]), "{r}");
+    // The action, its timer, or both in the same step: each way reaches the goal.
+    for script in [
+        "finish a 1\nfinish wait_5 5",
+        "finish a 5\nfinish wait_5 1",
+        "finish a 3\nfinish wait_5 3",
+    ] {
+        let mut out = Vec::new();
+        let script = Script::parse(script, "s").unwrap();
+        assert_eq!(
+            simulate(&p, &script, 20, &mut out).unwrap(),
+            PlanStatus::Goal,
+            "{}",
+            String::from_utf8_lossy(&out)
+        );
+    }
 }
 
 #[test]
@@ -162,7 +179,7 @@ fn livelocks_are_reported_with_a_witness() {
         .collect();
     assert_eq!(live.len(), 1, "{r}");
     assert!(
-        live[0].starts_with("from {'X6': 1} the plan can never reach its goal or fail: it stays among 3 markings forever; reached by step 1: t0 ('a.start'); step 2: t1 ('a.end'); step 3: t5 ('[y]')"),
+        live[0].starts_with("from {'X6': 1} the plan can never reach its goal or fail: it stays among 3 markings forever; reached by step 1: 'a.start'; step 2: 'a.end'; step 3: '[y]'"),
         "{}",
         live[0]
     );
@@ -255,5 +272,55 @@ fn a_shared_subplan_is_loaded_and_checked_once_however_many_paths_reach_it() {
             .iter()
             .any(|w| w.code == "goal-unreachable" && !w.message.starts_with("sub-plan")),
         "L0 itself can never reach its goal: {r}"
+    );
+}
+
+#[test]
+fn a_rule_that_never_applies_is_named_by_its_file_and_line() {
+    let p = compile_text(
+        "goto_dock",
+        "d.plan",
+        "d",
+        Some((
+            "*if* action_failed *during* goto *do* skip_action\n*if* action_failed *during* goto_dock *do* fail_plan\n",
+            "d.er",
+        )),
+    )
+    .unwrap();
+    let r = check(&p);
+    let dead: Vec<&str> = r
+        .warnings
+        .iter()
+        .filter(|w| w.code == "dead-transition")
+        .map(|w| w.message.as_str())
+        .collect();
+    assert_eq!(
+        dead,
+        ["the rule at d.er:2 (`*if* action_failed *during* goto_dock *do* fail_plan`) for `goto_dock` never applies (`goto_dock.fail` can never fire): the rule at d.er:1 (`*if* action_failed *during* goto *do* skip_action`) for `goto_dock` already handles it"],
+        "{r}"
+    );
+    assert!(!r.to_string().contains("'t"), "no internal ids: {r}");
+}
+
+#[test]
+fn an_action_that_can_never_run_is_named_by_its_line() {
+    let p = compile_text(
+        "a;\nGOTO_LABEL_end;\nLABEL_skipped;\nb;\nLABEL_end;\nc",
+        "j.plan",
+        "j",
+        None,
+    )
+    .unwrap();
+    let r = check(&p);
+    let dead: Vec<&str> = r
+        .warnings
+        .iter()
+        .filter(|w| w.code == "dead-transition")
+        .map(|w| w.message.as_str())
+        .collect();
+    assert_eq!(
+        dead,
+        ["action `b` at j.plan:4: `b.start` can never fire"],
+        "{r}"
     );
 }

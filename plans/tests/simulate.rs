@@ -142,3 +142,49 @@ fn scripts_accept_every_name_a_plan_can_contain() {
     let e = Script::parse("finish #x 2 3", "s").unwrap_err().to_string();
     assert!(e.starts_with("s:1: cannot read 'finish'"), "{e}");
 }
+
+#[test]
+fn an_unhandled_failure_fails_the_plan_and_a_handled_one_does_not() {
+    let p = petrel_plans::compile_text("a; b", "f.plan", "f", None).unwrap();
+    let (out, status) = lines(&p, "finish a 1\nfail b 1", 20);
+    assert_eq!(status, PlanStatus::Fail, "{out:?}");
+    assert_eq!(out.last().unwrap(), r#"{"result":"fail","step":4}"#);
+    // With a rule for b's failure, the rule runs instead.
+    let p = petrel_plans::compile_text(
+        "a; b",
+        "f.plan",
+        "f",
+        Some((
+            "*if* action_failed *during* b *do* fix; skip_action",
+            "f.er",
+        )),
+    )
+    .unwrap();
+    let (out, status) = lines(&p, "finish a 1\nfail b 1\nfinish fix 1", 20);
+    assert_eq!(status, PlanStatus::Goal, "{out:?}");
+    assert!(out.iter().any(|l| l.contains("b.fail")), "{out:?}");
+}
+
+#[test]
+fn an_unhandled_failure_is_reported_with_its_action() {
+    let p = petrel_plans::compile_text("a; b", "f.plan", "f", None).unwrap();
+    let mut state = petrel_plans::PlanState::new(&p);
+    let script = Script::parse("finish a 1\nfail b 1", "s").unwrap();
+    let mut env = petrel_plans::ScriptedEnv::new(&script);
+    let mut failed = None;
+    for _ in 0..10 {
+        let r = petrel_plans::step(&p, &mut state, &mut env);
+        failed = failed.or(r.unhandled_failure);
+    }
+    assert_eq!(failed.as_deref(), Some("b"));
+    assert_eq!(state.status(&p), PlanStatus::Fail);
+    assert_eq!(state.unhandled_failure(&p).as_deref(), Some("b"));
+    // A saved failed state restores as failed.
+    let mut again = petrel_plans::PlanState::new(&p);
+    again.restore(&p, &state.save()).unwrap();
+    assert_eq!(again.status(&p), PlanStatus::Fail);
+    assert!(
+        again.restore(&p, &[7, 1]).is_err(),
+        "a key that does not fit is refused"
+    );
+}

@@ -90,6 +90,7 @@ fn timed_action() {
             "wait_30.end: wait_30.exec -> X6",
             "wait_30.interrupt []: wait_30.exec,X4 -> X7",
             "a.interrupt []: a.exec,X6 -> X7",
+            "[]: X4,X6 -> X7",
             "b.start: X7 -> b.exec",
             "b.end: b.exec -> goal",
         ]
@@ -330,4 +331,23 @@ fn syntax_errors_have_line_and_column() {
         error("a ! *if* x *do* b", None),
         "t.plan:1:3: inline rule without its closing '!'"
     );
+}
+
+#[test]
+fn a_block_repeats_n_times() {
+    let p = compile("{ a; b } * 2; c", None);
+    let (_, trans) = structure(&p);
+    let starts: Vec<&String> = trans.iter().filter(|t| t.contains(".start")).collect();
+    assert_eq!(starts.len(), 5, "{trans:?}");
+    let glued = compile("{ a }*3", None);
+    assert_eq!(
+        structure(&glued)
+            .1
+            .iter()
+            .filter(|t| t.starts_with("a.start"))
+            .count(),
+        3
+    );
+    assert!(error("{ a } * 0", None).contains("expected a number of times from 1 to 1000"));
+    assert!(error("{ a } * x", None).contains("'x'"));
 }

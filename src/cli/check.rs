@@ -258,12 +258,20 @@ fn check_missions(file: &ConfigFile, built: Registry, missions: &[&str]) -> Vec<
         };
         let mut errors = Vec::new();
         for &module in missions {
-            if let Err(problems) = petrel_plans::mission::check_mission(&bb, module).await {
-                errors.extend(
+            match petrel_plans::mission::check_mission(&bb, module).await {
+                Ok(warnings) => {
+                    for w in warnings {
+                        eprintln!(
+                            "warning: {}",
+                            file.error(module, Some(&w.needle), w.message)
+                        );
+                    }
+                }
+                Err(problems) => errors.extend(
                     problems
                         .into_iter()
                         .map(|p| file.error(module, Some(&p.needle), p.message)),
-                );
+                ),
             }
         }
         errors

@@ -26,8 +26,14 @@ use std::time::Duration;
 use clap::{Parser, Subcommand, ValueEnum};
 use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry};
 
+// Exit codes: one table, documented in docs/missions.md ("Exit codes").
+/// Exit code when a mission or plan failed, a module failed, or a check found errors.
+pub(crate) const EXIT_FAILED: u8 = 1;
 /// Exit code for bad input (config errors, unknown names).
 pub(crate) const EXIT_BAD_INPUT: u8 = 2;
+// 3: the supervisor gave up (`petrel_actors::EXIT_GAVE_UP`), passed on from the agent.
+/// Exit code when time ran out (`run --for`, `plan simulate --steps`) with a mission still running.
+pub(crate) const EXIT_STILL_RUNNING: u8 = 4;
 
 #[derive(Parser)]
 #[command(
@@ -338,12 +344,14 @@ fn stop_quietly_on_a_closed_pipe() {
     }
 }
 
-/// Loads a config with its overlays, and adds the `contexts` module its `contexts:` field asks for.
+/// Loads a config with its overlays, and adds the `contexts` module its `contexts:` field asks for
+/// (on the clock of the agent's mission, when its `in/clock` is linked).
 pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile, ConfigErrors> {
     let mut file = ConfigFile::load(config)?;
     for overlay in overlays {
         file.overlay(ConfigFile::load(overlay)?);
     }
+    link_mission_clocks(&mut file);
     if let Some(rules) = file.config.contexts.clone() {
         // Relative to the config file, like every file path in it (resolved when built).
         let exists = file
@@ -352,15 +360,50 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
             .iter()
             .any(|m| m.name == CONTEXTS_MODULE);
         if !exists {
+            // Contexts run on the same clock as the agent's mission (`in/clock`), if it has one.
+            let clock = file
+                .config
+                .modules
+                .iter()
+                .filter(|m| m.type_name == "mission.pnp")
+                .find_map(|m| m.links.get("in/clock").cloned());
             file.config.modules.push(ModuleConfig {
                 name: CONTEXTS_MODULE.into(),
                 type_name: "context.manager".into(),
                 values: [("params/rules".to_string(), ron::Value::String(rules))].into(),
+                links: clock
+                    .map(|c| [("in/clock".to_string(), c)].into())
+                    .unwrap_or_default(),
                 ..Default::default()
             });
         }
     }
     Ok(file)
+}
+
+/// The agent's clock is its simulator's when one drives it: a mission whose `in/clock` the
+/// config leaves unlinked, in an agent with exactly one `sim.world`, runs on that world's
+/// `out/simTime` (so `held(x, 2s)` is two simulated seconds, as the robot lives them).
+fn link_mission_clocks(file: &mut ConfigFile) {
+    let mut worlds = file
+        .config
+        .modules
+        .iter()
+        .filter(|m| m.type_name == "sim.world");
+    let (Some(world), None) = (worlds.next(), worlds.next()) else {
+        return;
+    };
+    let sim_time = format!("{}/out/simTime", world.name);
+    for m in file
+        .config
+        .modules
+        .iter_mut()
+        .filter(|m| m.type_name == "mission.pnp")
+    {
+        m.links
+            .entry("in/clock".to_string())
+            .or_insert_with(|| sim_time.as_str().into());
+    }
 }
 
 /// The name of the context manager that an agent's `contexts:` field adds.

@@ -12,8 +12,7 @@ use petrel_plans::{
 
 use super::EXIT_BAD_INPUT;
 
-/// Exit code when a plan loads but its analysis finds errors, or a simulation ends in fail.
-const EXIT_PLAN_FAILED: u8 = 1;
+use super::{EXIT_FAILED as EXIT_PLAN_FAILED, EXIT_STILL_RUNNING};
 
 #[derive(Subcommand)]
 pub(crate) enum PlanCommand {
@@ -49,15 +48,19 @@ pub(crate) enum PlanCommand {
         output: PathBuf,
     },
     /// Runs the plan against a scripted environment; prints one JSON object per step.
+    ///
+    /// Exit code: 0 when the plan reaches its goal, 1 when it fails, 4 when --steps runs out
+    /// with the plan still running, 2 on bad input.
     Simulate {
         /// The plan.
         plan: PathBuf,
         /// Execution rules for a text plan.
         #[arg(long)]
         rules: Option<PathBuf>,
-        /// The script (`finish A N`, `fail A N`, `cond NAME FROM TO`); none = every action
-        /// finishes after 2 steps, every condition is false.
-        #[arg(long)]
+        /// A script file, or `-` to read it from standard input: lines `finish A N`,
+        /// `fail A N`, `cond NAME FROM TO`. Without one every action finishes after 2 steps
+        /// and every condition is false.
+        #[arg(long, value_name = "FILE|-")]
         script: Option<PathBuf>,
         /// Stop after this many steps if the plan has not ended.
         #[arg(long, default_value_t = DEFAULT_MAX_STEPS)]
@@ -107,7 +110,12 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             let script = match &script {
                 None => Script::default(),
                 Some(path) => {
-                    let text = match std::fs::read_to_string(path) {
+                    let read = if path.as_os_str() == "-" {
+                        std::io::read_to_string(std::io::stdin())
+                    } else {
+                        std::fs::read_to_string(path)
+                    };
+                    let text = match read {
                         Ok(text) => text,
                         Err(e) => {
                             return bad_input(format!(
@@ -127,7 +135,8 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             let _ = out.flush();
             match status {
                 Ok(PlanStatus::Fail) => ExitCode::from(EXIT_PLAN_FAILED),
-                Ok(_) => ExitCode::SUCCESS,
+                Ok(PlanStatus::Running) => ExitCode::from(EXIT_STILL_RUNNING),
+                Ok(PlanStatus::Goal) => ExitCode::SUCCESS,
                 Err(e) => bad_input(format!("cannot write the simulation: {e}")),
             }
         }),

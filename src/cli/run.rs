@@ -11,7 +11,7 @@ use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
 use super::check::{check_all, check_team};
-use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT};
+use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
     let _trace = match logging::init(args.log_format, args.trace_out.as_deref()) {
@@ -96,17 +96,24 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         None => None,
     };
     let forever = std::future::pending::<()>();
-    let (why, mut code) = tokio::select! {
-        exit = first_exit(&agents) => (exit.reason, ExitCode::from(exit.code)),
-        _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), ExitCode::SUCCESS),
+    let (mut why, mut code) = tokio::select! {
+        exit = first_exit(&agents) => (exit.reason, exit.code),
+        _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), 0),
         _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
         _ = async {
             match args.duration {
                 Some(d) => tokio::time::sleep(d).await,
                 None => forever.await,
             }
-        } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), ExitCode::SUCCESS),
+        } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), 0),
     };
+    if args.duration.is_some() && code == 0 && why.starts_with("ran for") {
+        let pending = pending_missions(&agents, &files).await;
+        if !pending.is_empty() {
+            why = format!("{why}; mission still running: {}", pending.join(", "));
+            code = EXIT_STILL_RUNNING;
+        }
+    }
     // Tools stop finding the run before its agents stop answering.
     drop(registration);
     for agent in &agents {
@@ -115,8 +122,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let summaries = stop_all(&agents, teams, args).await;
     if let Some(recorder) = recorder {
         if let Err(e) = super::record::finish(recorder).await {
-            eprintln!("error: {e}");
-            code = ExitCode::FAILURE;
+            tracing::error!("{e}");
+            code = code.max(EXIT_FAILED);
         }
     }
     if let (Some(path), [agent]) = (&args.snapshot_out, agents.as_slice()) {
@@ -132,7 +139,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
                     "error: could not write the snapshot to {}: {e}",
                     path.display()
                 );
-                code = ExitCode::FAILURE;
+                code = code.max(EXIT_FAILED);
             }
         }
     }
@@ -150,9 +157,38 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     if failed {
         // A log event, so `--log-format json` consumers see it too.
         tracing::error!("some modules failed: see the summary and the log");
-        code = ExitCode::FAILURE;
+        // A more specific reason (the supervisor gave up, a mission failed) keeps its code.
+        if code == 0 {
+            code = EXIT_FAILED;
+        }
     }
-    code
+    ExitCode::from(code)
+}
+
+/// Missions (`mission.pnp` modules with `params/is_mission`) whose plan has not ended, as
+/// `agent/module`: a run stopped by `--for` before them did not do its job.
+async fn pending_missions(agents: &[Agent], files: &[ConfigFile]) -> Vec<String> {
+    let mut pending = Vec::new();
+    for (agent, file) in agents.iter().zip(files) {
+        for m in file
+            .config
+            .modules
+            .iter()
+            .filter(|m| m.type_name == "mission.pnp")
+        {
+            let bb = agent.blackboard();
+            let is_mission = bb
+                .get::<bool>(&format!("{}/params/is_mission", m.name))
+                .await;
+            let result = bb.get::<String>(&format!("{}/out/result", m.name)).await;
+            if let (Ok(is_mission), Ok(result)) = (is_mission, result) {
+                if *is_mission && result.as_str() == "running" {
+                    pending.push(format!("{}/{}", agent.name(), m.name));
+                }
+            }
+        }
+    }
+    pending
 }
 
 /// Starts every agent, then joins each to its team or makes it reachable by tools (unless

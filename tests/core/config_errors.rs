@@ -247,3 +247,41 @@ fn file_paths_are_relative_to_the_config_file_that_names_them() {
         "an overlay's paths are relative to the overlay"
     );
 }
+
+#[test]
+fn every_field_an_overlay_writes_replaces_the_base_and_nothing_else_does() {
+    let mut base = ConfigFile::parse(
+        "base.ron",
+        r#"Agent(name: "r1", supervision: (max_restarts: 5, within_s: 10.0),
+            modules: [(name: "c", type: "demo.counter", restart: permanent, watchdog_ms: 100,
+                       values: {"params/period_ms": 10})])"#,
+    )
+    .unwrap();
+    let overlay = ConfigFile::parse(
+        "overlay.ron",
+        r#"Agent(name: "r1", supervision: (max_restarts: 50, within_s: 2.0, on_give_up: disable_module),
+            groups: [(name: "g", strategy: one_for_all)],
+            modules: [(name: "c", type: "demo.counter", restart: temporary, group: "g",
+                       values: {"params/start": 5.0})])"#,
+    )
+    .unwrap();
+    base.overlay(overlay);
+    let c = &base.config;
+    assert_eq!(
+        (c.supervision.max_restarts, c.supervision.within_s),
+        (50, 2.0)
+    );
+    assert_eq!(c.groups.len(), 1);
+    let m = &c.modules[0];
+    assert_eq!(
+        m.restart,
+        petrel::actors::supervision::RestartPolicy::Temporary
+    );
+    assert_eq!(m.group.as_deref(), Some("g"));
+    assert_eq!(m.watchdog_ms, Some(100), "not written by the overlay: kept");
+    assert_eq!(m.values.len(), 2, "values merge key by key");
+    // An overlay that writes no supervision leaves the base's.
+    let mut again = base.clone();
+    again.overlay(ConfigFile::parse("o.ron", r#"Agent(name: "r1", modules: [])"#).unwrap());
+    assert_eq!(again.config.supervision.max_restarts, 50);
+}

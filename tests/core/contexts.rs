@@ -160,3 +160,65 @@ async fn reloaded_rules_wake_on_the_properties_they_newly_read() {
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(&rules, LOST).unwrap();
+    let agent = start(&agent_with_rules(&rules)).await;
+    let bb = agent.blackboard().clone();
+    bb.set("quality/in/value", 0.1).await.unwrap();
+    advance(30).await;
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        0.0
+    );
+    std::fs::write(&rules, LOST.replace(r#""0.0""#, r#""0.25""#)).unwrap();
+    bb.set("contexts/params/reload", 1_i64).await.unwrap();
+    advance(30).await;
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "lost"
+    );
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        0.25,
+        "the context stays active and applies its new value"
+    );
+    // It still restores the original value when it ends.
+    bb.set("quality/in/value", 0.9).await.unwrap();
+    advance(30).await;
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        1.0
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_linked_clock_drives_held_in_context_rules() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(
+        &rules,
+        r#"Contexts(contexts: [(name: "low", when: "held(quality/out/value < 0.3, 5s)")])"#,
+    )
+    .unwrap();
+    // `clk` counts 100 per wall second: as the clock, 5 s of it pass in 50 ms.
+    let config = agent_with_rules(&rules).replace(
+        r#"(name: "contexts", type: "context.manager","#,
+        r#"(name: "clk", type: "demo.counter", values: {"params/period_ms": 10}),
+            (name: "contexts", type: "context.manager", links: {"in/clock": "clk/out/value"},"#,
+    );
+    let agent = start(&config).await;
+    let bb = agent.blackboard().clone();
+    bb.set("quality/in/value", 0.1).await.unwrap();
+    advance(200).await;
+    assert_eq!(
+        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        "low",
+        "5 clock seconds held within 200 ms of wall time"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

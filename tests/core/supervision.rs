@@ -160,8 +160,9 @@ async fn beyond_the_intensity_stop_agent_ends_the_run_naming_the_module() {
         .expect("the supervisor gives up within a minute");
     assert_eq!(exit.code, EXIT_GAVE_UP);
     assert!(
-        exit.reason
-            .contains("module `laser` failed 4 times (3 restarts)"),
+        exit.reason.contains(
+            "the agent-wide restart limit (supervision max_restarts: 3 within_s: 10) was reached; restarts so far: `laser` 3; the last failure was module `laser` (failure 4)"
+        ),
         "{}",
         exit.reason
     );

@@ -95,9 +95,10 @@ async fn bad_bindings_are_all_refused_at_init_with_positions() {
         r#"m/params/actions["a"].finished: 2:2: unknown property `c1/out/valu` (in `c1/out/value >= 3 and"#,
         r#"m/params/actions["b"].finished: 1:1: the left operand of `and` must be a boolean, found a number"#,
         r#"m/params/actions["c"].enable (action `c`): no module `nope` in this agent"#,
-        r#"m/params/actions["c"].set["c1/params/period_ms"] (action `c`): expected i64: "#,
+        r#"bad.plan:1): `c1/params/period_ms` takes a value like 10, found "fast""#,
         r#"m/params/actions["e"].failed: 1:19: expected a value, found the end (in `c1/out/value > 1 +`)"#,
-        "m/params/actions: no binding for action `d` (bound: a, b, c, e); bind them, or set params/allow_unbound",
+        "m/params/actions: no binding for action `d` at ",
+        "(bound: a, b, c, e); bind them, or set params/allow_unbound",
     ] {
         assert!(err.contains(want), "missing `{want}` in:\n{err}");
     }
@@ -120,6 +121,104 @@ async fn a_missing_plan_file_is_reported_with_its_path() {
         exit.reason.contains("m/params/plan") && exit.reason.contains("/nonexistent/p.plan"),
         "{}",
         exit.reason
+    );
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn named_places_are_parameters_of_one_binding() {
+    // `goto_far` and `goto_near` bind to `goto`: the place's value is set with the target's type
+    // and its field is read in the condition.
+    let plans = Plans::new(&[("places.plan", "goto_far; goto_near")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/places": {{"far": (increment: 5.0, until: 20.0), "near": (increment: 1.0, until: 23.0)}},
+           "params/actions": {{
+            "goto": (enable: ["c1"], set: {{"c1/params/increment": "$1.increment"}},
+                     finished: "c1/out/value >= $1.until"),
+        }}"#,
+        plans.path("places.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 0, "{}", exit.reason);
+    let bb = agent.blackboard();
+    assert_eq!(
+        *bb.get::<f64>("c1/out/value").await.unwrap(),
+        23.0,
+        "4 x 5, then 3 x 1"
+    );
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn wrong_arity_and_wrong_place_values_are_refused_naming_the_plan_line() {
+    let plans = Plans::new(&[("bad.plan", "# patrol\ngoto_kitchen; count_1_2")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/places": {{"kitchen": (x: 1.0, y: 2.0)}},
+           "params/actions": {{
+            "goto": (set: {{"c1/params/increment": "$1"}}, finished: "true"),
+            "count": (finished: "c1/out/value >= $1"),
+        }}"#,
+        plans.path("bad.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 2);
+    let summary = stop(agent).await;
+    let err = summary
+        .module("m")
+        .unwrap()
+        .last_error
+        .clone()
+        .unwrap_or_default();
+    for want in [
+        "action `count_1_2` at ",
+        "bad.plan:2 has 2 parameters, but the binding uses up to $1; write the action as `count_P1`",
+        "`c1/params/increment` takes a value like 1.0, found (x: 1.0, y: 2.0)",
+    ] {
+        assert!(err.contains(want), "missing `{want}` in:\n{err}");
+    }
+    assert!(
+        !err.contains("Expected") && !err.contains("f64"),
+        "no type names from the code: {err}"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn expressions_read_the_latest_item_of_a_queue() {
+    // The producer pushes 0, 1, 2... every 10 ms; `a` ends when the latest item reaches 20,
+    // read from the queue itself and through a consumer's linked queue input.
+    let plans = Plans::new(&[("q.plan", "a; b")]);
+    let config = agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/actions": {{
+            "a": (finished: "producer/out/items >= 20"),
+            "b": (finished: "consumer/in/items >= 30"),
+        }}"#,
+        plans.path("q.plan")
+    ))
+    .replace(
+        r#"(name: "m", type: "mission.pnp""#,
+        r#"(name: "producer", type: "demo.producer", values: {"params/period_ms": 10}),
+           (name: "consumer", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+           (name: "m", type: "mission.pnp""#,
+    );
+    let agent = start(&config).await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 0, "{}", exit.reason);
+    let memory = agent
+        .blackboard()
+        .get::<petrel::plans::mission::MissionMemory>("m/state/memory")
+        .await
+        .unwrap();
+    assert!(
+        (memory.actions["a"].time_s - 0.2).abs() < 0.015,
+        "{memory:?}"
+    );
+    assert!(
+        (memory.actions["b"].time_s - 0.1).abs() < 0.015,
+        "{memory:?}"
     );
     stop(agent).await;
 }

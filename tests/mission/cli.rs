@@ -45,3 +45,172 @@ fn check_accepts_the_mission_demo() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn plan_simulate_exit_codes_say_goal_fail_or_still_running_and_read_scripts_from_stdin() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("p.plan");
+    std::fs::write(&plan, "a; b").unwrap();
+    let plan = plan.display().to_string();
+    let simulate = |script: &str, steps: &str| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["plan", "simulate", &plan, "--script", "-", "--steps", steps])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .expect("petrel runs");
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(script.as_bytes())
+            .unwrap();
+        let out = child.wait_with_output().unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    assert_eq!(simulate("", "100").0, Some(0));
+    let (code, out) = simulate("fail b 1", "100");
+    assert_eq!(code, Some(1), "an unhandled failure fails the plan: {out}");
+    let (code, out) = simulate("", "2");
+    assert_eq!(code, Some(4), "steps ran out: {out}");
+    assert!(
+        out.ends_with("{\"result\":\"running\",\"step\":2}\n"),
+        "{out}"
+    );
+    let help = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(["plan", "simulate", "--help"])
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("--script <FILE|->") && help.contains("4 when --steps runs out"),
+        "{help}"
+    );
+}
+
+#[test]
+fn a_run_stopped_by_for_while_the_mission_runs_says_so_and_exits_4() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("slow.plan"), "wait_60").unwrap();
+    let config = dir.path().join("slow.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", modules: [
+            (name: "m", type: "mission.pnp", values: {"params/plan": "slow.plan", "params/is_mission": true}),
+        ])"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args([
+            "run",
+            &config.display().to_string(),
+            "--for",
+            "300ms",
+            "--no-remote",
+        ])
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("petrel runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(4), "{stdout}");
+    assert!(stdout.contains("mission still running: r1/m"), "{stdout}");
+}
+
+#[test]
+fn a_give_up_exits_3_naming_the_agent_wide_limit_even_though_a_module_failed() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("giveup.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", supervision: (max_restarts: 2, within_s: 10.0, backoff: (min_ms: 5, max_ms: 5, jitter: 0.0)),
+            modules: [
+                (name: "producer", type: "demo.producer", values: {"params/period_ms": 5}),
+                (name: "chaos", type: "demo.chaos", values: {"params/targets": "producer", "params/faults": "panic",
+                                                            "params/mean_interval_ms": 50, "params/seed": 7}),
+            ])"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args([
+            "run",
+            &config.display().to_string(),
+            "--for",
+            "20s",
+            "--no-remote",
+        ])
+        .env("RUST_LOG", "off")
+        .output()
+        .expect("petrel runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(3), "{stdout}");
+    assert!(
+        stdout.contains("the agent-wide restart limit (supervision max_restarts: 2 within_s: 10) was reached; restarts so far: `producer` 2"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn check_warns_about_a_binding_no_action_uses_with_the_nearest_name() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.plan"), "report_dock").unwrap();
+    let config = dir.path().join("m.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", modules: [
+            (name: "m", type: "mission.pnp", values: {"params/plan": "m.plan", "params/allow_unbound": true,
+             "params/actions": {"reprot_dock": (finished: "true")}}),
+        ])"#,
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args(["check", &config.display().to_string()])
+        .output()
+        .expect("petrel runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "a warning, not an error: {stderr}");
+    assert!(
+        stderr.contains("warning: ")
+            && stderr.contains("m/params/actions[\"reprot_dock\"]: the plan has no action `reprot_dock` (nor `reprot_dock_...`); did you mean `report_dock`?"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_simulator_drives_mission_time_without_a_link() {
+    // wait_5 is 5 simulated seconds: half a second of wall time at time_scale 10.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("w.plan"), "wait_5").unwrap();
+    let world = std::path::Path::new("configs/worlds/cluttered.txt")
+        .canonicalize()
+        .unwrap();
+    let config = dir.path().join("w.ron");
+    std::fs::write(
+        &config,
+        format!(
+            r#"Agent(name: "r1", modules: [
+            (name: "robot", type: "sim.world", values: {{"params/world": {:?}, "params/time_scale": 10.0}}),
+            (name: "m", type: "mission.pnp", values: {{"params/plan": "w.plan", "params/is_mission": true}}),
+        ])"#,
+            world.display().to_string()
+        ),
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .args([
+            "run",
+            &config.display().to_string(),
+            "--for",
+            "3s",
+            "--no-remote",
+        ])
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("petrel runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "ended before --for: {stdout}");
+    assert!(stdout.contains("mission `w` ended: goal"), "{stdout}");
+}

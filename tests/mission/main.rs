@@ -4,4 +4,8 @@
 mod bindings;
 mod cli;
 mod execution;
+mod guide;
+mod patrol;
+mod resilience;
 mod support;
+mod time;

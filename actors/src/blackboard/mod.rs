@@ -47,6 +47,7 @@ pub(crate) enum BlackboardMsg {
     SetRon(String, ron::Value, Reply<()>),
     Get(String, Reply<(TypeInfo, AnyValue)>),
     Endpoint(String, Reply<Arc<crate::cell::Endpoint>>),
+    Latest(String, Reply<Arc<crate::cell::Endpoint>>),
     Snapshot(Reply<String>),
     LinkOf(String, Reply<Option<String>>),
     AddModule(
@@ -135,6 +136,9 @@ impl Actor for BlackboardActor {
             }
             BlackboardMsg::Endpoint(key, reply) => {
                 let _ = reply.send(reg.endpoint(&key));
+            }
+            BlackboardMsg::Latest(key, reply) => {
+                let _ = reply.send(reg.endpoint_or_latest(&key));
             }
             BlackboardMsg::AddModule(config, module_type, reply) => {
                 let result = reg.add_module(&config, &module_type);
@@ -324,6 +328,17 @@ impl Blackboard {
             });
         }
         Ok(PropertyHandle::new(ep))
+    }
+
+    /// Like [`any_handle`](Blackboard::any_handle), and for a queue a read handle to its
+    /// latest item (version = items pushed since it was first asked for, write time = push
+    /// time): what expressions read, so `min(robot/out/laserScan.ranges)` works. A queue
+    /// whose item type has no known default and that has no item yet is refused.
+    pub async fn expr_handle(&self, address: &str) -> Result<AnyHandle, BlackboardError> {
+        let ep = self
+            .call(|r| BlackboardMsg::Latest(address.to_string(), r))
+            .await?;
+        Ok(AnyHandle { ep })
     }
 
     /// An untyped direct handle to a value property (see [`AnyHandle`]).

@@ -27,6 +27,7 @@ use crate::team::{LinkTarget, TeamConfig};
 
 mod error;
 mod record;
+mod written;
 
 pub use error::{parse_ron, read_text, ConfigError, ConfigErrors};
 pub use record::RecordSection;
@@ -103,6 +104,9 @@ pub struct ConfigFile {
     /// Which source gave each (module, value key) that an overlay set; the base otherwise.
     /// Relative file paths are resolved against their own file's directory.
     value_sources: HashMap<(String, String), usize>,
+    /// The fields written in the file (agent fields, and `module/field` for module fields), so
+    /// that an overlay replaces exactly what it writes and nothing is silently dropped.
+    written: std::collections::BTreeSet<String>,
 }
 
 impl ConfigFile {
@@ -120,21 +124,38 @@ impl ConfigFile {
         let config =
             parse_ron::<AgentConfig>(path, text, what).map_err(|e| ConfigErrors(vec![e]))?;
         Ok(ConfigFile {
+            written: written::written_fields(text),
             config,
             sources: vec![(path.into(), text.to_string())],
             value_sources: HashMap::new(),
         })
     }
 
-    /// Applies `overlay` (e.g. a snapshot) on top: modules match by name; its values, links and
-    /// capacities replace this config's; modules only it has are appended.
+    /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
+    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`; per module `type`,
+    /// `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`), while modules match by name
+    /// and their `values`, `links` and `capacities` are merged key by key; modules only it
+    /// has are appended.
     pub fn overlay(&mut self, overlay: ConfigFile) {
         let source = self.sources.len();
+        let wrote = |field: &str| overlay.written.contains(field);
         if overlay.config.team.is_some() {
             self.config.team = overlay.config.team.clone();
         }
         if overlay.config.record.is_some() {
             self.config.record = overlay.config.record.clone();
+        }
+        if wrote("supervision") {
+            self.config.supervision = overlay.config.supervision.clone();
+        }
+        if wrote("groups") {
+            self.config.groups = overlay.config.groups.clone();
+        }
+        if wrote("contexts") {
+            self.config.contexts = overlay.config.contexts.clone();
+        }
+        if wrote("name") && !overlay.config.name.is_empty() {
+            self.config.name = overlay.config.name.clone();
         }
         for m in &overlay.config.modules {
             for key in m.values.keys() {
@@ -145,7 +166,21 @@ impl ConfigFile {
         for m in overlay.config.modules {
             match self.config.modules.iter_mut().find(|b| b.name == m.name) {
                 Some(base) => {
+                    let wrote =
+                        |field: &str| overlay.written.contains(&format!("{}/{field}", m.name));
                     base.type_name = m.type_name;
+                    if wrote("group") {
+                        base.group = m.group;
+                    }
+                    if wrote("restart") {
+                        base.restart = m.restart;
+                    }
+                    if wrote("watchdog_ms") {
+                        base.watchdog_ms = m.watchdog_ms;
+                    }
+                    if wrote("shutdown_timeout_ms") {
+                        base.shutdown_timeout_ms = m.shutdown_timeout_ms;
+                    }
                     base.values.extend(m.values);
                     base.links.extend(m.links);
                     base.capacities.extend(m.capacities);
@@ -154,6 +189,7 @@ impl ConfigFile {
             }
         }
         self.sources.extend(overlay.sources);
+        self.written.extend(overlay.written);
     }
 
     /// The directory relative file paths of `module`'s value `key` are taken from: that of the

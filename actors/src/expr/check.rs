@@ -17,10 +17,16 @@ pub(crate) enum Node {
     Abs(Box<Node>),
     /// `min` (false) or `max` (true).
     MinMax(bool, Vec<Node>),
+    /// `min` (false) or `max` (true) of the elements of a list of numbers.
+    MinMaxList(bool, Box<Node>),
+    /// `len(list)`.
+    Len(Box<Node>),
     Clamp(Box<Node>, Box<Node>, Box<Node>),
     /// `held`: condition, seconds, index of its state slot.
     Held(Box<Node>, f64, usize),
     Age(usize),
+    /// `elapsed()`.
+    Elapsed,
 }
 
 /// What the checker needs from its caller.
@@ -29,6 +35,8 @@ pub(crate) trait Resolve {
     fn resolve(&mut self, path: &str) -> Result<(usize, Ty), String>;
     /// A fresh state slot for a `held`.
     fn held_slot(&mut self) -> usize;
+    /// The expression depends on time alone (`elapsed`).
+    fn timed(&mut self);
 }
 
 pub(crate) struct Checker<'a, R> {
@@ -161,6 +169,32 @@ impl<R: Resolve> Checker<'_, R> {
                     .resolve(p)
                     .map_err(|m| self.err(args[0].span, m))?;
                 Ok((Node::Age(i), Ty::Num))
+            }
+            Func::Elapsed => {
+                arity(0, "elapsed", "elapsed()")?;
+                self.resolve.timed();
+                Ok((Node::Elapsed, Ty::Num))
+            }
+            Func::Len => {
+                arity(1, "len", "len(list)")?;
+                let (n, t) = self.check(&args[0])?;
+                if !matches!(t, Ty::List(_)) {
+                    return Err(self.err(args[0].span, format!("`len` takes a list, found {t}")));
+                }
+                Ok((Node::Len(Box::new(n)), Ty::Num))
+            }
+            Func::Min | Func::Max if args.len() == 1 => {
+                let (n, t) = self.check(&args[0])?;
+                let name = if f == Func::Max { "max" } else { "min" };
+                if t != Ty::List(Box::new(Ty::Num)) {
+                    return Err(self.err(
+                        ast.span,
+                        format!(
+                            "`{name}` takes a list of numbers or at least 2 numbers, found {t}"
+                        ),
+                    ));
+                }
+                Ok((Node::MinMaxList(f == Func::Max, Box::new(n)), Ty::Num))
             }
             Func::Held => {
                 arity(2, "held", "held(condition, duration)")?;

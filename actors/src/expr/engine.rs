@@ -31,6 +31,12 @@ struct Entry {
     value: Option<Result<Value, String>>,
     deadline: Option<Instant>,
     evaluations: u64,
+    /// Where its time counts from (`elapsed`, and the earliest start of `held` and `age`).
+    origin: Option<Instant>,
+    /// Its `held` state slots.
+    held: std::ops::Range<usize>,
+    /// When it was added: `elapsed` counts from here until an origin is set.
+    added: Instant,
 }
 
 /// A set of checked expressions that knows which expressions read which properties: after
@@ -86,6 +92,10 @@ impl Resolve for Resolver<'_> {
         Ok((i, ty.clone()))
     }
 
+    fn timed(&mut self) {
+        self.timed = true;
+    }
+
     fn held_slot(&mut self) -> usize {
         self.timed = true;
         self.held += 1;
@@ -95,13 +105,14 @@ impl Resolve for Resolver<'_> {
 
 fn uses_age(n: &Node) -> bool {
     match n {
-        Node::Age(_) => true,
+        Node::Age(_) | Node::Elapsed => true,
         Node::Const(_) | Node::Prop(_) => false,
         Node::Field(x, _) | Node::Neg(x) | Node::Not(x) | Node::Abs(x) | Node::Held(x, _, _) => {
             uses_age(x)
         }
         Node::Bin(_, a, b) => uses_age(a) || uses_age(b),
         Node::MinMax(_, xs) => xs.iter().any(uses_age),
+        Node::MinMaxList(_, x) | Node::Len(x) => uses_age(x),
         Node::Clamp(a, b, c) => uses_age(a) || uses_age(b) || uses_age(c),
     }
 }
@@ -130,6 +141,7 @@ impl ExprSet {
             held: self.held.len(),
             timed: false,
         };
+        let first_held = self.held.len();
         let (node, ty) = Checker {
             src,
             resolve: &mut r,
@@ -168,6 +180,9 @@ impl ExprSet {
             value: None,
             deadline: None,
             evaluations: 0,
+            origin: None,
+            held: first_held..held,
+            added: Instant::now(),
         });
         Ok(ExprId(id))
     }
@@ -230,6 +245,8 @@ impl ExprSet {
                 held: &mut self.held,
                 now,
                 deadline: None,
+                origin: e.origin,
+                since: e.origin.unwrap_or(e.added),
             };
             let v = ev.eval(&e.node);
             e.deadline = ev.deadline;
@@ -244,6 +261,41 @@ impl ExprSet {
         // Time-dependent expressions stay due.
         due.retain(|&i| self.exprs[i].timed);
         self.due = due;
+    }
+
+    /// Makes time in expression `id` count from `origin`: `elapsed()` is the time since
+    /// `origin`, a `held` window starts at `origin` at the earliest (its state is forgotten),
+    /// and `age` is at most the time since `origin`. A plan action sets this when it starts, so
+    /// its conditions cannot hold because of what happened before it ran. `None` goes back
+    /// to counting from when the expression was added, with no floor on `held` and `age`.
+    pub fn set_origin(&mut self, id: ExprId, origin: Option<Instant>) {
+        let e = &mut self.exprs[id.0];
+        e.origin = origin;
+        for slot in e.held.clone() {
+            self.held[slot] = None;
+        }
+        if !e.dirty && !e.timed {
+            self.due.push(id.0);
+        }
+        e.dirty = true;
+    }
+
+    /// When each `held` of expression `id` has seen its condition true since (`None`: false),
+    /// to keep them across a restart of the module that owns the set.
+    pub fn held_states(&self, id: ExprId) -> Vec<Option<Instant>> {
+        self.exprs[id.0]
+            .held
+            .clone()
+            .map(|s| self.held[s])
+            .collect()
+    }
+
+    /// Puts back `held` states saved by [`held_states`](ExprSet::held_states) (extra or
+    /// missing entries are ignored).
+    pub fn restore_held_states(&mut self, id: ExprId, states: &[Option<Instant>]) {
+        for (slot, state) in self.exprs[id.0].held.clone().zip(states) {
+            self.held[slot] = *state;
+        }
     }
 
     /// The last value of `id` (`None` before its first evaluation; `Some(Err)` if a property

@@ -24,6 +24,18 @@ pub(crate) struct Eval<'a> {
     pub now: Instant,
     /// The earliest future instant at which a time-dependent result may change.
     pub deadline: Option<Instant>,
+    /// The floor of `held` windows and `age` write times (see `ExprSet::set_origin`).
+    pub origin: Option<Instant>,
+    /// What `elapsed()` counts from.
+    pub since: Instant,
+}
+
+/// The elements of a list value.
+fn list_of(v: Value) -> Result<Vec<ron::Value>, String> {
+    match v {
+        Value::Dyn(ron::Value::Seq(xs)) => Ok(xs),
+        other => Err(format!("expected a list, found {other}")),
+    }
 }
 
 /// Slack added to `age` deadlines so that `age(p) > 2` is already true when re-evaluated.
@@ -68,6 +80,18 @@ impl Eval<'_> {
                 }
                 Value::Num(acc)
             }
+            Node::MinMaxList(max, list) => {
+                let mut acc: Option<f64> = None;
+                for x in list_of(self.eval(list)?)? {
+                    let ron::Value::Number(x) = x else {
+                        return Err("a list element is not a number".into());
+                    };
+                    let x = x.into_f64();
+                    acc = Some(acc.map_or(x, |a| if *max { a.max(x) } else { a.min(x) }));
+                }
+                Value::Num(acc.ok_or("min/max of an empty list")?)
+            }
+            Node::Len(list) => Value::Num(list_of(self.eval(list)?)?.len() as f64),
             Node::Clamp(x, lo, hi) => {
                 let (x, lo, hi) = (self.num(x)?, self.num(lo)?, self.num(hi)?);
                 // Not f64::clamp: it panics when lo > hi, and bad bounds must not panic.
@@ -75,12 +99,16 @@ impl Eval<'_> {
             }
             Node::Age(i) => Value::Num(
                 self.now
-                    .saturating_duration_since(self.props[*i].written)
+                    .saturating_duration_since(self.written(*i))
                     .as_secs_f64(),
             ),
+            Node::Elapsed => {
+                Value::Num(self.now.saturating_duration_since(self.since).as_secs_f64())
+            }
             Node::Held(cond, secs, slot) => {
                 let c = self.bool(cond)?;
                 let since = if c {
+                    // `set_origin` forgets the window, so it starts at the origin at the earliest.
                     *self.held[*slot].get_or_insert(self.now)
                 } else {
                     self.held[*slot] = None;
@@ -120,11 +148,23 @@ impl Eval<'_> {
         })
     }
 
-    /// `age(p) < limit` (either way round) flips when the age crosses `limit`: wake then.
+    /// When property `i` counts as written for `age`: its write time, but not before the origin.
+    fn written(&self, i: usize) -> Instant {
+        let w = self.props[i].written;
+        self.origin.map_or(w, |o| w.max(o))
+    }
+
+    /// `age(p) < limit` or `elapsed() < limit` (either way round) flips when the time crosses
+    /// `limit`: wake then.
     fn age_deadline(&mut self, side: &Node, other: &Value) {
-        if let (Node::Age(i), Value::Num(limit)) = (side, other) {
+        let from = match side {
+            Node::Age(i) => self.written(*i),
+            Node::Elapsed => self.since,
+            _ => return,
+        };
+        if let Value::Num(limit) = other {
             if limit.is_finite() && *limit >= 0.0 {
-                let t = self.props[*i].written + Duration::from_secs_f64(*limit) + AGE_SLACK;
+                let t = from + Duration::from_secs_f64(*limit) + AGE_SLACK;
                 self.wake_at(t);
             }
         }

@@ -25,6 +25,7 @@
 //! alone may change a result.
 
 mod check;
+mod clock;
 mod engine;
 mod eval;
 mod lexer;
@@ -34,11 +35,14 @@ mod parse;
 mod tests;
 #[cfg(test)]
 mod tests_depth;
+#[cfg(test)]
+mod tests_time;
 mod types;
 mod value;
 
 use std::fmt;
 
+pub use clock::Clock;
 pub use engine::{ExprId, ExprSet, PropId};
 pub use never::never_true;
 pub use parse::{parse, Ast, AstKind, BinOp, Func};

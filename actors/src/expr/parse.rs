@@ -71,6 +71,11 @@ pub enum Func {
     Held,
     /// `age(path)`: seconds since the property was last written.
     Age,
+    /// `elapsed()`: seconds since the expression's origin (for a plan action's conditions,
+    /// the action's start), or since the expression was added when it has none.
+    Elapsed,
+    /// `len(list)`: the number of elements of a list.
+    Len,
 }
 
 impl Func {
@@ -82,6 +87,8 @@ impl Func {
             "clamp" => Func::Clamp,
             "held" => Func::Held,
             "age" => Func::Age,
+            "elapsed" => Func::Elapsed,
+            "len" => Func::Len,
             _ => return None,
         })
     }
@@ -378,7 +385,7 @@ impl Parser<'_> {
             Tok::Path(p) => AstKind::Path(p),
             Tok::Word(w) if w == "true" || w == "false" => AstKind::Bool(w == "true"),
             Tok::Word(w) => return Err(self.err(span, format!(
-                "unknown name `{w}`; expected a property `module/path`, a number, a string, true/false, or a function (abs, min, max, clamp, held, age)"
+                "unknown name `{w}`; expected a property `module/path`, a number, a string, true/false, or a function (abs, min, max, clamp, held, age, elapsed, len)"
             ))),
             t => return Err(self.err(span, format!("expected a value, found {}", show(&t)))),
         };

@@ -9,7 +9,7 @@ use super::*;
 use crate::types::Pose2;
 use crate::value::{AnyValue, TypeInfo};
 
-fn env() -> TypeEnv {
+pub(super) fn env() -> TypeEnv {
     let mut env = TypeEnv::new();
     env.insert("a/out/x", Ty::Num)
         .insert("a/out/y", Ty::Num)
@@ -27,20 +27,20 @@ fn env() -> TypeEnv {
 }
 
 /// A set fed with x = 3, y = -2, ok = true, name = "dock", pose (1, 2, 0.5).
-struct Fixture {
-    set: ExprSet,
-    t0: Instant,
+pub(super) struct Fixture {
+    pub set: ExprSet,
+    pub t0: Instant,
 }
 
 impl Fixture {
-    fn new() -> Self {
+    pub fn new() -> Self {
         Fixture {
             set: ExprSet::new(),
             t0: Instant::now(),
         }
     }
 
-    fn put<T: crate::PropertyType>(&mut self, path: &str, v: T, at_ms: u64) {
+    pub fn put<T: crate::PropertyType>(&mut self, path: &str, v: T, at_ms: u64) {
         if let Some(p) = self.set.property(path) {
             let v: AnyValue = Arc::new(v);
             self.set.update(
@@ -52,7 +52,7 @@ impl Fixture {
         }
     }
 
-    fn feed(&mut self) {
+    pub fn feed(&mut self) {
         self.put("a/out/x", 3.0, 0);
         self.put("petrel://r1/a/out/x", 3.0, 0);
         self.put("a/out/y", -2_i64, 0);
@@ -62,12 +62,12 @@ impl Fixture {
         self.put("s/out/list", vec![1.0, 2.0], 0);
     }
 
-    fn at(&mut self, ms: u64) -> Instant {
+    pub fn at(&mut self, ms: u64) -> Instant {
         self.t0 + Duration::from_millis(ms)
     }
 }
 
-fn eval(src: &str) -> Value {
+pub(super) fn eval(src: &str) -> Value {
     let mut f = Fixture::new();
     let id = f
         .set
@@ -83,7 +83,7 @@ fn eval(src: &str) -> Value {
         .unwrap_or_else(|e| panic!("{src}: {e}"))
 }
 
-fn err(src: &str) -> ExprError {
+pub(super) fn err(src: &str) -> ExprError {
     ExprSet::new()
         .add(src, &env(), Some(&Ty::Bool))
         .expect_err(src)
@@ -237,9 +237,22 @@ fn type_errors_have_positions() {
         ),
         ("age(a/out/x + 1) > 2", (1, 5), "takes a property"),
         ("abs(1, 2) > 0", (1, 1), "`abs` takes 1 argument"),
-        ("min(1) > 0", (1, 1), "at least 2 arguments"),
+        (
+            "min(1) > 0",
+            (1, 1),
+            "a list of numbers or at least 2 numbers",
+        ),
         ("clamp(1, 2) > 0", (1, 1), "`clamp` takes 3 arguments"),
-        ("s/out/list > 0", (1, 1), "must be a number, found a f64[]"),
+        (
+            "s/out/list > 0",
+            (1, 1),
+            "must be a number, found a list of numbers",
+        ),
+        (
+            "len(a/out/x) > 0",
+            (1, 5),
+            "`len` takes a list, found a number",
+        ),
     ];
     for (src, (line, col), msg) in cases {
         let e = err(src);

@@ -21,7 +21,9 @@ pub enum Ty {
         /// Fields and their types, in declaration order.
         fields: Vec<(String, Ty)>,
     },
-    /// Anything else (lists, images...): can be read by `age` only.
+    /// A list (`f64[]`, a scan's `ranges`): `min(list)`, `max(list)`, `len(list)`.
+    List(Box<Ty>),
+    /// Anything else (images, maps...): can be read by `age` only.
     Other(String),
 }
 
@@ -63,7 +65,23 @@ impl Ty {
                         .collect(),
                 }
             }
+            // The element type comes from the first element; an empty sample (a default
+            // value) is taken as a list of numbers, the common case (ranges, samples).
+            ron::Value::Seq(xs) => Ty::List(Box::new(
+                xs.first()
+                    .map_or(Ty::Num, |x| Ty::of_dynamic(&format!("{name}[]"), x)),
+            )),
             _ => Ty::Other(name.to_string()),
+        }
+    }
+
+    /// "numbers", "booleans"... for messages about lists.
+    fn plural(&self) -> String {
+        match self {
+            Ty::Bool => "booleans".into(),
+            Ty::Num => "numbers".into(),
+            Ty::Str => "strings".into(),
+            other => format!("values ({other})"),
         }
     }
 
@@ -83,6 +101,7 @@ impl fmt::Display for Ty {
             Ty::Num => f.write_str("a number"),
             Ty::Str => f.write_str("a string"),
             Ty::Struct { name, .. } => write!(f, "a {name}"),
+            Ty::List(elem) => write!(f, "a list of {}", elem.plural()),
             Ty::Other(name) => write!(f, "a {name}"),
         }
     }
@@ -142,6 +161,7 @@ mod tests {
             TypeInfo::of::<Vec<f64>>(),
             &(Arc::new(vec![1.0]) as AnyValue),
         );
-        assert_eq!(list, Ty::Other("f64[]".into()));
+        assert_eq!(list, Ty::List(Box::new(Ty::Num)));
+        assert_eq!(list.to_string(), "a list of numbers");
     }
 }

@@ -96,11 +96,21 @@ impl SupervisorState {
         let slot = &mut self.slots[i];
         slot.state = SlotState::Failed;
         let name = slot.spec.name.clone();
+        let (failures, last) = (slot.failures, slot.last_error.clone());
+        // The limit is the agent's (or a group's, escalated to the agent): name it and every
+        // module that used it, not only the one whose failure crossed it.
+        let used: Vec<String> = self
+            .slots
+            .iter()
+            .filter(|s| s.restarts > 0)
+            .map(|s| format!("`{}` {}", s.spec.name, s.restarts))
+            .collect();
         let reason = format!(
-            "module `{name}` failed {} times ({} restarts) beyond the supervision intensity; last error: {}",
-            slot.failures,
-            slot.restarts,
-            slot.last_error.as_deref().unwrap_or("none")
+            "the agent-wide restart limit (supervision max_restarts: {} within_s: {}) was reached; restarts so far: {}; the last failure was module `{name}` (failure {failures}): {}",
+            self.config.max_restarts,
+            self.config.within_s,
+            if used.is_empty() { "none".to_string() } else { used.join(", ") },
+            last.as_deref().unwrap_or("no error message")
         );
         tracing::error!(agent = %self.agent, module = %name, on_give_up = ?self.config.on_give_up, "supervisor gave up: {reason}");
         self.event(&name, "gave_up", &reason, self.slots[i].restarts);

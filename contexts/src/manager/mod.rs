@@ -12,9 +12,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::anyhow;
-use petrel_actors::expr::{parse, properties, PropId};
+use petrel_actors::expr::{parse, properties, Clock, PropId};
 use petrel_actors::{
-    AnyHandle, AnyValue, Context, FilePath, Module, Output, Param, Ports, PropertyType,
+    AnyHandle, AnyValue, Context, FilePath, Input, Module, Output, Param, Ports, PropertyType,
     QueueWriter, Registry, Schedule, TypeInfo,
 };
 use serde::{Deserialize, Serialize};
@@ -49,7 +49,7 @@ impl Schema for HashMap<Arc<str>, AnyHandle> {
 
 impl Schema for Registry {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
-        self.get(path).ok()
+        self.get_or_latest(path).ok()
     }
 }
 
@@ -120,6 +120,11 @@ pub struct ContextManager {
     original_runs: HashMap<Arc<str>, bool>,
     reload_seen: u64,
     started: Option<Instant>,
+    /// Declared so configs can link it to the agent's clock (see `clock`).
+    _clock_input: Input<f64>,
+    /// The time conditions run on: `in/clock` when linked (a simulator's `out/simTime`, the
+    /// same clock as the agent's missions), else wall time.
+    clock: Clock,
 }
 
 impl Module for ContextManager {
@@ -164,6 +169,12 @@ impl Module for ContextManager {
             original_runs: HashMap::new(),
             reload_seen: 0,
             started: None,
+            _clock_input: ports.input(
+                "in/clock",
+                0.0,
+                "the agent's clock in seconds (link it to a simulator's out/simTime); unlinked: wall time",
+            ),
+            clock: Clock::Wall,
         }
     }
 
@@ -182,6 +193,7 @@ impl Module for ContextManager {
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         self.started = Some(ctx.now());
+        self.clock = Clock::of_module(ctx.blackboard(), ctx.module()).await;
         self.reload_seen = self.reload.read().version;
         let engine = self
             .load(ctx)
@@ -201,14 +213,18 @@ impl Module for ContextManager {
             return Ok(());
         };
         let first = ctx.cause().first();
+        let now = self.clock.now(ctx.now());
+        let wall = self.clock.is_wall();
         for w in &mut self.watched {
             if w.handle.version() != w.seen || first {
                 let sample = w.handle.read();
                 w.seen = sample.version;
-                engine.update_prop(w.prop, w.handle.type_info(), &sample.value, sample.written);
+                // On another clock than wall time, a write counts from when it was seen.
+                let written = if wall { sample.written } else { now };
+                engine.update_prop(w.prop, w.handle.type_info(), &sample.value, written);
             }
         }
-        let actions = engine.step(ctx.now());
+        let actions = engine.step(now);
         let evaluations = engine.evaluations() as i64;
         let mut switched = false;
         for action in &actions {
@@ -240,7 +256,8 @@ impl ContextManager {
         let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
         let mut handles = HashMap::new();
         for address in mentioned(&loaded) {
-            if let Ok(handle) = ctx.blackboard().any_handle(&address).await {
+            // A queue's latest item too, for expressions such as `min(scan/out/ranges) < 0.6`.
+            if let Ok(handle) = ctx.blackboard().expr_handle(&address).await {
                 handles.insert(Arc::from(address), handle);
             }
         }

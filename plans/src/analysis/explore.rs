@@ -97,7 +97,7 @@ impl Markings {
 
 /// The top-level `(place, tokens)` pairs of a key.
 pub(super) fn top_pairs(key: &[u32]) -> impl Iterator<Item = (usize, u32)> + '_ {
-    key[1..1 + 2 * key[0] as usize]
+    key[1..1 + 2 * (key[0] & !crate::exec::FAILED_BIT) as usize]
         .chunks_exact(2)
         .map(|p| (p[0] as usize, p[1]))
 }
@@ -201,7 +201,7 @@ impl<'p> Stepper<'p> {
     pub fn new(plan: &'p Plan, outcomes: &Outcomes) -> Self {
         Stepper {
             plan,
-            state: PlanState::new(plan),
+            state: PlanState::new(plan).for_analysis(),
             env: Decisions::new(plan, outcomes),
             next: Vec::new(),
         }

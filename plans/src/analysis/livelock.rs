@@ -73,7 +73,10 @@ fn show_steps(plan: &Plan, steps: &[Vec<usize>]) -> String {
             .iter()
             .map(|&t| {
                 let t = &plan.transitions()[t];
-                format!("{} ('{}')", t.id, t.label)
+                match plan.is_text_plan() {
+                    true => format!("'{}'", t.label),
+                    false => format!("{} ('{}')", t.id, t.label),
+                }
             })
             .collect();
         let ts = if ts.is_empty() {

@@ -125,7 +125,11 @@ fn finding(code: &'static str, message: String) -> Finding {
 
 fn place_name(plan: &Plan, p: usize) -> String {
     let pl = &plan.places()[p];
-    format!("place '{}' ('{}')", pl.id, pl.label)
+    match plan.is_text_plan() {
+        // A text plan's ids are made up: its labels are what `plan dot` and `simulate` show.
+        true => format!("place '{}'", pl.label),
+        false => format!("place '{}' ('{}')", pl.id, pl.label),
+    }
 }
 
 /// Checks a plan and its sub-plans (their findings are prefixed with
@@ -284,7 +288,7 @@ fn behaviour(
         r.warnings.push(finding(
             "deadlock",
             format!(
-                "the plan can get stuck in a marking that is neither goal nor fail: {}",
+                "the plan can get stuck in a marking that is neither goal nor fail: {}; no transition has the tokens it needs there: check that each join waits only for branches that all end, and give each place a way on (`petrel plan simulate` shows how it gets there)",
                 show_marking(plan, ex.markings.get(id as u32))
             ),
         ));
@@ -302,11 +306,13 @@ fn behaviour(
         // Unsure: a parent must not conclude this plan never ends or never fails.
         return (true, true);
     }
-    for (ti, t) in plan.transitions().iter().enumerate() {
-        if !ex.fired[ti] {
+    // A rule that never applies leaves all its transitions dead: say it once.
+    let mut told = std::collections::HashSet::new();
+    for ti in 0..plan.transitions().len() {
+        if !ex.fired[ti] && plan.origin(ti).is_none_or(|o| told.insert(o)) {
             r.warnings.push(finding(
                 "dead-transition",
-                format!("transition '{}' ('{}') can never fire", t.id, t.label),
+                dead_transition(plan, &ex.fired, ti),
             ));
         }
     }
@@ -337,4 +343,29 @@ fn behaviour(
         ));
     }
     reached
+}
+
+/// Why transition `ti` never fires, in the terms the user wrote: the rule or action it comes
+/// from, and an earlier transition that takes the same tokens on the same guard (a rule
+/// shadowed by another).
+fn dead_transition(plan: &Plan, fired: &[bool], ti: usize) -> String {
+    let ts = plan.transitions();
+    let t = &ts[ti];
+    let Some(origin) = plan.origin(ti) else {
+        return format!("transition '{}' ('{}') can never fire", t.id, t.label);
+    };
+    let shadow = ts[..ti].iter().enumerate().find(|(ei, e)| {
+        fired[*ei] && e.guard == t.guard && e.inputs.iter().any(|i| t.inputs.contains(i))
+    });
+    let why = match shadow {
+        Some((ei, e)) => match plan.origin(ei) {
+            Some(o) => format!(": {o} already handles it"),
+            None => format!(": `{}` takes the same tokens first", e.label),
+        },
+        None => String::new(),
+    };
+    if origin.starts_with("action") {
+        return format!("{origin}: `{}` can never fire{why}", t.label);
+    }
+    format!("{origin} never applies (`{}` can never fire){why}", t.label)
 }

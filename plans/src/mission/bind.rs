@@ -1,14 +1,18 @@
 //! Resolving bindings against the blackboard at init: every action of the plan gets its
-//! handles and expressions, every condition atom its expression; every problem is collected.
+//! handles and expressions (its own binding, or a built-in), every condition atom its
+//! expression; every problem is collected.
 
 use std::collections::{BTreeSet, HashMap};
 
 use petrel_actors::expr::{parse, properties, ExprId, ExprSet, PropId, Ty, TypeEnv};
 use petrel_actors::{AnyHandle, AnyValue, Blackboard};
 
+use super::builtin::{builtin, Builtin};
 use super::config::{
-    match_action, substitute, substitute_value, ActionBindings, ActionName, ConditionBindings,
+    config_form, match_action, max_param, substitute, substitute_value, ActionBindings, ActionName,
+    ConditionBindings, Places,
 };
+use super::hints::{nearest, place_hint, unused_bindings};
 use crate::model::Plan;
 
 /// One plan action bound to modules and properties.
@@ -23,8 +27,19 @@ pub(crate) struct BoundAction {
     pub restore: bool,
     pub finished: Option<ExprId>,
     pub failed: Option<ExprId>,
+    /// The `failed` expression as bound (parameters substituted), for the failure message.
+    pub failed_text: String,
+    /// Text a built-in `log_...` / `say_...` action logs when it starts.
+    pub log: Option<String>,
     /// No binding and `params/allow_unbound`: finishes as soon as it is checked.
     pub unbound: bool,
+}
+
+impl BoundAction {
+    /// The expressions whose time counts from the action's start.
+    pub fn exprs(&self) -> impl Iterator<Item = ExprId> {
+        self.finished.into_iter().chain(self.failed)
+    }
 }
 
 /// Everything the mission needs at run time, resolved once.
@@ -56,8 +71,9 @@ pub(crate) fn plan_names(plan: &Plan) -> (BTreeSet<String>, BTreeSet<String>) {
     (actions, conds)
 }
 
-/// A binding that cannot be resolved: what is wrong, and the text of the config it is about
-/// (an action or condition key, a module or property name), to locate it in the config file.
+/// A binding that cannot be resolved, or looks wrong: what it is, and the text of the config
+/// it is about (an action or condition key, a module or property name), to locate it in the
+/// config file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BindingProblem {
     /// Config text the problem is about, as written between quotes.
@@ -71,11 +87,19 @@ pub(crate) struct Params<'a> {
     pub module: &'a str,
     pub actions: &'a ActionBindings,
     pub conditions: &'a ConditionBindings,
+    pub places: &'a Places,
     pub allow_unbound: bool,
+}
+
+/// What binding gives: the bound plan, or every error; warnings either way.
+pub(crate) struct Binding {
+    pub bound: Result<Bound, Vec<BindingProblem>>,
+    pub warnings: Vec<BindingProblem>,
 }
 
 struct Binder<'a> {
     bb: &'a Blackboard,
+    plan: &'a Plan,
     module: &'a str,
     handles: HashMap<String, Option<AnyHandle>>,
     exprs: ExprSet,
@@ -100,6 +124,17 @@ impl Binder<'_> {
             .ok_or_else(|| format!("unknown property `{path}`"))
     }
 
+    /// A property an expression reads: a value, or a queue's latest item.
+    async fn read_handle(&mut self, path: &str) -> Result<AnyHandle, String> {
+        if self.handle(path).await.is_err() {
+            let h = self.bb.expr_handle(path).await.ok();
+            self.handles.insert(path.to_string(), h);
+        }
+        self.handles[path]
+            .clone()
+            .ok_or_else(|| format!("unknown property `{path}`"))
+    }
+
     /// Checks boolean expression `src`, reporting errors as `what: line:col: message`, located
     /// at `needle`.
     async fn expr(&mut self, src: &str, what: &str, needle: &str) -> Option<ExprId> {
@@ -113,7 +148,7 @@ impl Binder<'_> {
         let mut env = TypeEnv::new();
         for p in properties(&ast) {
             // An unknown property is left out: the checker reports it with its position.
-            if let Ok(h) = self.handle(&p).await {
+            if let Ok(h) = self.read_handle(&p).await {
                 env.insert_property(&p, h.type_info(), &h.value());
             }
         }
@@ -126,6 +161,13 @@ impl Binder<'_> {
         }
     }
 
+    /// Where action `full` is written, for messages: ` at plan.plan:3`.
+    fn at(&self, full: &str) -> String {
+        self.plan
+            .action_line(full)
+            .map_or(String::new(), |l| format!(" at {l}"))
+    }
+
     async fn action(&mut self, full: &str, p: &Params<'_>) -> Option<BoundAction> {
         let name = ActionName::parse(full);
         let mut a = BoundAction {
@@ -136,15 +178,42 @@ impl Binder<'_> {
             restore: true,
             finished: None,
             failed: None,
+            failed_text: String::new(),
+            log: None,
             unbound: false,
         };
         let Some((key, params)) = match_action(p.actions.0.keys().map(|k| k.as_str()), &name.local)
         else {
-            a.unbound = true;
-            return p.allow_unbound.then_some(a);
+            match builtin(&name.local) {
+                Some(Builtin::Wait(secs)) => {
+                    let src = format!("elapsed() >= {secs}");
+                    a.finished = self.expr(&src, full, full).await;
+                }
+                Some(Builtin::Log(text)) => {
+                    a.log = Some(text);
+                    a.finished = self.expr("true", full, full).await;
+                }
+                None => {
+                    a.unbound = true;
+                    return p.allow_unbound.then_some(a);
+                }
+            }
+            return Some(a);
         };
         let b = &p.actions.0[key];
         let what = format!("{}/params/actions[\"{key}\"]", self.module);
+        let uses = max_param(b);
+        if uses > 0 && params.len() != uses {
+            let message = format!(
+                "{what}: action `{full}`{} has {} parameter{}, but the binding uses up to ${uses}; write the action as `{key}{}`",
+                self.at(full),
+                params.len(),
+                if params.len() == 1 { "" } else { "s" },
+                (1..=uses).map(|i| format!("_P{i}")).collect::<String>()
+            );
+            self.problem(key, message);
+            return Some(a);
+        }
         for m in &b.enable {
             match self.handle(&format!("{m}/enabled")).await {
                 Ok(h) => a.enable.push(h),
@@ -168,39 +237,56 @@ impl Binder<'_> {
                     continue;
                 }
             };
-            match h.type_info().from_ron(substitute_value(value, &params)) {
+            let given = substitute_value(value, &params, p.places);
+            match h.type_info().from_ron(given.clone()) {
                 Ok(v) => a.set.push((h, v)),
-                Err(e) => {
-                    let expected = h.type_info().name();
+                Err(_) => {
+                    let expected = h.type_info().to_ron(&h.value()).map_or_else(
+                        |_| "a value of its type".to_string(),
+                        |v| petrel_actors::spaced_ron(&v),
+                    );
                     let message = format!(
-                        "{what}.set[\"{path}\"] (action `{full}`): expected {expected}: {e}"
+                        "{what}.set[\"{path}\"] (action `{full}`{}): `{path}` takes a value like {expected}, found {}{}",
+                        self.at(full),
+                        config_form(&given),
+                        place_hint(value, &params, p.places),
                     );
                     self.problem(path, message);
                 }
             }
         }
         a.restore = b.restore;
-        if !b.finished.trim().is_empty() {
-            let src = substitute(&b.finished, &params);
-            a.finished = self.expr(&src, &format!("{what}.finished"), key).await;
-        }
-        if !b.failed.trim().is_empty() {
-            let src = substitute(&b.failed, &params);
-            a.failed = self.expr(&src, &format!("{what}.failed"), key).await;
+        for (text, is_failed) in [(&b.finished, false), (&b.failed, true)] {
+            if text.trim().is_empty() {
+                continue;
+            }
+            let field = if is_failed { "failed" } else { "finished" };
+            let src = match substitute(text, &params, p.places) {
+                Ok(src) => src,
+                Err(e) => {
+                    let at = self.at(full);
+                    self.problem(key, format!("{what}.{field} (action `{full}`{at}): {e}"));
+                    continue;
+                }
+            };
+            let id = self.expr(&src, &format!("{what}.{field}"), key).await;
+            if is_failed {
+                a.failed = id;
+                a.failed_text = src;
+            } else {
+                a.finished = id;
+            }
         }
         Some(a)
     }
 }
 
 /// Binds every action and condition of `plan`; all problems at once in the error.
-pub(crate) async fn bind(
-    bb: &Blackboard,
-    plan: &Plan,
-    p: Params<'_>,
-) -> Result<Bound, Vec<BindingProblem>> {
+pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding {
     let (action_names, cond_names) = plan_names(plan);
     let mut b = Binder {
         bb,
+        plan,
         module: p.module,
         handles: HashMap::new(),
         exprs: ExprSet::new(),
@@ -222,11 +308,16 @@ pub(crate) async fn bind(
             "{}/params/actions: no binding for action{} {} (bound: {}); bind them, or set params/allow_unbound to let them finish at once",
             p.module,
             if unbound.len() == 1 { "" } else { "s" },
-            unbound.iter().map(|u| format!("`{u}`")).collect::<Vec<_>>().join(", "),
+            unbound
+                .iter()
+                .map(|u| format!("`{u}`{}", b.at(u)))
+                .collect::<Vec<_>>()
+                .join(", "),
             if keys.is_empty() { "none".to_string() } else { keys.join(", ") }
         );
         b.problem("params/actions", message);
     }
+    let warnings = unused_bindings(p.module, p.actions, &action_names);
     let mut conditions = HashMap::new();
     let mut defaults = Vec::new();
     for atom in &cond_names {
@@ -240,11 +331,22 @@ pub(crate) async fn bind(
             None => defaults.push(atom.clone()),
         }
     }
+    let mut warnings = warnings;
     for extra in p.conditions.0.keys().filter(|k| !cond_names.contains(*k)) {
-        tracing::warn!(condition = %extra, "params/conditions binds a condition the plan does not use");
+        warnings.push(BindingProblem {
+            needle: extra.clone(),
+            message: format!(
+                "{}/params/conditions[\"{extra}\"]: the plan uses no condition `{extra}`{}",
+                p.module,
+                nearest(extra, cond_names.iter().map(String::as_str))
+            ),
+        });
     }
     if !b.errors.is_empty() {
-        return Err(b.errors);
+        return Binding {
+            bound: Err(b.errors),
+            warnings,
+        };
     }
     let watched = b
         .exprs
@@ -259,11 +361,14 @@ pub(crate) async fn bind(
             )
         })
         .collect();
-    Ok(Bound {
-        exprs: b.exprs,
-        watched,
-        conditions,
-        defaults,
-        actions,
-    })
+    Binding {
+        bound: Ok(Bound {
+            exprs: b.exprs,
+            watched,
+            conditions,
+            defaults,
+            actions,
+        }),
+        warnings,
+    }
 }

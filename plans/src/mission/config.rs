@@ -84,6 +84,17 @@ impl PropertyType for ConditionBindings {
     const TYPE_NAME: &'static str = "pnp.conditions";
 }
 
+/// `params/places`: named values that action parameters may name (`goto_kitchen` with
+/// `kitchen: (x: 2.0, y: 1.0)`): a `set` value `"$1"` becomes the place's value, `$1.x` in an
+/// expression its field.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Places(pub BTreeMap<String, ron::Value>);
+
+impl PropertyType for Places {
+    const TYPE_NAME: &'static str = "pnp.places";
+}
+
 /// `in/conditions`: values of the condition atoms no expression binds.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(transparent)]
@@ -138,8 +149,132 @@ pub fn match_action<'a>(
     best
 }
 
-/// Replaces `$1`, `$2`, ... (highest first, so `$12` is not read as `$1`) by parameters.
-pub fn substitute(text: &str, params: &[String]) -> String {
+/// Replaces `$1`, `$2`, ... in expression text by parameters: a parameter naming a place
+/// gives its value (a number or string), and `$N.field` a field of a place (`$1.x`).
+/// Errors name what cannot be substituted.
+pub fn substitute(text: &str, params: &[String], places: &Places) -> Result<String, String> {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(i) = rest.find('$') {
+        out.push_str(&rest[..i]);
+        let after = &rest[i + 1..];
+        let digits = after.len() - after.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+        let Ok(n) = after[..digits].parse::<usize>() else {
+            out.push('$');
+            rest = after;
+            continue;
+        };
+        let Some(param) = n.checked_sub(1).and_then(|k| params.get(k)) else {
+            return Err(format!(
+                "`${n}`: the action has {} parameter{}",
+                params.len(),
+                plural(params.len())
+            ));
+        };
+        rest = &after[digits..];
+        let field_len = rest
+            .strip_prefix('.')
+            .filter(|f| f.starts_with(|c: char| c.is_alphabetic() || c == '_'))
+            .map(|f| {
+                1 + f.len()
+                    - f.trim_start_matches(|c: char| c.is_alphanumeric() || c == '_')
+                        .len()
+            });
+        match (places.0.get(param), field_len) {
+            (Some(value), Some(len)) => {
+                let field = &rest[1..len];
+                let Some(v) = field_of(value, field) else {
+                    return Err(format!("`${n}.{field}`: place `{param}` has no field `{field}`"));
+                };
+                out.push_str(&expr_literal(v).ok_or_else(|| format!("`${n}.{field}` of place `{param}` is not a number, string or boolean"))?);
+                rest = &rest[len..];
+            }
+            (Some(value), None) => out.push_str(&expr_literal(value).ok_or_else(|| {
+                format!("`${n}` is place `{param}`, a structured value: name one of its fields, as `${n}.x`")
+            })?),
+            (None, Some(len)) => {
+                let known: Vec<&str> = places.0.keys().map(String::as_str).collect();
+                return Err(format!(
+                    "`${n}{}`: `{param}` is not a place in params/places (places: {})",
+                    &rest[..len],
+                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                ));
+            }
+            (None, None) => out.push_str(param),
+        }
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
+fn field_of<'a>(v: &'a ron::Value, field: &str) -> Option<&'a ron::Value> {
+    match v {
+        ron::Value::Map(m) => m.get(&ron::Value::String(field.to_string())),
+        _ => None,
+    }
+}
+
+/// A scalar as expression text.
+fn expr_literal(v: &ron::Value) -> Option<String> {
+    Some(match v {
+        ron::Value::Number(n) => n.into_f64().to_string(),
+        ron::Value::Bool(b) => b.to_string(),
+        ron::Value::String(s) => format!("{s:?}"),
+        _ => return None,
+    })
+}
+
+/// A `set` value with parameters substituted: `"$N"` alone becomes the place the parameter
+/// names (`"$N.field"` its field), or else the parameter read as RON (so `6` is a number); `$N` inside a longer string
+/// is replaced in the text.
+pub fn substitute_value(v: &ron::Value, params: &[String], places: &Places) -> ron::Value {
+    match v {
+        ron::Value::String(s) => {
+            // `"$1.x"`: a field of the place the parameter names.
+            let (head, field) = s.split_once('.').unwrap_or((s, ""));
+            let whole = head
+                .strip_prefix('$')
+                .and_then(|n| n.parse::<usize>().ok())
+                .and_then(|n| params.get(n.wrapping_sub(1)));
+            if let Some(place) = whole.and_then(|p| places.0.get(p)) {
+                if field.is_empty() {
+                    return place.clone();
+                }
+                if let Some(v) = field_of(place, field) {
+                    return v.clone();
+                }
+            }
+            let whole = if field.is_empty() { whole } else { None };
+            // A bare word (`kitchen`) reads as RON's unit: keep it as the text it is.
+            match whole.and_then(|p| ron::from_str::<ron::Value>(p).ok()) {
+                Some(ron::Value::Unit) | None => ron::Value::String(replace_params(s, params)),
+                Some(parsed) => parsed,
+            }
+        }
+        ron::Value::Seq(xs) => ron::Value::Seq(
+            xs.iter()
+                .map(|x| substitute_value(x, params, places))
+                .collect(),
+        ),
+        ron::Value::Map(m) => ron::Value::Map(
+            m.iter()
+                .map(|(k, x)| (k.clone(), substitute_value(x, params, places)))
+                .collect(),
+        ),
+        other => other.clone(),
+    }
+}
+
+/// `$N` replaced by the parameter text (highest first, so `$12` is not read as `$1`).
+fn replace_params(text: &str, params: &[String]) -> String {
     let mut out = text.to_string();
     for (i, p) in params.iter().enumerate().rev() {
         out = out.replace(&format!("${}", i + 1), p);
@@ -147,26 +282,31 @@ pub fn substitute(text: &str, params: &[String]) -> String {
     out
 }
 
-/// A `set` value with parameters substituted: `"$N"` alone becomes the parameter read as RON
-/// (so `6` is a number); `$N` inside a longer string is replaced in the text.
-pub fn substitute_value(v: &ron::Value, params: &[String]) -> ron::Value {
-    match v {
-        ron::Value::String(s) => {
-            let whole = s
-                .strip_prefix('$')
-                .and_then(|n| n.parse::<usize>().ok())
-                .and_then(|n| params.get(n.wrapping_sub(1)));
-            match whole.and_then(|p| ron::from_str::<ron::Value>(p).ok()) {
-                Some(parsed) => parsed,
-                None => ron::Value::String(substitute(s, params)),
-            }
+/// The highest `$N` a binding uses (0: none), in its `set` values and expressions.
+pub fn max_param(b: &ActionBinding) -> usize {
+    fn text(s: &str) -> usize {
+        let mut best = 0;
+        let mut rest = s;
+        while let Some(i) = rest.find('$') {
+            rest = &rest[i + 1..];
+            let digits = rest.len() - rest.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+            best = best.max(rest[..digits].parse().unwrap_or(0));
         }
-        ron::Value::Seq(xs) => {
-            ron::Value::Seq(xs.iter().map(|x| substitute_value(x, params)).collect())
-        }
-        other => other.clone(),
+        best
     }
+    fn value(v: &ron::Value) -> usize {
+        match v {
+            ron::Value::String(s) => text(s),
+            ron::Value::Seq(xs) => xs.iter().map(value).max().unwrap_or(0),
+            ron::Value::Map(m) => m.values().map(value).max().unwrap_or(0),
+            _ => 0,
+        }
+    }
+    let set = b.set.values().map(value).max().unwrap_or(0);
+    set.max(text(&b.finished)).max(text(&b.failed))
 }
+
+pub use petrel_actors::config_form;
 
 #[cfg(test)]
 mod tests {
@@ -195,12 +335,46 @@ mod tests {
     #[test]
     fn parameters_substitute_in_text_and_values() {
         let p: Vec<String> = ["6", "2", "x"].iter().map(|s| s.to_string()).collect();
-        assert_eq!(substitute("a/out/x > $1 + $2", &p), "a/out/x > 6 + 2");
-        let n = substitute_value(&ron::Value::String("$1".into()), &p);
+        let none = Places::default();
+        assert_eq!(
+            substitute("a/out/x > $1 + $2", &p, &none).unwrap(),
+            "a/out/x > 6 + 2"
+        );
+        let n = substitute_value(&ron::Value::String("$1".into()), &p, &none);
         assert!(matches!(n, ron::Value::Number(n) if n.into_f64() == 6.0));
         assert_eq!(
-            substitute_value(&ron::Value::String("to $3".into()), &p),
+            substitute_value(&ron::Value::String("to $3".into()), &p, &none),
             ron::Value::String("to x".into())
+        );
+        assert!(substitute("$4 > 1", &p, &none)
+            .unwrap_err()
+            .contains("3 parameters"));
+    }
+
+    #[test]
+    fn parameters_naming_places_give_their_values_and_fields() {
+        let places: Places = ron::from_str("{\"kitchen\": (x: 2.5, y: -1.0)}").unwrap();
+        let p = vec!["kitchen".to_string()];
+        let v = substitute_value(&ron::Value::String("$1".into()), &p, &places);
+        assert_eq!(config_form(&v), "(x: 2.5, y: -1.0)");
+        assert_eq!(
+            substitute("abs(r/out/pose.x - $1.x) < 0.2", &p, &places).unwrap(),
+            "abs(r/out/pose.x - 2.5) < 0.2"
+        );
+        let whole = substitute("r/out/pose == $1", &p, &places).unwrap_err();
+        assert!(whole.contains("`$1.x`"), "{whole}");
+        let missing = substitute("$1.z > 0", &p, &places).unwrap_err();
+        assert!(missing.contains("no field `z`"), "{missing}");
+        let other = vec!["garage".to_string()];
+        let not_a_place = substitute("$1.x > 0", &other, &places).unwrap_err();
+        assert_eq!(
+            not_a_place,
+            "`$1.x`: `garage` is not a place in params/places (places: kitchen)"
+        );
+        assert_eq!(
+            substitute_value(&ron::Value::String("$1".into()), &other, &places),
+            ron::Value::String("garage".into()),
+            "a bare word stays a word"
         );
     }
 

@@ -1,8 +1,12 @@
 //! The plan's [`Environment`] over the bound properties: conditions from expressions or
-//! `in/conditions`, action status from `finished`/`failed`, calls switching modules.
+//! `in/conditions`, action status from `finished`/`failed`, calls switching modules and
+//! keeping the mission's memory (start times, what each action did).
+
+use tokio::time::Instant;
 
 use super::bind::{Bound, BoundAction};
 use super::config::Flags;
+use super::memory::{MissionMemory, RunningAction};
 use crate::exec::Environment;
 use crate::label::CallKind;
 
@@ -10,6 +14,10 @@ use crate::label::CallKind;
 pub(crate) struct MissionEnv<'a> {
     pub bound: &'a mut Bound,
     pub flags: &'a Flags,
+    /// The mission clock now, as an instant and in seconds.
+    pub now: Instant,
+    pub secs: f64,
+    pub memory: &'a mut MissionMemory,
 }
 
 impl BoundAction {
@@ -57,6 +65,30 @@ impl MissionEnv<'_> {
     fn expr(&self, id: Option<petrel_actors::expr::ExprId>) -> bool {
         id.and_then(|id| self.bound.exprs.bool(id)).unwrap_or(false)
     }
+
+    /// Counts a call in the action's record and keeps its start time while it runs.
+    fn remember(&mut self, name: &str, kind: CallKind) {
+        let stats = self.memory.actions.entry(name.to_string()).or_default();
+        match kind {
+            CallKind::Start | CallKind::Resume => {
+                stats.starts += 1;
+                self.memory.running.insert(
+                    name.to_string(),
+                    RunningAction {
+                        started_s: self.secs,
+                        ..Default::default()
+                    },
+                );
+                return;
+            }
+            CallKind::End => stats.ends += 1,
+            CallKind::Fail => stats.failures += 1,
+            CallKind::Interrupt => stats.interrupts += 1,
+        }
+        if let Some(run) = self.memory.running.remove(name) {
+            stats.time_s += (self.secs - run.started_s).max(0.0);
+        }
+    }
 }
 
 impl Environment for MissionEnv<'_> {
@@ -87,6 +119,8 @@ impl Environment for MissionEnv<'_> {
     }
 
     fn call(&mut self, name: &str, kind: CallKind) {
+        self.remember(name, kind);
+        let now = self.now;
         let Some(a) = self.bound.actions.get_mut(name) else {
             return;
         };
@@ -97,7 +131,21 @@ impl Environment for MissionEnv<'_> {
         // The robot prefix (`robot#action`) is kept for multi-robot plans; all actions run here.
         tracing::debug!(action = name, robot = a.name.robot.as_deref().unwrap_or("-"), call = %kind, "action call");
         match kind {
-            CallKind::Start | CallKind::Resume => a.activate(),
+            CallKind::Start | CallKind::Resume => {
+                // Time in the action's conditions counts from here: a `held` window opened
+                // before it ran does not count, and `elapsed()` starts at 0.
+                let ids: Vec<_> = a.exprs().collect();
+                for id in ids {
+                    self.bound.exprs.set_origin(id, Some(now));
+                }
+                let Some(a) = self.bound.actions.get_mut(name) else {
+                    return;
+                };
+                if let Some(text) = &a.log {
+                    tracing::info!(action = name, "{text}");
+                }
+                a.activate();
+            }
             CallKind::End | CallKind::Interrupt | CallKind::Fail => a.deactivate(),
         }
     }

@@ -20,8 +20,18 @@
 //!     // Condition atom -> boolean expression. Atoms not listed read `in/conditions`
 //!     // (a map atom -> bool, false when absent; set it with tools or tests).
 //!     "params/conditions": {"overload": "held(scale/out/value > 60, 100ms)"},
-//! })
+//!     // Values parameters may name: `goto_kitchen` sets "$1" to this, `$1.x` is its x.
+//!     "params/places": {"kitchen": (x: 2.0, y: 1.0, theta: 0.0)},
+//! }, links: {"in/clock": "robot/out/simTime"})   // mission time = simulated time
 //! ```
+//!
+//! `wait_N` and `log_...`/`say_...` are built-in actions (a binding of the same name wins). An
+//! action failure that no transition handles fails the plan, logged with the action and its
+//! `failed` expression. Time in an action's `finished`/`failed` counts from its start
+//! (`elapsed()`, `held` windows, `age`). The marking, the running actions (start times, what
+//! `set` replaced, `held` windows) and each action's record live in `state/memory`: a
+//! restarted module or a resumed snapshot goes on from there. The user guide is
+//! `docs/missions.md`.
 //!
 //! Bindings are resolved and type-checked once, at init: an unknown module or property, a
 //! value of the wrong type, an expression error (with line and column) or a plan action with
@@ -39,15 +49,22 @@
 //! in parallel is disabled when the first of them ends.
 
 mod bind;
+mod builtin;
 mod config;
 mod env;
+mod hints;
+mod memory;
 mod module;
+mod prepare;
 
 pub use bind::BindingProblem;
 pub use config::{
-    match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
+    config_form, match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
+    Places,
 };
-pub use module::{check_mission, Mission};
+pub use memory::{ActionStats, MissionMemory, RunningAction};
+pub use module::Mission;
+pub use prepare::check_mission;
 
 use petrel_actors::ModuleRegistry;
 

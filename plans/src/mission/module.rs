@@ -3,20 +3,17 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use anyhow::Context as _;
-use petrel_actors::expr::ExprId;
-use petrel_actors::{
-    Blackboard, BlackboardError, Context, FilePath, Input, Module, Output, Param, Ports, Schedule,
-    State,
-};
+use petrel_actors::expr::{Clock, ExprId};
+use petrel_actors::{Context, FilePath, Input, Module, Output, Param, Ports, Schedule, State};
 use tokio::sync::watch;
 use tokio::time::Instant;
 
-use super::bind::{bind, BindingProblem, Bound, Params};
-use super::config::{ActionBindings, ConditionBindings, Flags};
+use super::bind::Bound;
+use super::config::{ActionBindings, ConditionBindings, Flags, Places};
 use super::env::MissionEnv;
+use super::memory::MissionMemory;
+use super::prepare::{prepare, Problems, Setup};
 use crate::exec::{step, PlanState, PlanStatus};
-use crate::load::load_plan;
 use crate::model::Plan;
 
 /// `mission.pnp`: see the [module docs](super).
@@ -28,12 +25,16 @@ pub struct Mission {
     allow_unbound: Param<bool>,
     actions: Param<ActionBindings>,
     conditions: Param<ConditionBindings>,
+    places: Param<Places>,
     flags: Input<Flags>,
+    /// Declared so configs can link it; read through a handle once linked (see `Clock`).
+    _clock: Input<f64>,
     marking: Output<String>,
     running: Output<String>,
     result: Output<String>,
     fired: Output<i64>,
     wake: State<i64>,
+    memory: State<MissionMemory>,
     run: Option<Run>,
 }
 
@@ -47,6 +48,9 @@ struct Run {
     done: bool,
     /// Scratch for the expressions a round changed, kept to avoid allocating per round.
     changed: Vec<ExprId>,
+    clock: Clock,
+    /// What is kept in `state/memory`, updated as the plan runs.
+    memory: MissionMemory,
 }
 
 impl Module for Mission {
@@ -63,12 +67,15 @@ impl Module for Mission {
             allow_unbound: ports.param("params/allow_unbound", false, "let actions without a binding finish at once instead of refusing to start"),
             actions: ports.param("params/actions", ActionBindings::default(), "action name (or prefix of `name_p1_p2`) -> (enable, set, restore, finished, failed)"),
             conditions: ports.param("params/conditions", ConditionBindings::default(), "condition atom -> boolean expression over properties"),
+            places: ports.param("params/places", Places::default(), "named values action parameters may name: `goto_kitchen` with {\"kitchen\": (x: 2.0, y: 1.0)}"),
             flags: ports.input("in/conditions", Flags::default(), "values of condition atoms that params/conditions does not bind"),
+            _clock: ports.input("in/clock", 0.0, "the agent's clock in seconds (link it to a simulator's out/simTime); unlinked: wall time"),
             marking: ports.output("out/marking", String::new(), "marked places, `label` or `label*n`, comma-separated"),
             running: ports.output("out/running", String::new(), "running actions, comma-separated"),
             result: ports.output("out/result", "running".to_string(), "running, goal or fail"),
             fired: ports.output("out/fired", 0, "transitions fired so far"),
             wake: ports.state("state/wake", 0, "bumped to make the mission step again: a held/age deadline passed, or many steps fired in a row"),
+            memory: ports.state("state/memory", MissionMemory::default(), "the plan's marking, running actions with their start times, and what each action did: a restarted mission goes on from here"),
             run: None,
         }
     }
@@ -78,6 +85,9 @@ impl Module for Mission {
         if let Some(run) = &self.run {
             for (_, h, _) in &run.bound.watched {
                 s = s.on_change(h);
+            }
+            if let Some(clock) = run.clock.handle() {
+                s = s.on_change(clock);
             }
         }
         match self.tick_ms.value() {
@@ -108,11 +118,12 @@ impl Module for Mission {
             return Ok(());
         }
         let mut fired = 0;
+        let (now, secs) = (run.clock.now(ctx.now()), run.clock.secs(ctx.now()));
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
         for round in 1.. {
-            let report = run.round(ctx.now(), &self.flags.get());
+            let report = run.round(now, secs, &self.flags.get());
             fired += report.fired.len();
             if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
                 break;
@@ -122,8 +133,11 @@ impl Module for Mission {
                 break;
             }
         }
-        set_deadline(&run.timer, run.bound.exprs.next_deadline());
+        if run.clock.is_wall() {
+            set_deadline(&run.timer, run.bound.exprs.next_deadline());
+        }
         if fired > 0 {
+            run.save(&self.memory);
             publish(&self.marking, marking(&run.plan, &run.state));
             publish(
                 &self.running,
@@ -137,9 +151,23 @@ impl Module for Mission {
             for a in run.bound.actions.values_mut().filter(|a| a.active()) {
                 a.deactivate();
             }
+            let mut reason = format!("mission `{}` ended: {}", run.plan.name(), status.as_str());
+            if let Some(action) = run.state.unhandled_failure(&run.plan) {
+                let why = run
+                    .bound
+                    .actions
+                    .get(&action)
+                    .map_or(String::new(), |a| format!(" (`failed`: {})", a.failed_text));
+                reason = format!(
+                    "{reason}: action `{action}` failed{why} and no execution rule handles its failure"
+                );
+                tracing::error!(action = %action, "{reason}");
+                run.memory.failed_action = Some(action);
+            } else {
+                tracing::info!(result = status.as_str(), "{reason}");
+            }
+            run.save(&self.memory);
             self.result.set(status.as_str().to_string());
-            let reason = format!("mission `{}` ended: {}", run.plan.name(), status.as_str());
-            tracing::info!(result = status.as_str(), "{reason}");
             if self.is_mission.value() {
                 ctx.stop_agent(u8::from(status == PlanStatus::Fail), reason);
             }
@@ -150,6 +178,16 @@ impl Module for Mission {
     async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(run) = self.run.as_mut() {
             set_deadline(&run.timer, None);
+            if self.is_mission.value() && !run.memory.actions.is_empty() {
+                // The run summary of a plan-driven mission: the plan's result and what each
+                // action did (printed as the run stops, like the recorder's summary).
+                petrel_actors::outln!(
+                    "\n── plan `{}`: {} ─────────────────────\n{}",
+                    run.plan.name(),
+                    run.state.status(&run.plan).as_str(),
+                    run.memory.report()
+                );
+            }
         }
         Ok(())
     }
@@ -159,8 +197,10 @@ impl Module for Mission {
 const MAX_ROUNDS: usize = 64;
 
 impl Run {
-    /// One plan step: bring expressions up to date with changed properties, then step.
-    fn round(&mut self, now: Instant, flags: &Flags) -> crate::exec::StepReport {
+    /// One plan step at clock time `secs`: bring expressions up to date with changed
+    /// properties, then step.
+    fn round(&mut self, now: Instant, secs: f64, flags: &Flags) -> crate::exec::StepReport {
+        let wall = self.clock.is_wall();
         for (id, h, seen) in &mut self.bound.watched {
             // A lock-free version check first: most rounds change few properties.
             if *seen == Some(h.version()) {
@@ -168,9 +208,11 @@ impl Run {
             }
             let s = h.read();
             *seen = Some(s.version);
+            // On another clock than wall time, a write counts from when the mission saw it.
+            let written = if wall { s.written } else { now };
             self.bound
                 .exprs
-                .update(*id, h.type_info(), &s.value, s.written);
+                .update(*id, h.type_info(), &s.value, written);
         }
         self.bound.exprs.evaluate_into(now, &mut self.changed);
         for &id in &self.changed {
@@ -182,6 +224,9 @@ impl Run {
         let mut env = MissionEnv {
             bound: &mut self.bound,
             flags,
+            now,
+            secs,
+            memory: &mut self.memory,
         };
         // Every condition is known here (unbound atoms read `in/conditions`), so the report's
         // `unknown_conditions` stays empty.
@@ -197,6 +242,67 @@ impl Run {
         }
         report
     }
+
+    /// Writes the memory (marking, running actions with what they replaced and their `held`
+    /// windows) to `state/memory`.
+    fn save(&mut self, out: &State<MissionMemory>) {
+        self.memory.plan = self.plan.name().to_string();
+        self.memory.marking = self.state.save();
+        for (name, ra) in self.memory.running.iter_mut() {
+            let Some(a) = self.bound.actions.get(name) else {
+                continue;
+            };
+            ra.saved = a.saved.as_ref().map(|vs| {
+                a.set
+                    .iter()
+                    .zip(vs)
+                    .map(|((h, _), v)| h.type_info().to_dynamic(v).unwrap_or(ron::Value::Unit))
+                    .collect()
+            });
+            ra.held = a
+                .exprs()
+                .map(|id| {
+                    let held = self.bound.exprs.held_states(id);
+                    held.into_iter().map(|t| t.map(Clock::secs_of)).collect()
+                })
+                .collect();
+        }
+        out.set(self.memory.clone());
+    }
+
+    /// Goes on from `memory` (a restart, or a snapshot being resumed): the marking, the
+    /// running actions' start times, what they replaced and their `held` windows.
+    fn resume(&mut self, memory: &MissionMemory) -> Result<(), String> {
+        self.state.restore(&self.plan, &memory.marking)?;
+        for (name, ra) in &memory.running {
+            let Some(a) = self.bound.actions.get_mut(name) else {
+                continue;
+            };
+            a.saved = ra.saved.as_ref().map(|vs| {
+                a.set
+                    .iter()
+                    .zip(vs)
+                    .map(|((h, old), v)| {
+                        h.type_info()
+                            .from_ron(v.clone())
+                            .unwrap_or_else(|_| old.clone())
+                    })
+                    .collect()
+            });
+            let origin = Clock::instant(ra.started_s);
+            let ids: Vec<ExprId> = a.exprs().collect();
+            for (k, id) in ids.into_iter().enumerate() {
+                self.bound.exprs.set_origin(id, Some(origin));
+                if let Some(held) = ra.held.get(k) {
+                    let held: Vec<Option<Instant>> =
+                        held.iter().map(|t| t.map(Clock::instant)).collect();
+                    self.bound.exprs.restore_held_states(id, &held);
+                }
+            }
+        }
+        self.memory = memory.clone();
+        Ok(())
+    }
 }
 
 impl Mission {
@@ -207,11 +313,13 @@ impl Mission {
             rules: self.rules.get(),
             actions: self.actions.get(),
             conditions: self.conditions.get(),
+            places: self.places.get(),
             allow_unbound: self.allow_unbound.value(),
         };
         let (plan, bound) = prepare(ctx.blackboard(), ctx.module(), &setup)
             .await
             .map_err(|problems| anyhow::anyhow!("{}", Problems(&problems, &setup.plan)))?;
+        let clock = Clock::of_module(ctx.blackboard(), ctx.module()).await;
         if !bound.defaults.is_empty() {
             tracing::info!(atoms = ?bound.defaults, "conditions read from in/conditions");
         }
@@ -228,98 +336,32 @@ impl Mission {
             "mission bound"
         );
         let state = PlanState::new(&plan);
-        publish(&self.marking, marking(&plan, &state));
-        self.run = Some(Run {
+        let mut run = Run {
             state,
             plan,
             bound,
             timer,
             done: false,
             changed: Vec::new(),
-        });
-        Ok(())
-    }
-}
-
-/// A mission's parameters, as its init reads them (or `petrel check`, from the config).
-struct Setup {
-    plan: Arc<FilePath>,
-    rules: Arc<FilePath>,
-    actions: Arc<ActionBindings>,
-    conditions: Arc<ConditionBindings>,
-    allow_unbound: bool,
-}
-
-/// Loads the plan and binds its actions and conditions; every problem at once.
-async fn prepare(
-    bb: &Blackboard,
-    module: &str,
-    setup: &Setup,
-) -> Result<(Arc<Plan>, Bound), Vec<BindingProblem>> {
-    let plan_problem = |message| {
-        vec![BindingProblem {
-            needle: "params/plan".into(),
-            message,
-        }]
-    };
-    if setup.plan.is_empty() {
-        return Err(plan_problem(format!(
-            "{module}/params/plan is empty; expected a plan file"
-        )));
-    }
-    let rules = (!setup.rules.is_empty()).then(|| setup.rules.as_path());
-    let loaded = load_plan(setup.plan.as_path(), rules)
-        .with_context(|| format!("{module}/params/plan"))
-        .map_err(|e| plan_problem(format!("{e:#}")))?;
-    let params = Params {
-        module,
-        actions: &setup.actions,
-        conditions: &setup.conditions,
-        allow_unbound: setup.allow_unbound,
-    };
-    let bound = bind(bb, &loaded.plan, params).await?;
-    Ok((loaded.plan, bound))
-}
-
-/// Problems of [`prepare`] as the module's init error.
-struct Problems<'a>(&'a [BindingProblem], &'a FilePath);
-
-impl std::fmt::Display for Problems<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let Problems(problems, plan) = self;
-        if let [only] = problems {
-            if only.needle == "params/plan" {
-                return write!(f, "{}", only.message);
+            clock,
+            memory: MissionMemory::default(),
+        };
+        let memory = self.memory.get();
+        if memory.plan == run.plan.name() && !memory.marking.is_empty() {
+            match run.resume(&memory) {
+                Ok(()) => tracing::info!(
+                    marking = %marking(&run.plan, &run.state),
+                    running = ?memory.running.keys().collect::<Vec<_>>(),
+                    "mission resumed from state/memory"
+                ),
+                Err(e) => tracing::warn!("state/memory not used: {e}; the plan starts over"),
             }
         }
-        write!(f, "plan {plan}: bad bindings:")?;
-        problems
-            .iter()
-            .try_for_each(|p| write!(f, "\n{}", p.message))
+        run.done = run.state.status(&run.plan) != PlanStatus::Running;
+        publish(&self.marking, marking(&run.plan, &run.state));
+        self.run = Some(run);
+        Ok(())
     }
-}
-
-/// Checks mission module `module` as its init would, without running anything: loads the plan
-/// its parameters name and binds every action and condition against `bb`, an agent's
-/// blackboard holding the config's values. What `petrel check` runs for each mission.
-pub async fn check_mission(bb: &Blackboard, module: &str) -> Result<(), Vec<BindingProblem>> {
-    let param = |name: &str| format!("{module}/params/{name}");
-    let read = async {
-        Ok::<_, BlackboardError>(Setup {
-            plan: bb.get::<FilePath>(&param("plan")).await?,
-            rules: bb.get::<FilePath>(&param("rules")).await?,
-            actions: bb.get::<ActionBindings>(&param("actions")).await?,
-            conditions: bb.get::<ConditionBindings>(&param("conditions")).await?,
-            allow_unbound: *bb.get::<bool>(&param("allow_unbound")).await?,
-        })
-    };
-    let setup = read.await.map_err(|e| {
-        vec![BindingProblem {
-            needle: module.to_string(),
-            message: format!("module `{module}` is not a mission.pnp: {e}"),
-        }]
-    })?;
-    prepare(bb, module, &setup).await.map(|_| ())
 }
 
 fn publish(out: &Output<String>, v: String) {

@@ -30,6 +30,7 @@ struct Net<'a> {
     gotos: Vec<(usize, String, usize)>,
     occurrences: Vec<Occurrence>,
     inline: Vec<(usize, Rule)>,
+    sources: crate::model::Sources,
 }
 
 impl Net<'_> {
@@ -176,8 +177,11 @@ impl Net<'_> {
                 name,
                 timeout: None,
                 rules,
+                at,
             } => {
+                self.written(name, *at);
                 let (exec, after) = self.action(cur, name);
+                self.own_last(2, name, *at);
                 self.occurrence(name, cur, exec, after, rules);
                 Some(after)
             }
@@ -185,16 +189,21 @@ impl Net<'_> {
                 name,
                 timeout: Some(secs),
                 rules,
+                at,
             } => {
+                self.written(name, *at);
                 let (pa, pw) = (self.place(""), self.place(""));
                 self.trans("[]", &[cur], &[pa, pw]);
                 let (exec, end_a) = self.action(pa, name);
+                self.own_last(2, name, *at);
                 self.occurrence(name, pa, exec, end_a, rules);
                 let wait = format!("wait_{secs}");
                 let (wexec, end_w) = self.action(pw, &wait);
                 let next = self.place("");
                 self.trans(&format!("{wait}.interrupt []"), &[wexec, end_a], &[next]);
                 self.trans(&format!("{name}.interrupt []"), &[exec, end_w], &[next]);
+                // Both ended in the same step: nothing is left to interrupt.
+                self.trans("[]", &[end_a, end_w], &[next]);
                 Some(next)
             }
             Item::Goto { label, at } => {
@@ -227,6 +236,26 @@ impl Net<'_> {
         self.inline.extend(rules.iter().map(|r| (i, r.clone())));
     }
 
+    /// Records where action `name` is written (its first occurrence) and that the transitions
+    /// made next are its own.
+    fn written(&mut self, name: &str, at: usize) {
+        let (line, _) = super::line_col(self.src, at);
+        self.sources
+            .action_lines
+            .entry(name.to_string())
+            .or_insert(line);
+    }
+
+    /// Marks the last `n` transitions made as action `name`'s (written at byte `at`).
+    fn own_last(&mut self, n: usize, name: &str, at: usize) {
+        let (line, _) = super::line_col(self.src, at);
+        let origin = format!("action `{name}` at {}:{line}", self.file);
+        let len = self.raw.transitions.len();
+        for t in len.saturating_sub(n)..len {
+            self.sources.origins.insert(t, origin.clone());
+        }
+    }
+
     fn fail_place(&mut self) -> usize {
         match self.fail {
             Some(f) => f,
@@ -248,7 +277,7 @@ impl Net<'_> {
             None => format!("{name}.fail"),
             Some(c) => format!("{name}.interrupt [{c}]"),
         };
-        self.trans(&label, &[exec], &[cur]);
+        let first = self.trans(&label, &[exec], &[cur]);
         for r in &rule.recovery {
             cur = self.action(cur, r).1;
         }
@@ -266,7 +295,13 @@ impl Net<'_> {
                 }
             },
         };
-        self.trans(" ", &[cur], &[target]);
+        let last = self.trans(" ", &[cur], &[target]);
+        // Every transition of the recovery is the rule's, for messages.
+        for t in first..=last {
+            self.sources
+                .origins
+                .insert(t, format!("the rule at {} for `{name}`", rule.origin));
+        }
     }
 }
 
@@ -308,6 +343,10 @@ pub fn compile_text(
         gotos: Vec::new(),
         occurrences: Vec::new(),
         inline: Vec::new(),
+        sources: crate::model::Sources {
+            file: file.to_string(),
+            ..Default::default()
+        },
     };
     let init = net.place("init");
     net.raw.places[init].initial = 1;
@@ -338,5 +377,7 @@ pub fn compile_text(
         net.apply_rule(occ, &rule);
     }
     layout(&mut net.raw);
-    Plan::build(net.raw, file)
+    let mut plan = Plan::build(net.raw, file)?;
+    plan.sources = net.sources;
+    Ok(plan)
 }

@@ -6,6 +6,7 @@
 //! item   := ACTION ['|' SECONDS] ('!' rule '!')*     action, optionally timed
 //!         | '<' COND '?' seq (':' COND '?' seq)* '>'  conditional
 //!         | '{' seq '}' ('||' '{' seq '}')*          block / parallel branches
+//!         | '{' seq '}' '*' N                         the block N times (1..=1000)
 //!         | LABEL_x | GOTO_LABEL_x | restart_plan | fail_plan
 //! ```
 //! Execution rules (see [`crate::compile_text`] and the `rules` module)

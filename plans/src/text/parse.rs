@@ -13,6 +13,7 @@ pub(crate) enum Item {
         name: String,
         timeout: Option<u32>,
         rules: Vec<Rule>,
+        at: usize,
     },
     Choice(Vec<(Cond<String>, Vec<Item>)>),
     Block(Vec<Item>),
@@ -150,7 +151,11 @@ impl<'a> Parser<'a> {
                         }
                     }
                     let item = if branches.len() == 1 {
-                        Item::Block(branches.pop().unwrap_or_default())
+                        let body = branches.pop().unwrap_or_default();
+                        match self.repeat()? {
+                            Some(n) => Item::Block(repeated(body, n)),
+                            None => Item::Block(body),
+                        }
                     } else {
                         Item::Parallel(std::mem::take(branches))
                     };
@@ -270,7 +275,34 @@ impl<'a> Parser<'a> {
             name: w,
             timeout,
             rules,
+            at,
         })
+    }
+
+    /// `* N` after a block: how many times to run it (the block is written out N times).
+    fn repeat(&mut self) -> Result<Option<u32>, PlanError> {
+        let (at, Tok::Word(w)) = self.peek()? else {
+            return Ok(None);
+        };
+        let Some(glued) = w.strip_prefix('*') else {
+            return Ok(None);
+        };
+        self.next()?;
+        let (n_at, n) = if glued.is_empty() {
+            match self.next()? {
+                (n_at, Tok::Word(n)) => (n_at, n),
+                (n_at, t) => return Err(self.unexpected(n_at, &t, "a number of times after '*'")),
+            }
+        } else {
+            (at + 1, glued.to_string())
+        };
+        match n.parse::<u32>() {
+            Ok(k) if (1..=MAX_REPEAT).contains(&k) => Ok(Some(k)),
+            _ => self.err(
+                n_at,
+                format!("'{n}': expected a number of times from 1 to {MAX_REPEAT} after '*'"),
+            ),
+        }
     }
 
     /// `COND ?` of a conditional.
@@ -294,6 +326,19 @@ impl<'a> Parser<'a> {
             }
         }
     }
+}
+
+/// The most times `{ ... } * N` may repeat a block.
+pub(crate) const MAX_REPEAT: u32 = 1000;
+
+/// `body` written out `n` times, one after the other.
+fn repeated(body: Vec<Item>, n: u32) -> Vec<Item> {
+    let mut out = Vec::with_capacity(body.len() * n as usize);
+    for _ in 1..n {
+        out.extend(body.iter().cloned());
+    }
+    out.extend(body);
+    out
 }
 
 fn show(t: &Tok) -> String {

@@ -42,6 +42,8 @@ pub(crate) struct Rule {
     pub during: Option<String>,
     pub recovery: Vec<String>,
     pub end: RuleEnd,
+    /// Where it is written (`file:line`) and its text, for messages.
+    pub origin: String,
 }
 
 impl Rule {
@@ -165,11 +167,13 @@ pub(crate) fn parse_rule(
             "expected the recovery to end with restart_action, skip_action, restart_plan, fail_plan or goal".into(),
         )
     })?;
+    let (line, _) = super::line_col(src, base + lead);
     Ok(Rule {
         cond,
         during,
         recovery,
         end,
+        origin: format!("{file}:{line} (`{}`)", text.trim()),
     })
 }
 

@@ -333,13 +333,26 @@ impl Registry {
     ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         let ti = self.entries[&key].decl.type_info;
-        let value = ti
-            .from_ron(value)
-            .map_err(|reason| BlackboardError::BadValue {
-                key: key.clone(),
-                expected: ti.name(),
-                reason,
-            })?;
+        let value = match ti.from_ron(value.clone()) {
+            Ok(v) => v,
+            Err(reason) => {
+                // Say what a value looks like, from the property's current one.
+                let example = self.get(&key).ok().and_then(|(_, v)| ti.to_ron(&v).ok());
+                let reason = match example {
+                    Some(example) => crate::value::config_value_error(
+                        &reason,
+                        &crate::value::spaced_ron(&example),
+                        &value,
+                    ),
+                    None => reason,
+                };
+                return Err(BlackboardError::BadValue {
+                    key: key.clone(),
+                    expected: ti.name(),
+                    reason,
+                });
+            }
+        };
         self.set(&key, ti, value)
     }
 
@@ -387,6 +400,12 @@ impl Registry {
         }
     }
 
+    /// Like [`get`](Registry::get), and for a queue its latest item (what expressions read).
+    pub fn get_or_latest(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
+        let ep = self.endpoint_or_latest(address)?;
+        Ok((ep.type_info(), ep.value()))
+    }
+
     /// The current value of a property (of its link target, if linked).
     pub fn get(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
         let key = self.key_of(address)?;
@@ -402,6 +421,36 @@ impl Registry {
     /// The endpoint of a value property.
     pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
         let key = self.key_of(address)?;
+        match &self.entries[&key].handle {
+            Handle::Value(ep) => Ok(ep.clone()),
+            _ => Err(BlackboardError::NotSettable {
+                kind: self.entries[&key].decl.kind,
+                key,
+            }),
+        }
+    }
+
+    /// Like [`endpoint`](Registry::endpoint), and for a queue (output, or input read through
+    /// its link) its latest item as a value (see `QueueCore::latest`): what expressions read.
+    pub(crate) fn endpoint_or_latest(
+        &self,
+        address: &str,
+    ) -> Result<Arc<Endpoint>, BlackboardError> {
+        let key = self.key_of(address)?;
+        let queue = match &self.entries[&key].handle {
+            Handle::QueueOut(core) => Some(core.clone()),
+            Handle::QueueIn(reader) => Some(reader.source()),
+            _ => None,
+        };
+        if let Some(core) = queue {
+            return core
+                .latest(crate::types::sample_of(core.type_info))
+                .ok_or_else(|| BlackboardError::BadValue {
+                    key: key.clone(),
+                    expected: core.type_info.name(),
+                    reason: "this queue has no item yet and its item type has no known default: its latest item cannot be read as a value until one is pushed".into(),
+                });
+        }
         match &self.entries[&key].handle {
             Handle::Value(ep) => Ok(ep.clone()),
             _ => Err(BlackboardError::NotSettable {

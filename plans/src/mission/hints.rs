@@ -1,0 +1,83 @@
+//! What binding tells a user beyond errors: hints about places, bindings that no action uses,
+//! and the nearest name to a misspelt one.
+
+use std::collections::BTreeSet;
+
+use super::bind::BindingProblem;
+use super::config::{match_action, ActionBindings, ActionName, Places};
+
+/// For a `"$N"` value whose parameter names no place: say which places there are.
+pub(crate) fn place_hint(value: &ron::Value, params: &[String], places: &Places) -> String {
+    let ron::Value::String(s) = value else {
+        return String::new();
+    };
+    let Some(param) = s
+        .strip_prefix('$')
+        .and_then(|n| n.parse::<usize>().ok())
+        .and_then(|n| params.get(n.wrapping_sub(1)))
+    else {
+        return String::new();
+    };
+    if places.0.contains_key(param) || param.parse::<f64>().is_ok() {
+        return String::new();
+    }
+    let known: Vec<&str> = places.0.keys().map(String::as_str).collect();
+    format!(
+        "; `{param}` is not a place in params/places (places: {})",
+        if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.join(", ")
+        }
+    )
+}
+
+/// Bindings no plan action uses (a typo such as `reprot_dock`), each with the nearest name.
+pub(crate) fn unused_bindings(
+    module: &str,
+    bindings: &ActionBindings,
+    actions: &BTreeSet<String>,
+) -> Vec<BindingProblem> {
+    let locals: Vec<String> = actions.iter().map(|a| ActionName::parse(a).local).collect();
+    bindings
+        .0
+        .keys()
+        .filter(|key| {
+            !locals
+                .iter()
+                .any(|l| match_action(std::iter::once(key.as_str()), l).is_some())
+        })
+        .map(|key| BindingProblem {
+            needle: key.clone(),
+            message: format!(
+                "{module}/params/actions[\"{key}\"]: the plan has no action `{key}` (nor `{key}_...`){}",
+                nearest(key, locals.iter().map(String::as_str))
+            ),
+        })
+        .collect()
+}
+
+/// `; did you mean `x`?` for the candidate nearest to `name`, if one is close.
+pub(crate) fn nearest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
+    candidates
+        .map(|c| (edit_distance(name, c), c))
+        .filter(|(d, c)| *d <= name.len().max(c.len()) / 2)
+        .min()
+        .map_or(String::new(), |(_, c)| format!("; did you mean `{c}`?"))
+}
+
+/// Levenshtein distance over characters.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}

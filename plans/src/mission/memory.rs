@@ -1,0 +1,90 @@
+//! What a mission keeps in its blackboard state (`state/memory`), so that a restarted mission
+//! module, or an agent resumed from a snapshot, goes on where the plan was: the marking, the
+//! actions running with their start times and what they replaced, the `held` windows they had
+//! seen open, and what each action did so far (for the summary).
+
+use std::collections::BTreeMap;
+
+use petrel_actors::PropertyType;
+use serde::{Deserialize, Serialize};
+
+/// `state/memory` of a `mission.pnp` module.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MissionMemory {
+    /// The plan this memory is about (its name), empty before the first step.
+    pub plan: String,
+    /// The marking ([`crate::PlanState::save`]).
+    pub marking: Vec<u32>,
+    /// Actions started (or resumed) and not ended, interrupted or failed since.
+    pub running: BTreeMap<String, RunningAction>,
+    /// Per action, what it did so far.
+    pub actions: BTreeMap<String, ActionStats>,
+    /// The action whose unhandled failure failed the plan, if one did.
+    pub failed_action: Option<String>,
+}
+
+impl PropertyType for MissionMemory {
+    const TYPE_NAME: &'static str = "pnp.memory";
+}
+
+/// An action in progress.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RunningAction {
+    /// When it started, in mission clock seconds.
+    pub started_s: f64,
+    /// The values its `set` replaced (config form), put back when it ends.
+    pub saved: Option<Vec<ron::Value>>,
+    /// Per condition expression (finished, failed), when each `held` has seen its condition
+    /// true since, in clock seconds.
+    pub held: Vec<Vec<Option<f64>>>,
+}
+
+/// What one action did during the run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ActionStats {
+    /// Starts and resumes.
+    pub starts: u32,
+    /// Ends (its `finished` held).
+    pub ends: u32,
+    /// Failures (its `failed` held).
+    pub failures: u32,
+    /// Interrupts (an execution rule, a timeout).
+    pub interrupts: u32,
+    /// Time spent running, clock seconds (finished runs only).
+    pub time_s: f64,
+}
+
+impl MissionMemory {
+    /// One line per action: `goto_A: 2 starts, 2 ends, 0 failures, 0 interrupts, 12.3 s`.
+    pub fn report(&self) -> String {
+        self.actions
+            .iter()
+            .map(|(name, a)| {
+                format!(
+                    "{name}: {} start{}, {} end{}, {} failure{}, {} interrupt{}, {:.1} s",
+                    a.starts,
+                    s(a.starts),
+                    a.ends,
+                    s(a.ends),
+                    a.failures,
+                    s(a.failures),
+                    a.interrupts,
+                    s(a.interrupts),
+                    a.time_s
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+}
+
+fn s(n: u32) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}

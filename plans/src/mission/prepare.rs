@@ -1,0 +1,123 @@
+//! Loading a mission's plan and binding it, as the module's init does and as `petrel check`
+//! does from a config (every problem at once, located by the config text it is about).
+
+use std::sync::Arc;
+
+use anyhow::Context as _;
+use petrel_actors::{Blackboard, BlackboardError, FilePath};
+
+use super::bind::{bind, BindingProblem, Bound, Params};
+use super::config::{ActionBindings, ConditionBindings, Places};
+use crate::load::load_plan;
+use crate::model::Plan;
+
+/// A mission's parameters, as its init reads them (or `petrel check`, from the config).
+pub(crate) struct Setup {
+    pub(crate) plan: Arc<FilePath>,
+    pub(crate) rules: Arc<FilePath>,
+    pub(crate) actions: Arc<ActionBindings>,
+    pub(crate) conditions: Arc<ConditionBindings>,
+    pub(crate) places: Arc<Places>,
+    pub(crate) allow_unbound: bool,
+}
+
+/// Loads the plan and binds its actions and conditions; every problem at once (warnings are
+/// logged).
+pub(crate) async fn prepare(
+    bb: &Blackboard,
+    module: &str,
+    setup: &Setup,
+) -> Result<(Arc<Plan>, Bound), Vec<BindingProblem>> {
+    let (bound, warnings) = prepare_all(bb, module, setup).await;
+    for w in &warnings {
+        tracing::warn!("{}", w.message);
+    }
+    bound
+}
+
+/// [`prepare`], with the warnings returned rather than logged.
+async fn prepare_all(
+    bb: &Blackboard,
+    module: &str,
+    setup: &Setup,
+) -> (
+    Result<(Arc<Plan>, Bound), Vec<BindingProblem>>,
+    Vec<BindingProblem>,
+) {
+    let plan_problem = |message| {
+        vec![BindingProblem {
+            needle: "params/plan".into(),
+            message,
+        }]
+    };
+    if setup.plan.is_empty() {
+        let message = format!("{module}/params/plan is empty; expected a plan file");
+        return (Err(plan_problem(message)), Vec::new());
+    }
+    let rules = (!setup.rules.is_empty()).then(|| setup.rules.as_path());
+    let loaded = match load_plan(setup.plan.as_path(), rules)
+        .with_context(|| format!("{module}/params/plan"))
+    {
+        Ok(loaded) => loaded,
+        Err(e) => return (Err(plan_problem(format!("{e:#}"))), Vec::new()),
+    };
+    let params = Params {
+        module,
+        actions: &setup.actions,
+        conditions: &setup.conditions,
+        places: &setup.places,
+        allow_unbound: setup.allow_unbound,
+    };
+    let binding = bind(bb, &loaded.plan, params).await;
+    (
+        binding.bound.map(|bound| (loaded.plan, bound)),
+        binding.warnings,
+    )
+}
+
+/// Problems of [`prepare`] as the module's init error.
+pub(crate) struct Problems<'a>(pub &'a [BindingProblem], pub &'a FilePath);
+
+impl std::fmt::Display for Problems<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Problems(problems, plan) = self;
+        if let [only] = problems {
+            if only.needle == "params/plan" {
+                return write!(f, "{}", only.message);
+            }
+        }
+        write!(f, "plan {plan}: bad bindings:")?;
+        problems
+            .iter()
+            .try_for_each(|p| write!(f, "\n{}", p.message))
+    }
+}
+
+/// Checks mission module `module` as its init would, without running anything: loads the plan
+/// its parameters name and binds every action and condition against `bb`, an agent's
+/// blackboard holding the config's values. What `petrel check` runs for each mission.
+/// `Ok` holds the warnings (a binding no action uses, with the nearest action name).
+pub async fn check_mission(
+    bb: &Blackboard,
+    module: &str,
+) -> Result<Vec<BindingProblem>, Vec<BindingProblem>> {
+    let param = |name: &str| format!("{module}/params/{name}");
+    let read = async {
+        Ok::<_, BlackboardError>(Setup {
+            plan: bb.get::<FilePath>(&param("plan")).await?,
+            rules: bb.get::<FilePath>(&param("rules")).await?,
+            actions: bb.get::<ActionBindings>(&param("actions")).await?,
+            conditions: bb.get::<ConditionBindings>(&param("conditions")).await?,
+            places: bb.get::<Places>(&param("places")).await?,
+            allow_unbound: *bb.get::<bool>(&param("allow_unbound")).await?,
+        })
+    };
+    let setup = read.await.map_err(|e| {
+        vec![BindingProblem {
+            needle: module.to_string(),
+            message: format!("module `{module}` is not a mission.pnp: {e}"),
+        }]
+    })?;
+    let (bound, warnings) = prepare_all(bb, module, &setup).await;
+    bound.map(|_| warnings)
+}
