@@ -702,3 +702,86 @@ fn a_closed_standard_output_ends_tools_quietly_and_a_run_goes_on() {
         "{err}"
     );
 }
+
+#[test]
+fn outputs_never_replace_inputs_and_bad_destinations_are_refused_before_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("pipeline.ron");
+    let original = std::fs::read_to_string("configs/pipeline.ron").unwrap();
+    std::fs::write(&config, &original).unwrap();
+    let config_arg = config.to_str().unwrap();
+
+    // The snapshot would replace the config (named another way): refused, nothing run.
+    let same = dir.path().join(".").join("pipeline.ron");
+    let out = petrel(&[
+        "run",
+        config_arg,
+        "--for",
+        "30s",
+        "--snapshot-out",
+        same.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("which this run reads"),
+        "{}",
+        text(&out.stderr)
+    );
+    assert!(
+        !text(&out.stdout).contains("ran for"),
+        "refused before running"
+    );
+    assert_eq!(std::fs::read_to_string(&config).unwrap(), original);
+
+    // A destination that cannot be written is found before the run, not after it.
+    let nowhere = dir.path().join("no/such/dir/snap.ron");
+    let out = petrel(&[
+        "run",
+        config_arg,
+        "--for",
+        "30s",
+        "--snapshot-out",
+        nowhere.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).starts_with("error: --snapshot-out "),
+        "{}",
+        text(&out.stderr)
+    );
+
+    // A good destination gets a whole snapshot, and no temporary file stays beside it.
+    let snap = dir.path().join("snap.ron");
+    let out = petrel(&[
+        "run",
+        config_arg,
+        "--for",
+        "1s",
+        "--no-remote",
+        "--snapshot-out",
+        snap.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(std::fs::read_to_string(&snap)
+        .unwrap()
+        .starts_with("// Snapshot of agent"));
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["pipeline.ron", "snap.ron"]);
+
+    // plan compile -o onto its own input: refused, the text plan kept.
+    let plan = dir.path().join("p.plan");
+    std::fs::write(&plan, "a; b\n").unwrap();
+    let out = petrel(&[
+        "plan",
+        "compile",
+        plan.to_str().unwrap(),
+        "-o",
+        plan.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert_eq!(std::fs::read_to_string(&plan).unwrap(), "a; b\n");
+}

@@ -92,7 +92,11 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             rules,
             output,
         } => match compile_to_pnml(&plan, rules.as_deref()) {
-            Ok(pnml) => match std::fs::write(&output, pnml) {
+            Ok(_) if refuses_overwrite(&output, &plan, rules.as_deref()) => bad_input(format!(
+                "{}: -o names an input of the compilation; write the PNML elsewhere",
+                output.display()
+            )),
+            Ok(pnml) => match petrel_actors::files::write_atomically(&output, pnml.as_bytes()) {
                 Ok(()) => {
                     println!("wrote {}", output.display());
                     ExitCode::SUCCESS
@@ -157,4 +161,10 @@ fn with_plan(
 fn bad_input(message: String) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(EXIT_BAD_INPUT)
+}
+
+/// Whether writing `output` would replace the plan or rules file being compiled.
+fn refuses_overwrite(output: &Path, plan: &Path, rules: Option<&Path>) -> bool {
+    let inputs: Vec<&Path> = std::iter::once(plan).chain(rules).collect();
+    petrel_actors::files::overwrites_an_input(output, &inputs).is_some()
 }

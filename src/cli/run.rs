@@ -6,7 +6,9 @@ use std::pin::Pin;
 use std::process::ExitCode;
 use std::task::Poll;
 
-use petrel_actors::{outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError};
+use petrel_actors::{
+    files, outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError,
+};
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
@@ -29,6 +31,12 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         eprintln!("error: --overlay and --snapshot-out take one agent; run each agent with its own `petrel run` to use them");
         return ExitCode::from(EXIT_BAD_INPUT);
     }
+    if let Some(out) = &args.snapshot_out {
+        if let Err(e) = check_destination(out, &args) {
+            eprintln!("error: --snapshot-out {}: {e}", out.display());
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
     let files = match load_all(registry, &args) {
         Ok(files) => files,
         Err(code) => return code,
@@ -45,6 +53,24 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         }
     };
     runtime.block_on(run_agents(registry, &args, files))
+}
+
+/// Checked before anything runs: a snapshot that cannot be written, or would replace a file
+/// the run reads, is refused at once rather than after the whole run.
+fn check_destination(out: &std::path::Path, args: &RunArgs) -> Result<(), String> {
+    let inputs: Vec<&std::path::Path> = args
+        .configs
+        .iter()
+        .chain(&args.overlay)
+        .map(|p| p.as_path())
+        .collect();
+    if let Some(input) = files::overwrites_an_input(out, &inputs) {
+        return Err(format!(
+            "it is {}, which this run reads; write the snapshot elsewhere",
+            input.display()
+        ));
+    }
+    files::check_writable(out)
 }
 
 /// Loads and checks every config, alone and together (links between them, unique names).
@@ -131,7 +157,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             .snapshot()
             .await
             .map_err(|e| e.to_string())
-            .and_then(|s| std::fs::write(path, s).map_err(|e| e.to_string()))
+            // Written whole or not at all: a full disk never leaves half a snapshot.
+            .and_then(|s| files::write_atomically(path, s.as_bytes()).map_err(|e| e.to_string()))
         {
             Ok(()) => outln!("snapshot written to {}", path.display()),
             Err(e) => {
