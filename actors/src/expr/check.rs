@@ -5,6 +5,10 @@ use super::types::Ty;
 use super::value::Value;
 use super::{ExprError, Span};
 
+/// The longest duration `held` accepts, in seconds (about 31 years): a time an instant can
+/// always be moved by, whatever the clock says.
+pub const MAX_HELD_SECS: f64 = 1e9;
+
 /// A typed node, ready to evaluate; properties are indices given by the resolver.
 #[derive(Debug, Clone)]
 pub(crate) enum Node {
@@ -201,7 +205,15 @@ impl<R: Resolve> Checker<'_, R> {
                 let (cond, t) = self.check(&args[0])?;
                 self.want(&args[0], &t, &Ty::Bool, "the condition of `held`")?;
                 let secs = match args[1].kind {
-                    AstKind::Num(n) => n,
+                    AstKind::Num(n) if (0.0..=MAX_HELD_SECS).contains(&n) => n,
+                    AstKind::Num(n) => {
+                        return Err(self.err(
+                            args[1].span,
+                            format!(
+                                "the duration of `held` must be between 0 and {MAX_HELD_SECS:e} s (about 31 years); found {n:.3e} s"
+                            ),
+                        ))
+                    }
                     _ => {
                         return Err(self.err(
                             args[1].span,

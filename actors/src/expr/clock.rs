@@ -48,7 +48,14 @@ impl Clock {
 
     /// The instant standing for clock seconds `secs`.
     pub fn instant(secs: f64) -> Instant {
-        let secs = if secs.is_finite() { secs.max(0.0) } else { 0.0 };
+        // An instant cannot hold any number: beyond some 30,000 years (a clock property gone
+        // wild, `1e300`), time stands at that limit rather than overflowing.
+        const MAX_SECS: f64 = 1e12;
+        let secs = if secs.is_finite() {
+            secs.clamp(0.0, MAX_SECS)
+        } else {
+            0.0
+        };
         base() + Duration::from_secs_f64(secs)
     }
 

@@ -163,7 +163,9 @@ impl Eval<'_> {
             _ => return,
         };
         if let Value::Num(limit) = other {
-            if limit.is_finite() && *limit >= 0.0 {
+            // A limit beyond `held`'s longest duration never flips within a run: no wake-up
+            // (and no instant overflowing for `age(p) > 1e300`).
+            if (0.0..=super::check::MAX_HELD_SECS).contains(limit) {
                 let t = from + Duration::from_secs_f64(*limit) + AGE_SLACK;
                 self.wake_at(t);
             }

@@ -412,3 +412,19 @@ fn contradicting_comparisons_can_never_be_true() {
         assert_eq!(never(ok), None, "{ok}");
     }
 }
+
+#[test]
+fn durations_are_bounded_where_they_are_written() {
+    let e = err("held(b/out/ok, 100000000000000000000s)");
+    assert!(
+        e.to_string()
+            .contains("the duration of `held` must be between 0 and 1e9 s"),
+        "{e}"
+    );
+    assert!(e.to_string().starts_with("1:16:"), "at the duration: {e}");
+    // A comparison with an age beyond any run is fine: it just never flips.
+    assert_eq!(
+        eval("age(a/out/x) > 9223372036854775807"),
+        Value::Bool(false)
+    );
+}
