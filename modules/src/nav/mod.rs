@@ -12,6 +12,7 @@ pub mod headless;
 pub mod localizer;
 pub mod mapper;
 pub mod planner;
+pub mod scan_matcher;
 pub mod sequencer;
 
 pub use avoidance::{Avoidance, AvoidanceParams};
@@ -20,4 +21,5 @@ pub use headless::{run_mission, MissionParams, MissionSummary};
 pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
 pub use mapper::{Mapper, MapperParams};
 pub use planner::{Planner, PlannerOutput, PlannerParams};
+pub use scan_matcher::{ScanLocalizer, ScanMatcher, ScanMatcherParams, ScanOutcome};
 pub use sequencer::{GoalSequencer, SequencerOutput};
