@@ -12,6 +12,7 @@ use crate::sim::render::{save_png, RenderLayers};
 /// `sim.recorder`: trajectory, distance, and the end-of-run summary and PNG.
 pub struct Recorder {
     pose: Input<Pose2>,
+    estimate: Input<Pose2>,
     map: Input<OccupancyGrid>,
     path: Input<Path2>,
     goals: Input<Path2>,
@@ -22,6 +23,9 @@ pub struct Recorder {
     sample_m: Input<f64>,
     robot_radius: Input<f64>,
     distance: Output<f64>,
+    pose_error: Output<f64>,
+    /// Sum, count and maximum of the localization error samples.
+    error_stats: (f64, u64, f64),
     trajectory: Vec<Point2>,
     last: Option<Point2>,
     started: Option<std::time::Instant>,
@@ -38,6 +42,11 @@ impl Module for Recorder {
                 "in/pose",
                 Pose2::default(),
                 "robot pose to record (ground truth in simulation)",
+            ),
+            estimate: ports.input(
+                "in/estimatedPose",
+                Pose2::default(),
+                "estimated pose: when linked, the error to in/pose is tracked and summarized",
             ),
             map: ports.input(
                 "in/map",
@@ -65,6 +74,12 @@ impl Module for Recorder {
             ),
             robot_radius: ports.param("params/robot_radius", 0.2, "robot radius drawn, m"),
             distance: ports.output("out/distance", 0.0, "distance travelled, m"),
+            pose_error: ports.output(
+                "out/poseError",
+                0.0,
+                "distance between in/pose and in/estimatedPose, m (0 while unlinked)",
+            ),
+            error_stats: (0.0, 0, 0.0),
             trajectory: Vec::new(),
             last: None,
             started: None,
@@ -94,6 +109,13 @@ impl Module for Recorder {
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let p = self.pose.get().position();
+        let estimate = self.estimate.read();
+        if estimate.version > 0 && !ctx.cause().first() {
+            let e = (estimate.value.position().0 - p.0).norm();
+            let (sum, n, max) = self.error_stats;
+            self.error_stats = (sum + e, n + 1, max.max(e));
+            self.pose_error.set(e);
+        }
         match self.last {
             // The first pose read may be an unlinked default; the first real one is the start.
             None if ctx.cause().first() => return Ok(()),
@@ -137,6 +159,12 @@ impl Module for Recorder {
         }
         println!("path length      {:.1} m", self.distance.value());
         println!("collisions       {}", self.collisions.value());
+        if let (sum, n @ 1.., max) = self.error_stats {
+            println!(
+                "pose error       mean {:.3} m, max {max:.3} m (estimate vs truth)",
+                sum / n as f64
+            );
+        }
         println!("sim time         {sim:.1} s");
         println!(
             "wall time        {wall:.1} s ({:.1}x real time)",
