@@ -8,6 +8,7 @@
 pub mod astar;
 pub mod avoidance;
 pub mod costmap;
+pub mod frontier;
 pub mod headless;
 pub mod localizer;
 pub mod mapper;
@@ -17,6 +18,7 @@ pub mod sequencer;
 
 pub use avoidance::{Avoidance, AvoidanceParams};
 pub use costmap::CostParams;
+pub use frontier::{explore, known_area, Exploration, Frontier, FrontierParams};
 pub use headless::{run_mission, MissionParams, MissionSummary};
 pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
 pub use mapper::{Mapper, MapperParams};

@@ -325,7 +325,9 @@ impl ScanLocalizer {
     /// Corrects the estimate with a scan taken at the latest odometry sample.
     pub fn scan(&mut self, scan: &LaserScan) -> ScanOutcome {
         let predicted = self.pose();
-        let points = self.matcher.endpoints(scan, self.matcher.params().ray_stride);
+        let points = self
+            .matcher
+            .endpoints(scan, self.matcher.params().ray_stride);
         let (pose, fit, matched) = match self.matcher.best_pose(predicted, &points) {
             Some((pose, fit)) => (pose, fit, true),
             None if self.matcher.wall_cells() == 0 => (predicted, 1.0, false),

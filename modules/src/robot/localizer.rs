@@ -198,7 +198,11 @@ impl Module for LocalizerModule {
         if !(0.0..=1.0).contains(&lost_below) {
             bail!("invalid parameter `params/lost_below`: expected a number in [0, 1], got {lost_below}");
         }
-        let (res, size, origin) = (self.resolution.value(), self.size.value(), self.origin.value());
+        let (res, size, origin) = (
+            self.resolution.value(),
+            self.size.value(),
+            self.origin.value(),
+        );
         let cells = |m: f64| (m / res).ceil();
         let (w, h) = (cells(size.0.x), cells(size.0.y));
         if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {

@@ -14,6 +14,7 @@
 //! driver replaces `sim.world` by publishing the same properties.
 
 mod avoidance;
+mod explorer;
 mod localizer;
 mod mapper;
 mod path_planner;
@@ -22,6 +23,7 @@ mod sequencer;
 mod world;
 
 pub use avoidance::ObstacleAvoidance;
+pub use explorer::ExplorerModule;
 pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
@@ -42,6 +44,7 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<PathPlanner>()
         .register::<ObstacleAvoidance>()
         .register::<GoalSequencerModule>()
+        .register::<ExplorerModule>()
         .register::<Recorder>();
 }
 

@@ -100,13 +100,28 @@ fn noisy_tour(noise: OdomNoise, use_scans: bool) -> (f64, f64) {
     let mut loc = ScanLocalizer::new(params()).unwrap();
     let (mut max, mut sum, mut n) = (0.0f64, 0.0, 0);
     // A loop around the room: straight legs and turns, 0.4 m/s, 100 Hz, scans at 20 Hz.
-    let legs = [(7.5, 0.0), (0.0, 1.5708), (6.0, 0.0), (0.0, 1.5708), (7.5, 0.0), (0.0, 1.5708), (6.0, 0.0), (0.0, 1.5708)];
+    let legs = [
+        (7.5, 0.0),
+        (0.0, 1.5708),
+        (6.0, 0.0),
+        (0.0, 1.5708),
+        (7.5, 0.0),
+        (0.0, 1.5708),
+        (6.0, 0.0),
+        (0.0, 1.5708),
+    ];
     let mut k = 0u64;
     for _lap in 0..3 {
         for &(dist, turn) in &legs {
-            let (v, w, secs): (f64, f64, f64) = if dist > 0.0 { (0.4, 0.0, dist / 0.4) } else { (0.0, 0.6, turn / 0.6) };
+            let (v, w, secs): (f64, f64, f64) = if dist > 0.0 {
+                (0.4, 0.0, dist / 0.4)
+            } else {
+                (0.0, 0.6, turn / 0.6)
+            };
             let steps = (secs * 100.0).round() as u64;
-            world.set_command(id, petrel_actors::Twist2::new(v, w)).unwrap();
+            world
+                .set_command(id, petrel_actors::Twist2::new(v, w))
+                .unwrap();
             for _ in 0..steps {
                 let out = world.step(0.01).unwrap()[id].clone();
                 loc.odometry(out.odometry.pose);
@@ -139,5 +154,8 @@ fn error_stays_bounded_over_a_noisy_run_where_odometry_alone_drifts() {
     let (mean_odom, max_odom) = noisy_tour(noise, false);
     println!("scan matching: mean {mean:.3} m, max {max:.3} m; odometry alone: mean {mean_odom:.3} m, max {max_odom:.3} m");
     assert!(max <= 0.15, "max error {max}");
-    assert!(mean_odom > 2.0 * mean, "odometry alone drifts further: {mean_odom}");
+    assert!(
+        mean_odom > 2.0 * mean,
+        "odometry alone drifts further: {mean_odom}"
+    );
 }
