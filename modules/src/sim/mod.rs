@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod error;
 pub mod features;
 pub mod grid;
