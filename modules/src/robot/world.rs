@@ -5,15 +5,18 @@ use std::time::Duration;
 use anyhow::{bail, Context as _};
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    Context, FilePath, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter, Schedule,
-    Twist2,
+    Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter,
+    Schedule, Twist2,
 };
+use rand::SeedableRng;
 use tokio::time::Instant;
 
 use super::{check_params, count, param_error};
+use crate::sim::camera::{self, CameraConfig, CameraMotion};
 use crate::sim::error::{non_negative, positive};
 use crate::sim::{
     load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
+    WorldFeatures,
 };
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
@@ -59,9 +62,15 @@ pub struct SimWorld {
     laser_noise: Input<f64>,
     laser_rate: Input<f64>,
     laser_mount: Input<Pose2>,
+    camera_enabled: Input<bool>,
+    camera_exposure: Input<f64>,
+    camera_gain: Input<f64>,
+    camera_rate: Input<f64>,
+    camera_fov_deg: Input<f64>,
     command: Input<Twist2>,
     odometry: QueueWriter<Pose2>,
     scans: QueueWriter<LaserScan>,
+    images: QueueWriter<Image>,
     pose: Output<Pose2>,
     speed: Output<Twist2>,
     collisions: Output<i64>,
@@ -80,6 +89,11 @@ struct Sim {
     last_wake: Instant,
     /// Version of `in/controlSpeed` last seen, and the simulated time it was first seen.
     command_seen: (u64, f64),
+    /// Victims and dark and rough areas, for the camera.
+    features: WorldFeatures,
+    /// The camera's own noise stream and the simulated time of its next frame.
+    camera_rng: rand::rngs::StdRng,
+    next_frame: f64,
 }
 
 impl Module for SimWorld {
@@ -111,9 +125,15 @@ impl Module for SimWorld {
             laser_noise: ports.param("params/laser/noise_std", 0.0, "Gaussian range noise, m"),
             laser_rate: ports.param("params/laser/rate_hz", 20.0, "scans per simulated second (0 = every step)"),
             laser_mount: ports.param("params/laser/mount", Pose2::default(), "laser pose in the robot frame"),
+            camera_enabled: ports.param("params/camera/enabled", false, "whether the robot has a camera (out/image)"),
+            camera_exposure: ports.param("params/camera/exposure_ms", 10.0, "exposure time, ms (0..200]: longer is brighter and less noisy, and blurs more when moving; read at every frame"),
+            camera_gain: ports.param("params/camera/gain", 1.0, "sensor gain [1, 16]: brighter, noise amplified alike; read at every frame"),
+            camera_rate: ports.param("params/camera/rate_hz", 10.0, "frames per simulated second"),
+            camera_fov_deg: ports.param("params/camera/fov_deg", 60.0, "horizontal field of view, degrees (0, 180)"),
             command: ports.input("in/controlSpeed", Twist2::default(), "velocity command (clamped to the limits)"),
             odometry: ports.queue_out("out/odometry", 256, "odometric pose at every step (item stamp = push time; simulated time is out/simTime)"),
             scans: ports.queue_out("out/laserScan", 16, "laser scans, in the laser frame"),
+            images: ports.queue_out("out/image", 4, "camera frames, 160 x 120 mono8 (shared, never copied)"),
             pose: ports.output("out/pose", Pose2::default(), "ground-truth pose (for evaluation: a real robot has none)"),
             speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
             collisions: ports.output("out/collisions", 0, "collision events so far"),
@@ -148,6 +168,9 @@ impl Module for SimWorld {
         check_params(non_negative, &[("command_timeout_s", timeout)])?;
         let config = self.robot_config()?;
         let seed = self.seed.value() as u64;
+        self.camera_config()?;
+        let rate = self.camera_rate.value();
+        check_params(positive, &[("camera/rate_hz", rate)])?;
         let mut world = World::new(map.grid, seed);
         let id = world
             .add_robot(config, start)
@@ -168,11 +191,18 @@ impl Module for SimWorld {
             owed: 0.0,
             last_wake: ctx.now(),
             command_seen: (0, 0.0),
+            features: map.features,
+            camera_rng: rand::rngs::StdRng::seed_from_u64(seed ^ 0xCA3E_7A00),
+            next_frame: 0.0,
         });
         Ok(())
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let camera_config = match self.camera_enabled.value() {
+            true => Some(self.camera_config()?),
+            false => None,
+        };
         let sim = self
             .sim
             .as_mut()
@@ -197,7 +227,7 @@ impl Module for SimWorld {
         let cmd = if stale { Twist2::default() } else { *command };
         sim.world.set_command(sim.id, cmd)?;
         for _ in 0..steps {
-            let out = &sim.world.step(sim.dt)?[sim.id];
+            let out = sim.world.step(sim.dt)?[sim.id].clone();
             // The scan goes first: a consumer pairing a scan with the pose estimated from the
             // odometry of the same step then sees the scan before that pose exists.
             if let Some(scan) = &out.scan {
@@ -208,12 +238,49 @@ impl Module for SimWorld {
             self.speed.set(out.speed);
             self.collisions.set(out.collisions as i64);
             self.sim_time.set(out.odometry.stamp);
+            let due = out.odometry.stamp + 1e-9 >= sim.next_frame;
+            if let Some(cfg) = camera_config.as_ref().filter(|_| due) {
+                sim.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();
+                let motion = CameraMotion {
+                    speed: out.speed,
+                    rough: sim
+                        .features
+                        .is_rough(out.ground_truth.x(), out.ground_truth.y()),
+                };
+                let grid = sim.world.grid();
+                let pixels = camera::render(
+                    grid,
+                    &sim.features,
+                    out.ground_truth,
+                    motion,
+                    cfg,
+                    &mut sim.camera_rng,
+                );
+                self.images.push(Image {
+                    width: cfg.width,
+                    height: cfg.height,
+                    encoding: "mono8".into(),
+                    data: pixels.into(),
+                });
+            }
         }
         Ok(())
     }
 }
 
 impl SimWorld {
+    /// The camera's parameters as they are now (contexts change exposure and gain).
+    fn camera_config(&self) -> anyhow::Result<CameraConfig> {
+        let cfg = CameraConfig {
+            fov: self.camera_fov_deg.value().to_radians(),
+            exposure_ms: self.camera_exposure.value(),
+            gain: self.camera_gain.value(),
+            ..CameraConfig::default()
+        };
+        cfg.validate().map_err(|e| param_error(e, &[]))?;
+        Ok(cfg)
+    }
+
     fn robot_config(&self) -> anyhow::Result<RobotConfig> {
         let drive = match self.drive.get().as_str() {
             "differential" => DriveKind::Differential,

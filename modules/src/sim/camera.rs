@@ -81,19 +81,28 @@ impl CameraConfig {
         if !(8..=1024).contains(&self.width) || !(8..=1024).contains(&self.height) {
             return Err(ParamError {
                 param: "camera/size".into(),
-                message: format!("expected 8..=1024 pixels each way, got {} x {}", self.width, self.height),
+                message: format!(
+                    "expected 8..=1024 pixels each way, got {} x {}",
+                    self.width, self.height
+                ),
             });
         }
         if !(self.fov > 0.0 && self.fov < std::f64::consts::PI) {
             return Err(ParamError {
                 param: "camera/fov_deg".into(),
-                message: format!("expected degrees in (0, 180), got {}", self.fov.to_degrees()),
+                message: format!(
+                    "expected degrees in (0, 180), got {}",
+                    self.fov.to_degrees()
+                ),
             });
         }
         if !(self.exposure_ms > 0.0 && self.exposure_ms <= 200.0) {
             return Err(ParamError {
                 param: "camera/exposure_ms".into(),
-                message: format!("expected milliseconds in (0, 200], got {}", self.exposure_ms),
+                message: format!(
+                    "expected milliseconds in (0, 200], got {}",
+                    self.exposure_ms
+                ),
             });
         }
         if !(self.gain >= 1.0 && self.gain <= 16.0) {

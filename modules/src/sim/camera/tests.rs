@@ -29,11 +29,23 @@ fn scene(dark: bool) -> (Grid, WorldFeatures) {
 fn frame(dark: bool, motion: CameraMotion, cfg: &CameraConfig, seed: u64) -> Vec<u8> {
     let (grid, features) = scene(dark);
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    render(&grid, &features, Pose2::new(1.0, 2.5, 0.0), motion, cfg, &mut rng)
+    render(
+        &grid,
+        &features,
+        Pose2::new(1.0, 2.5, 0.0),
+        motion,
+        cfg,
+        &mut rng,
+    )
 }
 
 /// Mean |row-to-row difference| in a window: the checkerboard's contrast.
-fn contrast(img: &[u8], cfg: &CameraConfig, cols: std::ops::Range<usize>, rows: std::ops::Range<usize>) -> f64 {
+fn contrast(
+    img: &[u8],
+    cfg: &CameraConfig,
+    cols: std::ops::Range<usize>,
+    rows: std::ops::Range<usize>,
+) -> f64 {
     let w = cfg.width as usize;
     let mut sum = 0.0;
     let mut n = 0;
@@ -123,7 +135,12 @@ fn darkness_makes_images_dim_and_noisy_exposure_and_gain_bring_them_back() {
     let cfg = CameraConfig::default();
     let bright = frame(false, CameraMotion::default(), &cfg, 4);
     let dim = frame(true, CameraMotion::default(), &cfg, 4);
-    assert!(mean(&dim) < 0.15 * mean(&bright), "{} vs {}", mean(&dim), mean(&bright));
+    assert!(
+        mean(&dim) < 0.15 * mean(&bright),
+        "{} vs {}",
+        mean(&dim),
+        mean(&bright)
+    );
     assert!(noise(&cfg, true) > 2.0 * noise(&cfg, false));
     let longer = CameraConfig {
         exposure_ms: 40.0,
@@ -136,9 +153,6 @@ fn darkness_makes_images_dim_and_noisy_exposure_and_gain_bring_them_back() {
     };
     let dim_gained = frame(true, CameraMotion::default(), &gained, 4);
     assert!(mean(&dim_gained) > 4.0 * mean(&dim));
-    let bad = CameraConfig {
-        gain: 0.5,
-        ..cfg
-    };
+    let bad = CameraConfig { gain: 0.5, ..cfg };
     assert_eq!(bad.validate().unwrap_err().param, "camera/gain");
 }
