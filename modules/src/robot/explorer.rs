@@ -58,7 +58,7 @@ impl Module for ExplorerModule {
             clearance: ports.param("params/clearance", 0.3, "distance the robot's centre keeps from walls, m (frontiers closer are unreachable)"),
             min_frontier_cells: ports.param("params/min_frontier_cells", 4, "smaller frontiers are ignored, cells"),
             gain_weight: ports.param("params/gain_weight", 0.05, "metres of travel one frontier cell is worth"),
-            blacklist_radius: ports.param("params/blacklist_radius", 0.6, "after a failed target, frontiers this close to it are skipped, m"),
+            blacklist_radius: ports.param("params/blacklist_radius", 0.6, "frontiers this close to a target reached or failed before are skipped, m"),
             replan_s: ports.param("params/replan_s", 2.0, "re-evaluate frontiers at least this often, simulated s"),
             keep_radius: ports.param("params/keep_radius", 1.0, "keep the current target while a frontier stays this close to it, m"),
             end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
@@ -132,7 +132,10 @@ impl Module for ExplorerModule {
             state.blacklist.push(p);
             force = true;
         } else if settled && self.arrived.value() {
-            state.current = None;
+            // Arrived and a frontier is still here: the laser cannot see it from this pose
+            // (behind the robot, under a table); going there again would change nothing.
+            let (p, _) = state.current.take().expect("settled");
+            state.blacklist.push(p);
             force = true;
         }
         if !force && t - state.last_plan < self.replan_s.value() {

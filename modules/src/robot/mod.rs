@@ -20,6 +20,8 @@ mod mapper;
 mod path_planner;
 mod recorder;
 mod sequencer;
+mod victim_detector;
+mod victim_mapper;
 mod world;
 
 pub use avoidance::ObstacleAvoidance;
@@ -29,6 +31,8 @@ pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use victim_detector::VictimDetector;
+pub use victim_mapper::VictimMapper;
 pub use world::SimWorld;
 
 use petrel_actors::ModuleRegistry;
@@ -45,6 +49,8 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<ObstacleAvoidance>()
         .register::<GoalSequencerModule>()
         .register::<ExplorerModule>()
+        .register::<VictimDetector>()
+        .register::<VictimMapper>()
         .register::<Recorder>();
 }
 

@@ -31,6 +31,10 @@ const ROBOT_PARAMS: &[(&str, &str)] = &[
     ("rot_per_trans_std", "odom_noise[2]"),
 ];
 
+/// Side of the square around each victim that the simulator makes solid, metres (inside
+/// the camera's victim cylinder, [`camera::VICTIM_RADIUS`]).
+const VICTIM_BODY: f64 = 0.3;
+
 /// Simulation steps run at most per wake-up in real-time mode: a host that falls further
 /// behind slows simulated time down instead of freezing in a catch-up burst.
 const MAX_CATCH_UP_STEPS: u32 = 10;
@@ -76,6 +80,10 @@ pub struct SimWorld {
     collisions: Output<i64>,
     sim_time: Output<f64>,
     world_goals: Output<Path2>,
+    world_victims: Output<Path2>,
+    vibration: Output<f64>,
+    dark_areas: Output<Vec<f64>>,
+    rough_areas: Output<Vec<f64>>,
     sim: Option<Sim>,
 }
 
@@ -139,6 +147,10 @@ impl Module for SimWorld {
             collisions: ports.output("out/collisions", 0, "collision events so far"),
             sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             world_goals: ports.output("out/worldGoals", Path2::default(), "goal markers `1`..`9` of an ASCII world file, in order"),
+            world_victims: ports.output("out/worldVictims", Path2::default(), "victims of the world file (ground truth, for evaluation)"),
+            vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1 (an IMU would measure it): high on rough floor even when slow"),
+            dark_areas: ports.output("out/darkAreas", Vec::new(), "dark areas of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
+            rough_areas: ports.output("out/roughAreas", Vec::new(), "rough floor of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
             sim: None,
         }
     }
@@ -171,7 +183,14 @@ impl Module for SimWorld {
         self.camera_config()?;
         let rate = self.camera_rate.value();
         check_params(positive, &[("camera/rate_hz", rate)])?;
-        let mut world = World::new(map.grid, seed);
+        // Victims are bodies on the floor: the robot must drive around them, and its laser
+        // sees them as small obstacles (the camera sees who they are).
+        let mut grid = map.grid;
+        for v in &map.features.victims {
+            let r = VICTIM_BODY / 2.0;
+            grid.fill_rect(v.0.x - r, v.0.y - r, v.0.x + r, v.0.y + r);
+        }
+        let mut world = World::new(grid, seed);
         let id = world
             .add_robot(config, start)
             .map_err(|e| param_error(e, ROBOT_PARAMS))?;
@@ -182,6 +201,15 @@ impl Module for SimWorld {
                 .collect::<Vec<_>>()
                 .into(),
         );
+        self.world_victims.set(map.features.victims.clone().into());
+        let flat = |rects: &[crate::sim::Rect]| {
+            rects
+                .iter()
+                .flat_map(|r| [r.x0, r.y0, r.x1, r.y1])
+                .collect::<Vec<f64>>()
+        };
+        self.dark_areas.set(flat(&map.features.dark));
+        self.rough_areas.set(flat(&map.features.rough));
         self.pose.set(start);
         tracing::info!(module = ctx.module(), world = %file, ?start, "world loaded");
         self.sim = Some(Sim {
@@ -238,6 +266,16 @@ impl Module for SimWorld {
             self.speed.set(out.speed);
             self.collisions.set(out.collisions as i64);
             self.sim_time.set(out.odometry.stamp);
+            let rough = sim
+                .features
+                .is_rough(out.ground_truth.x(), out.ground_truth.y());
+            let vibration = match rough {
+                true => 0.3 + 0.5 * out.speed.v.abs(),
+                false => 0.05 * out.speed.v.abs(),
+            };
+            if vibration != self.vibration.value() {
+                self.vibration.set(vibration);
+            }
             let due = out.odometry.stamp + 1e-9 >= sim.next_frame;
             if let Some(cfg) = camera_config.as_ref().filter(|_| due) {
                 sim.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();

@@ -5,7 +5,8 @@
 //! 6 cm squares (bright 0.95 / dark 0.1 albedo), their visible signature. Walls darken with
 //! distance, so far victims are small and faint.
 //!
-//! Sensor: the light reaching the camera (1 in the open, [`DARK_LIGHT`] in dark areas) times
+//! Sensor: the light on what a column sees (1 in the open, [`DARK_LIGHT`] where the ray ends
+//! in a dark area) times
 //! the exposure makes photons; shot noise is their square root plus a read-noise floor, and
 //! `gain` scales signal and noise alike before 8-bit quantization. So a dark scene is dim and
 //! noisy, a longer exposure cleans it up, and gain brightens it. Motion blurs over the
@@ -161,6 +162,15 @@ pub fn render(
         // Depth along the optical axis, so walls stay straight (no fish-eye).
         let axial = bearing.cos();
         let wall = cast_ray(grid, pose.x(), pose.y(), angle, cfg.range_max);
+        // Light where the column's ray ends (a victim in a dark room is dark from anywhere).
+        let light_at = |d: f64| {
+            let (x, y) = (pose.x() + d * c, pose.y() + d * s);
+            if features.is_dark(x, y) {
+                DARK_LIGHT as f32
+            } else {
+                1.0
+            }
+        };
         let wall_depth = (wall * axial).max(1e-3);
         let wall_shade = (0.55 / (1.0 + 0.12 * wall)) as f32;
         // The nearest victim this column's ray meets before the wall.
@@ -192,16 +202,21 @@ pub fn render(
             } else {
                 None
             };
-            radiance[row * w + col] = value.unwrap_or_else(|| {
-                let z = CAMERA_HEIGHT - y * wall_depth / f;
-                if z < 0.0 {
-                    0.3 // floor
-                } else if z > WALL_HEIGHT {
-                    0.12 // ceiling
-                } else {
-                    wall_shade as f64
-                }
-            }) as f32;
+            let lit = match (value, victim) {
+                (Some(_), Some((d, _))) => light_at(d),
+                _ => light_at(wall),
+            };
+            radiance[row * w + col] = lit
+                * value.unwrap_or_else(|| {
+                    let z = CAMERA_HEIGHT - y * wall_depth / f;
+                    if z < 0.0 {
+                        0.3 // floor
+                    } else if z > WALL_HEIGHT {
+                        0.12 // ceiling
+                    } else {
+                        wall_shade as f64
+                    }
+                }) as f32;
         }
     }
     // Pixels swept while the shutter is open: turning sweeps the whole image sideways,
@@ -214,12 +229,7 @@ pub fn render(
     };
     box_blur(&mut radiance, w, h, blur_h.round() as usize, 1);
     box_blur(&mut radiance, w, h, blur_v.round() as usize, w);
-    let light = if features.is_dark(pose.x(), pose.y()) {
-        DARK_LIGHT
-    } else {
-        1.0
-    };
-    let photons_per_unit = light * cfg.exposure_ms * PHOTONS_PER_MS;
+    let photons_per_unit = cfg.exposure_ms * PHOTONS_PER_MS;
     let unit = Normal::new(0.0, 1.0).expect("unit normal");
     radiance
         .iter()

@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod camera;
+pub mod context_log;
 pub mod error;
 pub mod features;
 pub mod grid;

@@ -18,6 +18,8 @@ use crate::sim::camera::{CAMERA_HEIGHT, VICTIM_RADIUS};
 
 /// Fewest adjacent textured columns that make a detection.
 pub const MIN_COLUMNS: usize = 3;
+/// Texture differences of this many noise deviations are still noise.
+const NOISE_SIGMAS: f64 = 5.0;
 /// Rows over which a column's texture is averaged (a victim 3.5 m away is 12 rows high).
 const WINDOW: usize = 10;
 /// Textured runs this close (columns) are one victim: checker squares leave gaps.
@@ -88,6 +90,14 @@ pub struct Detection {
     pub confidence: f64,
 }
 
+/// The detections of one image, as a property (`vision.victim_detector`'s `out/detections`).
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub struct Detections(pub Vec<Detection>);
+
+impl petrel_actors::PropertyType for Detections {
+    const TYPE_NAME: &'static str = "vision.Detections";
+}
+
 /// What one image gave.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DetectorOutput {
@@ -142,16 +152,22 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
     let mut sorted = texture.clone();
     sorted.sort_by(f64::total_cmp);
     let floor = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    // How much noise alone makes column textures differ (median absolute deviation, scaled to
+    // a standard deviation): amplified noise must not pass for a victim.
+    let mut deviations: Vec<f64> = texture.iter().map(|t| (t - floor).abs()).collect();
+    deviations.sort_by(f64::total_cmp);
+    let spread = 1.4826 * deviations.get(deviations.len() / 2).copied().unwrap_or(0.0);
+    let threshold = p.threshold.max(NOISE_SIGMAS * spread);
     let focal = w as f64 / 2.0 / (p.fov / 2.0).tan();
     let mut runs: Vec<(usize, usize)> = Vec::new();
     let mut c = 0;
     while c < texture.len() {
-        if texture[c] - floor <= p.threshold {
+        if texture[c] - floor <= threshold {
             c += 1;
             continue;
         }
         let start = c;
-        while c < texture.len() && texture[c] - floor > p.threshold {
+        while c < texture.len() && texture[c] - floor > threshold {
             c += 1;
         }
         match runs.last_mut() {
@@ -168,8 +184,7 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         let excess = texture[start..c].iter().map(|t| t - floor).sum::<f64>() / (c - start) as f64;
         // The lowest row whose texture across the run still stands out: the victim's foot.
         let bottom = (r0..r1).rev().find(|&r| {
-            cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64
-                > floor + p.threshold
+            cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64 > floor + threshold
         });
         let Some(bottom) = bottom else { continue };
         let below_horizon = bottom as f64 + 1.0 - h as f64 / 2.0;
@@ -182,7 +197,7 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         detections.push(Detection {
             bearing,
             range: axial / bearing.cos() + VICTIM_RADIUS,
-            confidence: ((excess - p.threshold) / p.threshold).clamp(0.0, 1.0),
+            confidence: ((excess - threshold) / threshold).clamp(0.0, 1.0),
         });
     }
     Some(DetectorOutput {

@@ -6,5 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod detector;
+pub mod victim_map;
 
-pub use detector::{detect, Detection, DetectorOutput, DetectorParams};
+pub use detector::{detect, Detection, Detections, DetectorOutput, DetectorParams};
+pub use victim_map::{VictimMap, VictimMapParams};

@@ -17,7 +17,7 @@ fn scene(dark: bool) -> (Grid, WorldFeatures) {
     let features = WorldFeatures {
         victims: vec![Point2::new(3.0, 2.5)],
         dark: if dark {
-            vec![Rect::from_corners([0.0, 0.0, 5.0, 5.0]).unwrap()]
+            vec![Rect::from_corners([0.0, 0.0, 10.0, 5.0]).unwrap()]
         } else {
             Vec::new()
         },
