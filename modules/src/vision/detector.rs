@@ -2,9 +2,11 @@
 //! columns whose pixels alternate strongly from row to row.
 //!
 //! Per column of the region of interest, the mean absolute difference between vertically
-//! adjacent pixels is the column's *texture*. Walls, floor and ceiling are smooth, so most
-//! columns hold only noise: the median column is the noise floor, and a column is a victim
-//! column when it rises above the floor by more than `threshold` grey levels. Runs of at least
+//! adjacent pixels over its most textured rows is the column's *texture*. Walls, floor and
+//! ceiling are smooth, so most columns hold only noise: the noise floor is the median
+//! column's texture, or the column's own noise where that is higher (dark, amplified parts of
+//! an image), and a column is a victim column when it rises above the floor by more than
+//! `threshold` grey levels, all the way from the horizon to the victim's foot. Runs of at least
 //! [`MIN_COLUMNS`] such columns are detections; the bearing comes from the run's centre
 //! column, the range from the lowest textured row (where the victim meets the floor, seen
 //! from a camera [`CAMERA_HEIGHT`] above it). Nothing is faked: a dark image has little
@@ -18,8 +20,9 @@ use crate::sim::camera::{CAMERA_HEIGHT, VICTIM_RADIUS};
 
 /// Fewest adjacent textured columns that make a detection.
 pub const MIN_COLUMNS: usize = 3;
-/// Texture differences of this many noise deviations are still noise.
-const NOISE_SIGMAS: f64 = 5.0;
+/// A column's noise texture, in multiples of its median row-to-row difference (pure noise
+/// averages about 1.7 of it over a window; the most textured window a little more).
+const NOISE_FACTOR: f64 = 2.0;
 /// Rows over which a column's texture is averaged (a victim 3.5 m away is 12 rows high).
 const WINDOW: usize = 10;
 /// Textured runs this close (columns) are one victim: checker squares leave gaps.
@@ -149,25 +152,37 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
             window.iter().sum::<f64>() / window.len() as f64
         })
         .collect();
+    // The noise floor: the texture most columns have (the median) or, where noise is
+    // stronger (a dark, amplified part of the image beside a saturated one), the column's own
+    // noise: its typical row-to-row difference, which a victim covering part of the column
+    // does not move much.
     let mut sorted = texture.clone();
     sorted.sort_by(f64::total_cmp);
-    let floor = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-    // How much noise alone makes column textures differ (median absolute deviation, scaled to
-    // a standard deviation): amplified noise must not pass for a victim.
-    let mut deviations: Vec<f64> = texture.iter().map(|t| (t - floor).abs()).collect();
-    deviations.sort_by(f64::total_cmp);
-    let spread = 1.4826 * deviations.get(deviations.len() / 2).copied().unwrap_or(0.0);
-    let threshold = p.threshold.max(NOISE_SIGMAS * spread);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    let own_noise: Vec<f64> = (c0..c1)
+        .map(|c| {
+            let mut d: Vec<f64> = (r0..r1).map(|r| diff(r, c)).collect();
+            d.sort_by(f64::total_cmp);
+            NOISE_FACTOR * d.get(d.len() / 2).copied().unwrap_or(0.0)
+        })
+        .collect();
+    let floor_of: Vec<f64> = (0..texture.len())
+        .map(|i| {
+            let window = &own_noise[i.saturating_sub(1)..(i + 2).min(own_noise.len())];
+            median.max(window.iter().sum::<f64>() / window.len() as f64)
+        })
+        .collect();
+    let threshold = p.threshold;
     let focal = w as f64 / 2.0 / (p.fov / 2.0).tan();
     let mut runs: Vec<(usize, usize)> = Vec::new();
     let mut c = 0;
     while c < texture.len() {
-        if texture[c] - floor <= threshold {
+        if texture[c] - floor_of[c] <= threshold {
             c += 1;
             continue;
         }
         let start = c;
-        while c < texture.len() && texture[c] - floor > threshold {
+        while c < texture.len() && texture[c] - floor_of[c] > threshold {
             c += 1;
         }
         match runs.last_mut() {
@@ -177,10 +192,14 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
     }
     let mut detections = Vec::new();
     for (start, c) in runs {
-        if c - start < MIN_COLUMNS {
+        // A victim cut by the image border is left for a later frame, where it is whole (its
+        // centre and so its bearing would be wrong, and the border columns are the least
+        // reliable: sharpening cannot reach them).
+        if c - start < MIN_COLUMNS || start == 0 || c == texture.len() {
             continue;
         }
         let cols = (start + c0)..(c + c0);
+        let floor = floor_of[start..c].iter().sum::<f64>() / (c - start) as f64;
         let excess = texture[start..c].iter().map(|t| t - floor).sum::<f64>() / (c - start) as f64;
         // The lowest row whose texture across the run still stands out: the victim's foot.
         let bottom = (r0..r1).rev().find(|&r| {
@@ -188,7 +207,18 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         });
         let Some(bottom) = bottom else { continue };
         let below_horizon = bottom as f64 + 1.0 - h as f64 / 2.0;
-        if below_horizon < 1.0 {
+        if below_horizon < 3.0 {
+            continue;
+        }
+        // A victim is textured all the way from the horizon (the camera's height, its top)
+        // down to its foot; an edge or a corner is textured in a row or two.
+        let band = (h / 2)..bottom;
+        let band_texture = band
+            .clone()
+            .map(|r| cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64)
+            .sum::<f64>()
+            / band.len().max(1) as f64;
+        if band_texture - floor <= threshold {
             continue;
         }
         let centre = (cols.start + cols.end) as f64 / 2.0;
