@@ -72,10 +72,13 @@ impl Module for ExplorerModule {
     }
 
     fn schedule(&self) -> Schedule {
+        // Simulated time too: a robot that arrived within the grace period, before a static map,
+        // must still get its next target (a step that decides nothing returns at once).
         Schedule::new()
             .on_change(&self.map)
             .on_change(&self.arrived)
             .on_change(&self.failed)
+            .on_change(&self.sim_time)
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {

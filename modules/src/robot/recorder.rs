@@ -50,6 +50,7 @@ pub struct Recorder {
     robot_radius: Input<f64>,
     distance: Output<f64>,
     pose_error: Output<f64>,
+    pose_error_max: Output<f64>,
     /// Sum, count and maximum of the localization error samples.
     error_stats: (f64, u64, f64),
     trajectory: Vec<Point2>,
@@ -129,6 +130,11 @@ impl Module for Recorder {
                 0.0,
                 "distance between in/pose and in/estimatedPose, m (0 while unlinked)",
             ),
+            pose_error_max: ports.output(
+                "out/poseErrorMax",
+                0.0,
+                "largest out/poseError so far, m",
+            ),
             error_stats: (0.0, 0, 0.0),
             trajectory: Vec::new(),
             last: None,
@@ -167,6 +173,9 @@ impl Module for Recorder {
             let (sum, n, max) = self.error_stats;
             self.error_stats = (sum + e, n + 1, max.max(e));
             self.pose_error.set(e);
+            if e > self.pose_error_max.value() {
+                self.pose_error_max.set(e);
+            }
         }
         match self.last {
             // The first pose read may be an unlinked default; the first real one is the start.

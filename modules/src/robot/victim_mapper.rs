@@ -39,7 +39,7 @@ impl Module for VictimMapper {
             ),
             merge_radius: ports.param(
                 "params/merge_radius",
-                1.0,
+                1.5,
                 "sightings this close are one victim, m",
             ),
             confirm_hits: ports.param("params/confirm_hits", 3, "sightings that confirm a victim"),

@@ -14,7 +14,7 @@ use super::detector::Detection;
 /// Mapper parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub struct VictimMapParams {
-    /// Sightings closer than this to a candidate are the same victim, metres (default 1.0).
+    /// Sightings closer than this to a candidate are the same victim, metres (default 1.5).
     pub merge_radius: f64,
     /// Sightings that confirm a victim (default 3).
     pub confirm_hits: u32,
@@ -28,7 +28,7 @@ pub struct VictimMapParams {
 impl Default for VictimMapParams {
     fn default() -> Self {
         VictimMapParams {
-            merge_radius: 1.0,
+            merge_radius: 1.5,
             confirm_hits: 3,
             min_confidence: 0.1,
             max_range: 5.0,
