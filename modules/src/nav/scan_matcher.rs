@@ -33,12 +33,12 @@ pub struct ScanMatcherParams {
     pub step_xy: f64,
     /// First hill-climbing step in heading, radians (default 0.02).
     pub step_theta: f64,
-    /// Largest correction accepted for one scan, metres (default 0.2); a larger one is a
+    /// Largest correction accepted for one scan, metres (default 0.1); a larger one is a
     /// false fit and is refused.
     pub max_correction: f64,
     /// Use every n-th ray (default 2).
     pub ray_stride: usize,
-    /// Fit below which a scan is not added to the field (default 0.35).
+    /// Fit below which a scan is not added to the field (default 0.5).
     pub min_fit_to_map: f64,
     /// Travel (m) or turn (rad / 2) after which a scan is added to the field (default 0.05).
     pub map_every: f64,
@@ -55,9 +55,9 @@ impl Default for ScanMatcherParams {
             sigma: 0.05,
             step_xy: 0.04,
             step_theta: 0.02,
-            max_correction: 0.2,
+            max_correction: 0.1,
             ray_stride: 2,
-            min_fit_to_map: 0.35,
+            min_fit_to_map: 0.5,
             map_every: 0.05,
         }
     }
@@ -107,6 +107,11 @@ impl ScanMatcherParams {
 /// How often endpoints must hit a cell before it counts as a wall. One: the first scan alone
 /// must give the second something to match, and a stray hit only adds a small bump.
 const HITS_FOR_WALL: u8 = 1;
+/// Weight of the motion prior against the fit (a mean in 0..1).
+const PRIOR_WEIGHT: f64 = 0.01;
+/// Position and heading errors of odometry between two scans that the prior tolerates.
+const PRIOR_XY: f64 = 0.05;
+const PRIOR_THETA: f64 = 0.05;
 /// Fewest endpoints for a scan to be matched at all (a robot facing open space has none).
 const MIN_POINTS: usize = 10;
 
@@ -205,7 +210,16 @@ impl ScanMatcher {
         }
         let p = &self.params;
         let (mut x, mut y, mut t) = (predicted.x(), predicted.y(), predicted.theta());
-        let mut best = self.fit(predicted, points);
+        // The motion prior: odometry errs little between two scans, so a pose far from its
+        // prediction must fit clearly better (along a corridor, where every shift fits the
+        // same, the estimate stays with odometry instead of wandering).
+        let (px, py, pt) = (x, y, t);
+        let prior = |x: f64, y: f64, t: f64| {
+            PRIOR_WEIGHT * (((x - px).powi(2) + (y - py).powi(2)) / (PRIOR_XY * PRIOR_XY)
+                + (t - pt).powi(2) / (PRIOR_THETA * PRIOR_THETA))
+        };
+        let score = |pose: Pose2, x: f64, y: f64, t: f64| self.fit(pose, points) - prior(x, y, t);
+        let mut best = score(predicted, x, y, t);
         let (mut sxy, mut st) = (p.step_xy, p.step_theta);
         for _level in 0..5 {
             // Climb at this step size until no neighbour is better, at most a few moves.
@@ -219,7 +233,8 @@ impl ScanMatcher {
                     (0.0, 0.0, st),
                     (0.0, 0.0, -st),
                 ] {
-                    let f = self.fit(Pose2::new(x + dx, y + dy, t + dt), points);
+                    let (nx, ny, nt) = (x + dx, y + dy, t + dt);
+                    let f = score(Pose2::new(nx, ny, nt), nx, ny, nt);
                     if f > best + 1e-9 {
                         (best, x, y, t, moved) = (f, x + dx, y + dy, t + dt, true);
                     }
@@ -232,7 +247,8 @@ impl ScanMatcher {
             st *= 0.5;
         }
         let moved = (x - predicted.x()).hypot(y - predicted.y());
-        (moved <= p.max_correction).then(|| (Pose2::new(x, y, t), best))
+        let pose = Pose2::new(x, y, t);
+        (moved <= p.max_correction).then(|| (pose, self.fit(pose, points)))
     }
 
     /// Adds endpoints (robot frame) seen from `pose` to the field.

@@ -24,6 +24,7 @@ pub struct ExplorerModule {
     blacklist_radius: Input<f64>,
     replan_s: Input<f64>,
     keep_radius: Input<f64>,
+    give_up_s: Input<f64>,
     end_run: Input<bool>,
     timeout_s: Input<f64>,
     target: Output<Pose2>,
@@ -61,6 +62,7 @@ impl Module for ExplorerModule {
             blacklist_radius: ports.param("params/blacklist_radius", 0.6, "frontiers this close to a target reached or failed before are skipped, m"),
             replan_s: ports.param("params/replan_s", 2.0, "re-evaluate frontiers at least this often, simulated s"),
             keep_radius: ports.param("params/keep_radius", 1.0, "keep the current target while a frontier stays this close to it, m"),
+            give_up_s: ports.param("params/give_up_s", 60.0, "a target not reached within this many simulated seconds is given up (and skipped from then on)"),
             end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
             timeout_s: ports.param("params/timeout_s", 0.0, "simulated time after which exploration fails, s (0 = none)"),
             target: ports.output("out/targetPose", Pose2::default(), "the frontier to explore next"),
@@ -94,6 +96,7 @@ impl Module for ExplorerModule {
             ("replan_s", self.replan_s.value()),
             ("keep_radius", self.keep_radius.value()),
             ("timeout_s", self.timeout_s.value()),
+            ("give_up_s", self.give_up_s.value()),
         ] {
             crate::sim::error::non_negative(name, v).map_err(|e| param_error(e, &[]))?;
         }
@@ -128,9 +131,13 @@ impl Module for ExplorerModule {
         let settled = state
             .current
             .is_some_and(|(_, since)| t - since >= FLAG_GRACE_S);
+        let overdue = state
+            .current
+            .is_some_and(|(_, since)| t - since > self.give_up_s.value());
         let mut force = state.current.is_none();
-        if settled && self.failed.value() {
-            // No path to this frontier: do not pick it (or its neighbours) again.
+        if settled && (self.failed.value() || overdue) {
+            // No path to this frontier, or no way to get there in time (blocked, circling): do
+            // not pick it (or its neighbours) again.
             let (p, _) = state.current.take().expect("settled");
             state.blacklist.push(p);
             force = true;
