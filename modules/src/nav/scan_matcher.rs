@@ -215,8 +215,9 @@ impl ScanMatcher {
         // same, the estimate stays with odometry instead of wandering).
         let (px, py, pt) = (x, y, t);
         let prior = |x: f64, y: f64, t: f64| {
-            PRIOR_WEIGHT * (((x - px).powi(2) + (y - py).powi(2)) / (PRIOR_XY * PRIOR_XY)
-                + (t - pt).powi(2) / (PRIOR_THETA * PRIOR_THETA))
+            PRIOR_WEIGHT
+                * (((x - px).powi(2) + (y - py).powi(2)) / (PRIOR_XY * PRIOR_XY)
+                    + (t - pt).powi(2) / (PRIOR_THETA * PRIOR_THETA))
         };
         let score = |pose: Pose2, x: f64, y: f64, t: f64| self.fit(pose, points) - prior(x, y, t);
         let mut best = score(predicted, x, y, t);
