@@ -158,7 +158,10 @@ mod tests {
         assert_eq!(m.add(Pose2::new(1.0, 2.0, 0.0), &seen(0.0, 2.1)), None);
         assert_eq!(m.add(Pose2::new(1.0, 2.0, 0.0), &seen(0.02, 1.9)), None);
         let confirmed = m
-            .add(Pose2::new(2.0, 1.0, 1.5708), &seen(-0.785, 1.41))
+            .add(
+                Pose2::new(2.0, 1.0, std::f64::consts::FRAC_PI_2),
+                &seen(-0.785, 1.41),
+            )
             .unwrap();
         assert!(
             (confirmed.0.x - 3.0).abs() < 0.1 && (confirmed.0.y - 2.0).abs() < 0.1,
@@ -170,7 +173,10 @@ mod tests {
         assert_eq!(m.confirmed().len(), 1);
         // A second victim far away is a new candidate, confirmed on its own.
         for _ in 0..3 {
-            m.add(Pose2::new(1.0, 2.0, 0.0), &seen(1.5708, 3.0));
+            m.add(
+                Pose2::new(1.0, 2.0, 0.0),
+                &seen(std::f64::consts::FRAC_PI_2, 3.0),
+            );
         }
         assert_eq!(m.confirmed().len(), 2);
     }

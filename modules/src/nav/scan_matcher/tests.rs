@@ -102,13 +102,13 @@ fn noisy_tour(noise: OdomNoise, use_scans: bool) -> (f64, f64) {
     // A loop around the room: straight legs and turns, 0.4 m/s, 100 Hz, scans at 20 Hz.
     let legs = [
         (7.5, 0.0),
-        (0.0, 1.5708),
+        (0.0, std::f64::consts::FRAC_PI_2),
         (6.0, 0.0),
-        (0.0, 1.5708),
+        (0.0, std::f64::consts::FRAC_PI_2),
         (7.5, 0.0),
-        (0.0, 1.5708),
+        (0.0, std::f64::consts::FRAC_PI_2),
         (6.0, 0.0),
-        (0.0, 1.5708),
+        (0.0, std::f64::consts::FRAC_PI_2),
     ];
     let mut k = 0u64;
     for _lap in 0..3 {
