@@ -73,7 +73,7 @@ mod tests {
         let totals = log.totals(7.0);
         assert_eq!(
             totals,
-            vec![("dark".into(), 2, 2.0), ("rough".into(), 1, 3.0)]
+            vec![("dark".into(), 2, 4.0), ("rough".into(), 1, 3.0)]
         );
         assert_eq!((log.index("rough"), log.index("lost")), (Some(1), None));
     }
