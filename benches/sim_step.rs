@@ -3,6 +3,11 @@
 //! `raycast_only` (the scan alone) and `step_no_laser` (kinematics and swept collision
 //! checks alone) run in the same process as baselines, so the ratio to `step_400` stays
 //! meaningful on a noisy machine.
+//!
+//! `camera/render` (one 160 x 120 frame of the rescue world: a ray per column, shading,
+//! noise) is measured against `camera/rays_only` (its 160 ray casts alone), and
+//! `camera/detect` and `camera/detect_deblur` (the victim detector without and with
+//! sharpening) against `camera/pixel_pass` (one pass summing the frame's pixels).
 
 use std::hint::black_box;
 use std::path::Path;
@@ -86,5 +91,72 @@ fn sim_step(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sim_step);
+fn camera(c: &mut Criterion) {
+    use petrel_modules::sim::camera::{render, CameraConfig, CameraMotion};
+    use petrel_modules::vision::{detect, DetectorParams};
+    use rand::SeedableRng;
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/rescue/rescue.txt");
+    let world = load_world(&path).expect("shipped rescue world loads");
+    // At the start, facing the first victim.
+    let pose = Pose2::new(1.1, 1.1, 1.3);
+    let cfg = CameraConfig::default();
+    let motion = CameraMotion {
+        speed: Twist2::new(0.3, 0.2),
+        rough: false,
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+    let mut g = c.benchmark_group("camera");
+    g.bench_function("render", |b| {
+        b.iter(|| {
+            black_box(render(
+                &world.grid,
+                &world.features,
+                black_box(pose),
+                motion,
+                &cfg,
+                &mut rng,
+            ))
+        })
+    });
+    g.bench_function("rays_only", |b| {
+        b.iter(|| {
+            let mut sum = 0.0;
+            for col in 0..160 {
+                let a = pose.theta() + cfg.bearing(col as f64 + 0.5);
+                sum += cast_ray(&world.grid, black_box(pose.x()), pose.y(), a, cfg.range_max);
+            }
+            black_box(sum)
+        })
+    });
+    let frame = render(
+        &world.grid,
+        &world.features,
+        pose,
+        CameraMotion::default(),
+        &cfg,
+        &mut rng,
+    );
+    let plain = DetectorParams::default();
+    assert_eq!(
+        detect(&frame, 160, 120, &plain).unwrap().detections.len(),
+        1
+    );
+    g.bench_function("detect", |b| {
+        b.iter(|| black_box(detect(black_box(&frame), 160, 120, &plain)))
+    });
+    let sharpen = DetectorParams {
+        deblur: 1.0,
+        ..DetectorParams::default()
+    };
+    g.bench_function("detect_deblur", |b| {
+        b.iter(|| black_box(detect(black_box(&frame), 160, 120, &sharpen)))
+    });
+    g.bench_function("pixel_pass", |b| {
+        b.iter(|| black_box(black_box(&frame).iter().map(|&v| v as u64).sum::<u64>()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, sim_step, camera);
 criterion_main!(benches);

@@ -595,7 +595,7 @@ fn a_world_file_that_does_not_parse_is_refused_by_check_and_run_before_anything_
         );
         assert!(
             err.contains("`params/world`: ")
-                && err.contains("broken.txt:2: unexpected character 'Z'"),
+                && err.contains("broken.txt:2:4: unexpected character 'Z'"),
             "{command}: names the world file's line: {err}"
         );
         assert!(

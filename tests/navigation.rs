@@ -170,7 +170,8 @@ async fn a_missing_world_file_fails_init_naming_the_file() {
 #[test]
 fn every_shipped_config_checks() {
     let mut checked = Vec::new();
-    for entry in std::fs::read_dir("configs").unwrap() {
+    let dirs = ["configs", "configs/rescue"];
+    for entry in dirs.iter().flat_map(|d| std::fs::read_dir(d).unwrap()) {
         let path = entry.unwrap().path();
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         // Agent configs; `*.rules.ron` are context rules, checked with the config naming them.
@@ -188,7 +189,7 @@ fn every_shipped_config_checks() {
         }
     }
     assert!(
-        checked.len() >= 6,
-        "pipeline, chaos, contexts-demo, reactive, navigate, navigate-warehouse: {checked:?}"
+        checked.len() >= 9,
+        "pipeline, chaos, contexts-demo, reactive, navigate, navigate-warehouse, rescue robot, -warehouse, -chaos: {checked:?}"
     );
 }

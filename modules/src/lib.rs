@@ -2,13 +2,15 @@
 //!
 //! [`sim`] and [`nav`] are the pure, deterministic cores of the simulator and the navigation
 //! modules: plain structs with `step`-style methods, no actors and no async; [`robot`] wraps
-//! them as runtime modules (`sim.world`, `nav.localizer`, ...).
+//! them as runtime modules (`sim.world`, `nav.localizer`, ...); [`vision`] holds the victim
+//! detector and mapper cores.
 #![warn(missing_docs)]
 
 pub mod demo;
 pub mod nav;
 pub mod robot;
 pub mod sim;
+pub mod vision;
 
 use petrel_actors::ModuleRegistry;
 

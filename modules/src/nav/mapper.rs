@@ -32,6 +32,12 @@ pub struct MapperParams {
     pub log_odds_min: f64,
     /// Upper clamp (default 3.5).
     pub log_odds_max: f64,
+    /// Only rays within this field of view (radians, centred ahead of the laser) are mapped;
+    /// `None` maps every ray. With the camera's view, the map holds what the camera saw.
+    pub fov: Option<f64>,
+    /// Returns further than this are mapped as free space up to it and no further, metres;
+    /// `None` maps the laser's whole range.
+    pub max_range: Option<f64>,
 }
 
 impl Default for MapperParams {
@@ -46,6 +52,8 @@ impl Default for MapperParams {
             log_odds_miss: -0.4,
             log_odds_min: -2.0,
             log_odds_max: 3.5,
+            fov: None,
+            max_range: None,
         }
     }
 }
@@ -53,6 +61,12 @@ impl Default for MapperParams {
 impl MapperParams {
     /// Checks every parameter.
     pub fn validate(&self) -> Result<(), ParamError> {
+        if let Some(fov) = self.fov {
+            positive("fov", fov)?;
+        }
+        if let Some(range) = self.max_range {
+            positive("max_range", range)?;
+        }
         let cells = self.width as u64 * self.height as u64;
         if cells == 0 || cells > crate::sim::Grid::MAX_CELLS as u64 {
             return Err(ParamError {
@@ -134,9 +148,17 @@ impl Mapper {
             if !(r.is_finite() && r >= 0.0) {
                 continue; // invalid reading: no information
             }
+            if self
+                .params
+                .fov
+                .is_some_and(|fov| scan.angle(i).abs() > fov / 2.0)
+            {
+                continue;
+            }
+            let limit = self.params.max_range.unwrap_or(f64::INFINITY);
             let (s, c) = (heading + scan.angle(i)).sin_cos();
-            let is_hit = r < scan.range_max;
-            let length = r.min(scan.range_max);
+            let is_hit = r < scan.range_max && r <= limit;
+            let length = r.min(scan.range_max).min(limit);
             // The hit cell is the one just beyond the measured distance along the ray.
             let hit_cell = is_hit.then(|| {
                 let e = length + res * 1e-3;
@@ -226,7 +248,7 @@ mod tests {
             resolution: 0.1,
             ..MapperParams::default()
         };
-        let mut m = Mapper::new(params).unwrap();
+        let mut m = Mapper::new(params.clone()).unwrap();
         let changed = m.update(out.ground_truth, out.scan.as_ref().unwrap());
         assert!(changed > 100);
         let grid = m.grid();
@@ -243,6 +265,29 @@ mod tests {
         assert_eq!(grid.get(35, 20), Some(-1));
         // Unchanged map: the same shared data is handed out again.
         assert!(Arc::ptr_eq(&grid.data, &m.grid().data));
+        // Mapping only a 60 degree cone out to 1 m: the wall 1.95 m ahead is not mapped (free
+        // up to 1 m, unknown after), nor is anything beside the robot.
+        let mut cone = Mapper::new(MapperParams {
+            fov: Some(60f64.to_radians()),
+            max_range: Some(1.0),
+            ..params
+        })
+        .unwrap();
+        cone.update(out.ground_truth, out.scan.as_ref().unwrap());
+        let grid = cone.grid();
+        assert!(grid.get(15, 20).unwrap() < 50 && grid.get(15, 20).unwrap() >= 0);
+        assert_eq!(grid.get(22, 20), Some(-1));
+        assert_eq!(grid.get(30, 20), Some(-1));
+        assert_eq!(
+            grid.get(10, 28),
+            Some(-1),
+            "beside the robot, outside the cone"
+        );
+        let bad = MapperParams {
+            fov: Some(0.0),
+            ..MapperParams::default()
+        };
+        assert_eq!(bad.validate().unwrap_err().param, "fov");
     }
 
     #[test]

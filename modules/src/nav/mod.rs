@@ -8,16 +8,20 @@
 pub mod astar;
 pub mod avoidance;
 pub mod costmap;
+pub mod frontier;
 pub mod headless;
 pub mod localizer;
 pub mod mapper;
 pub mod planner;
+pub mod scan_matcher;
 pub mod sequencer;
 
 pub use avoidance::{Avoidance, AvoidanceParams};
 pub use costmap::CostParams;
+pub use frontier::{explore, known_area, Exploration, Frontier, FrontierParams};
 pub use headless::{run_mission, MissionParams, MissionSummary};
 pub use localizer::{Localizer, LocalizerOutput, LocalizerParams};
 pub use mapper::{Mapper, MapperParams};
 pub use planner::{Planner, PlannerOutput, PlannerParams};
+pub use scan_matcher::{ScanLocalizer, ScanMatcher, ScanMatcherParams, ScanOutcome};
 pub use sequencer::{GoalSequencer, SequencerOutput};

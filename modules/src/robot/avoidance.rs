@@ -25,6 +25,7 @@ pub struct ObstacleAvoidance {
     clearance_weight: Input<f64>,
     laser_mount: Input<Pose2>,
     command: Output<Twist2>,
+    nearest: Output<f64>,
     /// The core and the parameters it was built with.
     core: Option<(Avoidance, AvoidanceParams)>,
 }
@@ -88,6 +89,11 @@ impl Module for ObstacleAvoidance {
                 "laser pose in the robot frame",
             ),
             command: ports.output("out/controlSpeed", Twist2::default(), "velocity command"),
+            nearest: ports.output(
+                "out/nearest",
+                f64::INFINITY,
+                "range of the closest laser return, m (what `crowded` rules read)",
+            ),
             core: None,
         }
     }
@@ -123,6 +129,13 @@ impl Module for ObstacleAvoidance {
             }
         }
         self.command.set(core.step(&scan, self.target.value()));
+        let nearest = scan
+            .value
+            .ranges
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        self.nearest.set(nearest);
         Ok(())
     }
 }

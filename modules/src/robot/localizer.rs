@@ -1,18 +1,38 @@
-//! `nav.localizer`: odometry in, estimated pose out, with the simulated localization error.
+//! `nav.localizer`: odometry in, estimated pose out; either odometry with a simulated error
+//! ([`Localizer`]) or odometry corrected by scan matching ([`ScanLocalizer`]).
+
+use std::collections::VecDeque;
 
 use anyhow::bail;
 use petrel_actors::{
-    Context, Input, Module, Output, Ports, Pose2, QueueReader, QueueWriter, Schedule,
+    Context, Input, Item, LaserScan, Module, Output, Point2, Ports, Pose2, QueueReader,
+    QueueWriter, Schedule,
 };
 
 use super::param_error;
-use crate::nav::{Localizer, LocalizerParams};
+use crate::nav::{Localizer, LocalizerParams, ScanLocalizer, ScanMatcherParams};
 use crate::sim::Odometry;
+
+/// Scans kept waiting for the odometry of their step before being matched anyway.
+const MAX_PENDING_SCANS: usize = 4;
+
+/// The estimator chosen by `params/scan_matching`.
+enum Core {
+    Simulated(Localizer),
+    ScanMatching(ScanLocalizer),
+}
 
 /// `nav.localizer`: wraps [`Localizer`].
 pub struct LocalizerModule {
     odometry: QueueReader<Pose2>,
+    scans: QueueReader<LaserScan>,
     sim_time: Input<f64>,
+    scan_matching: Input<bool>,
+    resolution: Input<f64>,
+    size: Input<Point2>,
+    origin: Input<Point2>,
+    laser_mount: Input<Pose2>,
+    lost_below: Input<f64>,
     drift_per_meter: Input<f64>,
     drift_direction: Input<f64>,
     lost_episodes: Input<Vec<f64>>,
@@ -25,17 +45,54 @@ pub struct LocalizerModule {
     estimates: QueueWriter<Pose2>,
     quality: Output<f64>,
     lost: Output<bool>,
-    core: Option<Localizer>,
+    pending_scans: VecDeque<Item<LaserScan>>,
+    /// Push time of the latest odometry sample used.
+    odometry_stamp: Option<tokio::time::Instant>,
+    core: Option<Core>,
 }
 
 impl Module for LocalizerModule {
     const TYPE: &'static str = "nav.localizer";
     const DESCRIPTION: &'static str =
-        "Estimates the robot pose from odometry, with configurable drift and lost episodes.";
+        "Estimates the robot pose from odometry, corrected by scan matching or with simulated drift and lost episodes.";
 
     fn declare(ports: &mut Ports) -> Self {
         LocalizerModule {
             odometry: ports.queue_in("in/odometry", "odometric poses"),
+            scans: ports.queue_in(
+                "in/laserScan",
+                "laser scans, matched against the map being built (with params/scan_matching)",
+            ),
+            scan_matching: ports.param(
+                "params/scan_matching",
+                false,
+                "correct odometry by matching laser scans (true) or simulate drift (false)",
+            ),
+            resolution: ports.param(
+                "params/resolution",
+                0.05,
+                "scan matching: cell size of the likelihood field, m",
+            ),
+            size: ports.param(
+                "params/size",
+                Point2::new(20.0, 20.0),
+                "scan matching: extent of the field (x: width, y: height), m",
+            ),
+            origin: ports.param(
+                "params/origin",
+                Point2::new(0.0, 0.0),
+                "scan matching: world position of the field's lower-left corner",
+            ),
+            laser_mount: ports.param(
+                "params/laser_mount",
+                Pose2::default(),
+                "scan matching: laser pose in the robot frame",
+            ),
+            lost_below: ports.param(
+                "params/lost_below",
+                0.3,
+                "scan matching: out/lost while the scan fit (out/quality) is below this, 0..1",
+            ),
             sim_time: ports.input(
                 "in/simTime",
                 0.0,
@@ -96,13 +153,21 @@ impl Module for LocalizerModule {
                 1.0,
                 "localization quality, 0 (lost) .. 1 (perfect)",
             ),
-            lost: ports.output("out/lost", false, "inside a lost episode"),
+            lost: ports.output(
+                "out/lost",
+                false,
+                "inside a lost episode, or scan fit below params/lost_below",
+            ),
+            pending_scans: VecDeque::new(),
+            odometry_stamp: None,
             core: None,
         }
     }
 
     fn schedule(&self) -> Schedule {
-        Schedule::new().on_items(&self.odometry)
+        Schedule::new()
+            .on_items(&self.odometry)
+            .on_items(&self.scans)
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
@@ -121,34 +186,114 @@ impl Module for LocalizerModule {
             quality_scale: self.quality_scale.value(),
             heading_quality_scale: self.heading_quality_scale.value(),
         };
-        self.core = Some(Localizer::new(params).map_err(|e| param_error(e, &[]))?);
+        if !self.scan_matching.value() {
+            let core = Localizer::new(params).map_err(|e| param_error(e, &[]))?;
+            self.core = Some(Core::Simulated(core));
+            return Ok(());
+        }
+        if params != LocalizerParams::default() {
+            bail!("`params/scan_matching` is true: the simulated error parameters (drift_per_meter, drift_direction, lost_episodes, lost_*, recovery_time, *quality_scale) do not apply; remove them");
+        }
+        let lost_below = self.lost_below.value();
+        if !(0.0..=1.0).contains(&lost_below) {
+            bail!("invalid parameter `params/lost_below`: expected a number in [0, 1], got {lost_below}");
+        }
+        let (res, size, origin) = (
+            self.resolution.value(),
+            self.size.value(),
+            self.origin.value(),
+        );
+        let cells = |m: f64| (m / res).ceil();
+        let (w, h) = (cells(size.0.x), cells(size.0.y));
+        if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
+            bail!(
+                "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {res} m per cell",
+                crate::sim::Grid::MAX_CELLS, size.0.x, size.0.y
+            );
+        }
+        let matcher = ScanMatcherParams {
+            width: w as u32,
+            height: h as u32,
+            resolution: res,
+            origin: (origin.0.x, origin.0.y),
+            laser_mount: self.laser_mount.value(),
+            ..ScanMatcherParams::default()
+        };
+        let core = ScanLocalizer::new(matcher).map_err(|e| param_error(e, &[]))?;
+        self.core = Some(Core::ScanMatching(core));
         Ok(())
     }
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
+        match self
             .core
             .as_mut()
-            .expect("stepping only after a successful init");
-        // Items carry no simulated time; a batch is at most a few steps old, so all of it is
-        // stamped with the current time (drift depends on distance, not on these stamps).
-        let stamp = self.sim_time.value();
-        let mut last = None;
-        for item in self.odometry.drain() {
-            let out = core.step(Odometry {
-                stamp,
-                pose: *item.value,
-            });
-            self.estimates.push(out.pose);
-            last = Some(out);
-        }
-        if let Some(out) = last {
-            self.estimate.set(out.pose);
-            self.quality.set(out.quality);
-            if out.lost != self.lost.value() {
-                self.lost.set(out.lost);
+            .expect("stepping only after a successful init")
+        {
+            Core::Simulated(core) => {
+                // Items carry no simulated time; a batch is at most a few steps old, so all of
+                // it is stamped with the current time (drift depends on distance, not on
+                // these stamps).
+                let stamp = self.sim_time.value();
+                let mut last = None;
+                for item in self.odometry.drain() {
+                    let out = core.step(Odometry {
+                        stamp,
+                        pose: *item.value,
+                    });
+                    self.estimates.push(out.pose);
+                    last = Some((out.pose, out.quality, out.lost));
+                }
+                if let Some(out) = last {
+                    self.publish(out);
+                }
+            }
+            Core::ScanMatching(core) => {
+                // A scan is matched at the odometry of its own simulation step (same push
+                // time); one that arrives first waits for it, a few at most.
+                self.pending_scans.extend(self.scans.drain());
+                let mut moved = false;
+                for item in self.odometry.drain() {
+                    // Scans older than this sample belong to steps already integrated.
+                    while self
+                        .pending_scans
+                        .front()
+                        .is_some_and(|s| s.stamp < item.stamp)
+                    {
+                        let scan = self.pending_scans.pop_front().expect("peeked");
+                        core.scan(&scan.value);
+                    }
+                    let pose = core.odometry(*item.value);
+                    self.odometry_stamp = Some(item.stamp);
+                    self.estimates.push(pose);
+                    moved = true;
+                }
+                while let Some(scan) = self.pending_scans.front() {
+                    let due = self.odometry_stamp.is_some_and(|t| scan.stamp <= t);
+                    if !due && self.pending_scans.len() <= MAX_PENDING_SCANS {
+                        break;
+                    }
+                    let scan = self.pending_scans.pop_front().expect("peeked");
+                    core.scan(&scan.value);
+                    moved = true;
+                }
+                if moved {
+                    let quality = core.quality();
+                    let out = (core.pose(), quality, quality < self.lost_below.value());
+                    self.publish(out);
+                }
             }
         }
         Ok(())
+    }
+}
+
+impl LocalizerModule {
+    fn publish(&mut self, (pose, quality, lost): (Pose2, f64, bool)) {
+        self.estimate.set(pose);
+        self.quality.set(quality);
+        if lost != self.lost.value() {
+            self.lost.set(lost);
+        }
     }
 }

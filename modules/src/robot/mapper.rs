@@ -23,6 +23,8 @@ pub struct MapperModule {
     size: Input<Point2>,
     origin: Input<Point2>,
     laser_mount: Input<Pose2>,
+    fov_deg: Input<f64>,
+    max_range: Input<f64>,
     map: Output<OccupancyGrid>,
     pending: VecDeque<Item<LaserScan>>,
     core: Option<Mapper>,
@@ -56,6 +58,16 @@ impl Module for MapperModule {
                 "params/laser_mount",
                 Pose2::default(),
                 "laser pose in the robot frame",
+            ),
+            fov_deg: ports.param(
+                "params/fov_deg",
+                0.0,
+                "map only rays within this field of view, degrees (0 = all): with a camera's view, the map holds what the camera saw",
+            ),
+            max_range: ports.param(
+                "params/max_range",
+                0.0,
+                "map returns only up to this range, m (0 = the laser's)",
             ),
             map: ports.output(
                 "out/map",
@@ -92,9 +104,12 @@ impl Module for MapperModule {
             resolution: res,
             origin: (origin.0.x, origin.0.y),
             laser_mount: self.laser_mount.value(),
+            fov: Some(self.fov_deg.value().to_radians()).filter(|&f| f != 0.0),
+            max_range: Some(self.max_range.value()).filter(|&r| r != 0.0),
             ..MapperParams::default()
         };
-        let mut core = Mapper::new(params).map_err(|e| param_error(e, &[("width", "size")]))?;
+        let mut core = Mapper::new(params)
+            .map_err(|e| param_error(e, &[("width", "size"), ("fov", "fov_deg")]))?;
         self.map.set(core.grid());
         self.core = Some(core);
         Ok(())

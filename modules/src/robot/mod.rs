@@ -14,19 +14,25 @@
 //! driver replaces `sim.world` by publishing the same properties.
 
 mod avoidance;
+mod explorer;
 mod localizer;
 mod mapper;
 mod path_planner;
 mod recorder;
 mod sequencer;
+mod victim_detector;
+mod victim_mapper;
 mod world;
 
 pub use avoidance::ObstacleAvoidance;
+pub use explorer::ExplorerModule;
 pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use victim_detector::VictimDetector;
+pub use victim_mapper::VictimMapper;
 pub use world::SimWorld;
 
 use petrel_actors::ModuleRegistry;
@@ -42,6 +48,9 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<PathPlanner>()
         .register::<ObstacleAvoidance>()
         .register::<GoalSequencerModule>()
+        .register::<ExplorerModule>()
+        .register::<VictimDetector>()
+        .register::<VictimMapper>()
         .register::<Recorder>();
 }
 

@@ -7,21 +7,52 @@ use petrel_actors::{
     Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Schedule,
 };
 
+use crate::sim::context_log::ContextLog;
 use crate::sim::render::{save_png, RenderLayers};
+use crate::sim::Rect;
+
+/// Trajectory colour while no context is active.
+const NO_CONTEXT: [u8; 3] = [60, 110, 230];
+
+/// Trajectory colour of a context: fixed for the rescue robot's contexts, cycling otherwise.
+fn context_colour(name: &str, index: usize) -> [u8; 3] {
+    match name {
+        "lost" => [220, 20, 20],
+        "dark" => [130, 60, 200],
+        "rough" => [150, 95, 30],
+        "crowded" => [245, 150, 0],
+        "victim_seen" => [20, 170, 90],
+        _ => [[0, 160, 200], [200, 0, 150], [110, 110, 110]][index % 3],
+    }
+}
 
 /// `sim.recorder`: trajectory, distance, and the end-of-run summary and PNG.
 pub struct Recorder {
     pose: Input<Pose2>,
+    estimate: Input<Pose2>,
     map: Input<OccupancyGrid>,
     path: Input<Path2>,
     goals: Input<Path2>,
     reached: Input<i64>,
+    victims: Input<Path2>,
+    true_victims: Input<Path2>,
+    explored: Input<f64>,
+    contexts: Input<String>,
+    dark: Input<Vec<f64>>,
+    rough: Input<Vec<f64>>,
+    context_log: ContextLog,
+    /// Colour of each trajectory point (the highest-priority active context).
+    colours: Vec<[u8; 3]>,
     collisions: Input<i64>,
     sim_time: Input<f64>,
     png: Input<String>,
     sample_m: Input<f64>,
     robot_radius: Input<f64>,
     distance: Output<f64>,
+    pose_error: Output<f64>,
+    pose_error_max: Output<f64>,
+    /// Sum, count and maximum of the localization error samples.
+    error_stats: (f64, u64, f64),
     trajectory: Vec<Point2>,
     last: Option<Point2>,
     started: Option<std::time::Instant>,
@@ -39,6 +70,11 @@ impl Module for Recorder {
                 Pose2::default(),
                 "robot pose to record (ground truth in simulation)",
             ),
+            estimate: ports.input(
+                "in/estimatedPose",
+                Pose2::default(),
+                "estimated pose: when linked, the error to in/pose is tracked and summarized",
+            ),
             map: ports.input(
                 "in/map",
                 OccupancyGrid::default(),
@@ -51,6 +87,30 @@ impl Module for Recorder {
                 "goals to draw (link it to the sequencer's params/goals)",
             ),
             reached: ports.input("in/reached", 0, "goals reached"),
+            victims: ports.input("in/victims", Path2::default(), "victims found (map frame)"),
+            true_victims: ports.input(
+                "in/trueVictims",
+                Path2::default(),
+                "the world's victims (ground truth): found ones are matched to them within 1 m",
+            ),
+            explored: ports.input("in/explored", 0.0, "explored (known) area, m²"),
+            contexts: ports.input(
+                "in/contexts",
+                String::new(),
+                "active contexts, highest priority first (link to contexts/out/active)",
+            ),
+            dark: ports.input(
+                "in/darkAreas",
+                Vec::new(),
+                "dark areas to tint, `[x0, y0, x1, y1, ...]`",
+            ),
+            rough: ports.input(
+                "in/roughAreas",
+                Vec::new(),
+                "rough floor to tint, `[x0, y0, x1, y1, ...]`",
+            ),
+            context_log: ContextLog::default(),
+            colours: Vec::new(),
             collisions: ports.input("in/collisions", 0, "collision count"),
             sim_time: ports.input("in/simTime", 0.0, "simulated time, s"),
             png: ports.param(
@@ -65,6 +125,17 @@ impl Module for Recorder {
             ),
             robot_radius: ports.param("params/robot_radius", 0.2, "robot radius drawn, m"),
             distance: ports.output("out/distance", 0.0, "distance travelled, m"),
+            pose_error: ports.output(
+                "out/poseError",
+                0.0,
+                "distance between in/pose and in/estimatedPose, m (0 while unlinked)",
+            ),
+            pose_error_max: ports.output(
+                "out/poseErrorMax",
+                0.0,
+                "largest out/poseError so far, m",
+            ),
+            error_stats: (0.0, 0, 0.0),
             trajectory: Vec::new(),
             last: None,
             started: None,
@@ -93,11 +164,23 @@ impl Module for Recorder {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        self.context_log
+            .update(self.sim_time.value(), &self.contexts.get());
         let p = self.pose.get().position();
+        let estimate = self.estimate.read();
+        if estimate.version > 0 && !ctx.cause().first() {
+            let e = (estimate.value.position().0 - p.0).norm();
+            let (sum, n, max) = self.error_stats;
+            self.error_stats = (sum + e, n + 1, max.max(e));
+            self.pose_error.set(e);
+            if e > self.pose_error_max.value() {
+                self.pose_error_max.set(e);
+            }
+        }
         match self.last {
             // The first pose read may be an unlinked default; the first real one is the start.
             None if ctx.cause().first() => return Ok(()),
-            None => self.trajectory.push(p),
+            None => self.record(p),
             Some(last) => {
                 let d = (p.0 - last.0).norm();
                 self.distance.set(self.distance.value() + d);
@@ -106,7 +189,7 @@ impl Module for Recorder {
                     .last()
                     .map_or(f64::INFINITY, |q| (p.0 - q.0).norm());
                 if sampled >= self.sample_m.value() {
-                    self.trajectory.push(p);
+                    self.record(p);
                 }
             }
         }
@@ -116,7 +199,7 @@ impl Module for Recorder {
 
     async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(p) = self.last {
-            self.trajectory.push(p);
+            self.record(p);
         }
         let wall = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
         let sim = self.sim_time.value();
@@ -135,8 +218,51 @@ impl Module for Recorder {
                 goals.len()
             );
         }
+        let truth = self.true_victims.get();
+        if !truth.points().is_empty() {
+            let found = self.victims.get();
+            let matched = match_victims(truth.points(), found.points(), 1.0);
+            let errors: Vec<String> = matched
+                .iter()
+                .flatten()
+                .map(|e| format!("{e:.2}"))
+                .collect();
+            println!(
+                "victims found    {} / {} (position errors {} m; {} false)",
+                errors.len(),
+                truth.points().len(),
+                if errors.is_empty() {
+                    "-".to_string()
+                } else {
+                    errors.join(", ")
+                },
+                found.points().len().saturating_sub(errors.len())
+            );
+            for (v, e) in truth.points().iter().zip(&matched) {
+                if e.is_none() {
+                    println!("  missed victim  ({:.2}, {:.2})", v.0.x, v.0.y);
+                }
+            }
+        }
+        let totals = self.context_log.totals(sim);
+        if !totals.is_empty() {
+            println!("contexts         (switches on, time active)");
+            for (name, on, secs) in &totals {
+                println!("  {name:<14} {on:>3}x  {secs:6.1} s");
+            }
+        }
+        let explored = self.explored.value();
+        if explored > 0.0 {
+            println!("explored area    {explored:.0} m²");
+        }
         println!("path length      {:.1} m", self.distance.value());
         println!("collisions       {}", self.collisions.value());
+        if let (sum, n @ 1.., max) = self.error_stats {
+            println!(
+                "pose error       mean {:.3} m, max {max:.3} m (estimate vs truth)",
+                sum / n as f64
+            );
+        }
         println!("sim time         {sim:.1} s");
         println!(
             "wall time        {wall:.1} s ({:.1}x real time)",
@@ -145,8 +271,29 @@ impl Module for Recorder {
         let png = self.png.get();
         if !png.is_empty() {
             let path = self.path.get();
+            let rects = |flat: &[f64], tint: [u8; 3]| -> Vec<(Rect, [u8; 3])> {
+                flat.chunks_exact(4)
+                    .filter_map(|c| Rect::from_corners([c[0], c[1], c[2], c[3]]).ok())
+                    .map(|r| (r, tint))
+                    .collect()
+            };
+            let mut areas = rects(&self.dark.get(), [40, 20, 90]);
+            areas.extend(rects(&self.rough.get(), [150, 95, 30]));
+            let truth = self.true_victims.get();
+            let found = self.victims.get();
+            let matched = match_victims(truth.points(), found.points(), 1.0);
+            let victims: Vec<(Point2, bool)> = truth
+                .points()
+                .iter()
+                .zip(&matched)
+                .map(|(v, m)| (*v, m.is_some()))
+                .collect();
             let layers = RenderLayers {
                 trajectory: &self.trajectory,
+                trajectory_colours: &self.colours,
+                areas: &areas,
+                victims: &victims,
+                reported: found.points(),
                 path: path.points(),
                 goals: &goals,
                 reached: self.reached.value().max(0) as usize,
@@ -161,7 +308,55 @@ impl Module for Recorder {
             save_png(Path::new(png.as_str()), &self.map.get(), &layers)
                 .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;
             println!("map + trajectory {png}");
+            if !totals.is_empty() {
+                let legend: Vec<String> = totals
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (n, _, _))| format!("{n} {:?}", context_colour(n, i)))
+                    .collect();
+                println!(
+                    "  trajectory colour by context: none {NO_CONTEXT:?}, {}",
+                    legend.join(", ")
+                );
+            }
         }
         Ok(())
     }
+}
+
+impl Recorder {
+    /// Appends a trajectory point, coloured by the highest-priority active context.
+    fn record(&mut self, p: Point2) {
+        let active = self.contexts.get();
+        let top = active.split(',').map(str::trim).find(|s| !s.is_empty());
+        let colour = top.map_or(NO_CONTEXT, |name| {
+            context_colour(name, self.context_log.index(name).unwrap_or(0))
+        });
+        self.trajectory.push(p);
+        self.colours.push(colour);
+    }
+}
+
+/// For each true victim, the distance to the found one matched to it (greedy by distance,
+/// each found victim used once, within `radius`), or `None` when it was missed.
+pub(crate) fn match_victims(truth: &[Point2], found: &[Point2], radius: f64) -> Vec<Option<f64>> {
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (i, t) in truth.iter().enumerate() {
+        for (j, f) in found.iter().enumerate() {
+            let d = (t.0 - f.0).norm();
+            if d <= radius {
+                pairs.push((d, i, j));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out = vec![None; truth.len()];
+    let mut used = vec![false; found.len()];
+    for (d, i, j) in pairs {
+        if out[i].is_none() && !used[j] {
+            out[i] = Some(d);
+            used[j] = true;
+        }
+    }
+    out
 }

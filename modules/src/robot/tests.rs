@@ -119,6 +119,16 @@ async fn bad_parameters_fail_init_naming_the_parameter() {
             "`params/lost_episodes`: expected [start, end)",
         ),
         (
+            "nav.localizer",
+            r#""params/scan_matching": true, "params/drift_per_meter": 0.1"#.to_string(),
+            "do not apply; remove them",
+        ),
+        (
+            "nav.localizer",
+            r#""params/scan_matching": true, "params/lost_below": 2.0"#.to_string(),
+            "`params/lost_below`: expected a number in [0, 1], got 2",
+        ),
+        (
             "nav.mapper",
             r#""params/resolution": 0.0"#.to_string(),
             "`params/resolution`",

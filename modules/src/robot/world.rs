@@ -5,15 +5,18 @@ use std::time::Duration;
 use anyhow::{bail, Context as _};
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    CheckProblem, Context, FilePath, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter,
-    Schedule, Twist2, Unrecoverable,
+    CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2,
+    QueueWriter, Schedule, Twist2, Unrecoverable,
 };
+use rand::SeedableRng;
 use tokio::time::Instant;
 
 use super::{check_params, count, param_error};
+use crate::sim::camera::{self, CameraConfig, CameraMotion};
 use crate::sim::error::{non_negative, positive};
 use crate::sim::{
-    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World, WorldMap,
+    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
+    WorldFeatures, WorldMap,
 };
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
@@ -27,6 +30,10 @@ const ROBOT_PARAMS: &[(&str, &str)] = &[
     ("rot_std", "odom_noise[1]"),
     ("rot_per_trans_std", "odom_noise[2]"),
 ];
+
+/// Side of the square around each victim that the simulator makes solid, metres (inside
+/// the camera's victim cylinder, [`camera::VICTIM_RADIUS`]).
+const VICTIM_BODY: f64 = 0.3;
 
 /// Simulation steps run at most per wake-up in real-time mode: a host that falls further
 /// behind slows simulated time down instead of freezing in a catch-up burst.
@@ -59,14 +66,24 @@ pub struct SimWorld {
     laser_noise: Input<f64>,
     laser_rate: Input<f64>,
     laser_mount: Input<Pose2>,
+    camera_enabled: Input<bool>,
+    camera_exposure: Input<f64>,
+    camera_gain: Input<f64>,
+    camera_rate: Input<f64>,
+    camera_fov_deg: Input<f64>,
     command: Input<Twist2>,
     odometry: QueueWriter<Pose2>,
     scans: QueueWriter<LaserScan>,
+    images: QueueWriter<Image>,
     pose: Output<Pose2>,
     speed: Output<Twist2>,
     collisions: Output<i64>,
     sim_time: Output<f64>,
     world_goals: Output<Path2>,
+    world_victims: Output<Path2>,
+    vibration: Output<f64>,
+    dark_areas: Output<Vec<f64>>,
+    rough_areas: Output<Vec<f64>>,
     sim: Option<Sim>,
 }
 
@@ -80,6 +97,11 @@ struct Sim {
     last_wake: Instant,
     /// Version of `in/controlSpeed` last seen, and the simulated time it was first seen.
     command_seen: (u64, f64),
+    /// Victims and dark and rough areas, for the camera.
+    features: WorldFeatures,
+    /// The camera's own noise stream and the simulated time of its next frame.
+    camera_rng: rand::rngs::StdRng,
+    next_frame: f64,
 }
 
 impl SimWorld {
@@ -123,14 +145,24 @@ impl Module for SimWorld {
             laser_noise: ports.param("params/laser/noise_std", 0.0, "Gaussian range noise, m"),
             laser_rate: ports.param("params/laser/rate_hz", 20.0, "scans per simulated second (0 = every step)"),
             laser_mount: ports.param("params/laser/mount", Pose2::default(), "laser pose in the robot frame"),
+            camera_enabled: ports.param("params/camera/enabled", false, "whether the robot has a camera (out/image)"),
+            camera_exposure: ports.param("params/camera/exposure_ms", 10.0, "exposure time, ms (0..200]: longer is brighter and less noisy, and blurs more when moving; read at every frame"),
+            camera_gain: ports.param("params/camera/gain", 1.0, "sensor gain [1, 16]: brighter, noise amplified alike; read at every frame"),
+            camera_rate: ports.param("params/camera/rate_hz", 10.0, "frames per simulated second"),
+            camera_fov_deg: ports.param("params/camera/fov_deg", 60.0, "horizontal field of view, degrees (0, 180)"),
             command: ports.input("in/controlSpeed", Twist2::default(), "velocity command (clamped to the limits)"),
             odometry: ports.queue_out("out/odometry", 256, "odometric pose at every step (item stamp = push time; simulated time is out/simTime)"),
             scans: ports.queue_out("out/laserScan", 16, "laser scans, in the laser frame"),
+            images: ports.queue_out("out/image", 4, "camera frames, 160 x 120 mono8 (shared, never copied)"),
             pose: ports.output("out/pose", Pose2::default(), "ground-truth pose (for evaluation: a real robot has none)"),
             speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
             collisions: ports.output("out/collisions", 0, "collision events so far"),
             sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             world_goals: ports.output("out/worldGoals", Path2::default(), "goal markers `1`..`9` of an ASCII world file, in order"),
+            world_victims: ports.output("out/worldVictims", Path2::default(), "victims of the world file (ground truth, for evaluation)"),
+            vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1 (an IMU would measure it): high on rough floor even when slow"),
+            dark_areas: ports.output("out/darkAreas", Vec::new(), "dark areas of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
+            rough_areas: ports.output("out/roughAreas", Vec::new(), "rough floor of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
             sim: None,
         }
     }
@@ -166,7 +198,17 @@ impl Module for SimWorld {
         check_params(non_negative, &[("command_timeout_s", timeout)])?;
         let config = self.robot_config()?;
         let seed = self.seed.value() as u64;
-        let mut world = World::new(map.grid, seed);
+        self.camera_config()?;
+        let rate = self.camera_rate.value();
+        check_params(positive, &[("camera/rate_hz", rate)])?;
+        // Victims are bodies on the floor: the robot must drive around them, and its laser
+        // sees them as small obstacles (the camera sees who they are).
+        let mut grid = map.grid;
+        for v in &map.features.victims {
+            let r = VICTIM_BODY / 2.0;
+            grid.fill_rect(v.0.x - r, v.0.y - r, v.0.x + r, v.0.y + r);
+        }
+        let mut world = World::new(grid, seed);
         let id = world
             .add_robot(config, start)
             .map_err(|e| param_error(e, ROBOT_PARAMS))?;
@@ -177,6 +219,15 @@ impl Module for SimWorld {
                 .collect::<Vec<_>>()
                 .into(),
         );
+        self.world_victims.set(map.features.victims.clone().into());
+        let flat = |rects: &[crate::sim::Rect]| {
+            rects
+                .iter()
+                .flat_map(|r| [r.x0, r.y0, r.x1, r.y1])
+                .collect::<Vec<f64>>()
+        };
+        self.dark_areas.set(flat(&map.features.dark));
+        self.rough_areas.set(flat(&map.features.rough));
         self.pose.set(start);
         tracing::info!(module = ctx.module(), world = %file, ?start, "world loaded");
         self.sim = Some(Sim {
@@ -186,11 +237,18 @@ impl Module for SimWorld {
             owed: 0.0,
             last_wake: ctx.now(),
             command_seen: (0, 0.0),
+            features: map.features,
+            camera_rng: rand::rngs::StdRng::seed_from_u64(seed ^ 0xCA3E_7A00),
+            next_frame: 0.0,
         });
         Ok(())
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let camera_config = match self.camera_enabled.value() {
+            true => Some(self.camera_config()?),
+            false => None,
+        };
         let sim = self
             .sim
             .as_mut()
@@ -215,7 +273,7 @@ impl Module for SimWorld {
         let cmd = if stale { Twist2::default() } else { *command };
         sim.world.set_command(sim.id, cmd)?;
         for _ in 0..steps {
-            let out = &sim.world.step(sim.dt)?[sim.id];
+            let out = sim.world.step(sim.dt)?[sim.id].clone();
             // The scan goes first: a consumer pairing a scan with the pose estimated from the
             // odometry of the same step then sees the scan before that pose exists.
             if let Some(scan) = &out.scan {
@@ -226,12 +284,59 @@ impl Module for SimWorld {
             self.speed.set(out.speed);
             self.collisions.set(out.collisions as i64);
             self.sim_time.set(out.odometry.stamp);
+            let rough = sim
+                .features
+                .is_rough(out.ground_truth.x(), out.ground_truth.y());
+            let vibration = match rough {
+                true => 0.3 + 0.5 * out.speed.v.abs(),
+                false => 0.05 * out.speed.v.abs(),
+            };
+            if vibration != self.vibration.value() {
+                self.vibration.set(vibration);
+            }
+            let due = out.odometry.stamp + 1e-9 >= sim.next_frame;
+            if let Some(cfg) = camera_config.as_ref().filter(|_| due) {
+                sim.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();
+                let motion = CameraMotion {
+                    speed: out.speed,
+                    rough: sim
+                        .features
+                        .is_rough(out.ground_truth.x(), out.ground_truth.y()),
+                };
+                let grid = sim.world.grid();
+                let pixels = camera::render(
+                    grid,
+                    &sim.features,
+                    out.ground_truth,
+                    motion,
+                    cfg,
+                    &mut sim.camera_rng,
+                );
+                self.images.push(Image {
+                    width: cfg.width,
+                    height: cfg.height,
+                    encoding: "mono8".into(),
+                    data: pixels.into(),
+                });
+            }
         }
         Ok(())
     }
 }
 
 impl SimWorld {
+    /// The camera's parameters as they are now (contexts change exposure and gain).
+    fn camera_config(&self) -> anyhow::Result<CameraConfig> {
+        let cfg = CameraConfig {
+            fov: self.camera_fov_deg.value().to_radians(),
+            exposure_ms: self.camera_exposure.value(),
+            gain: self.camera_gain.value(),
+            ..CameraConfig::default()
+        };
+        cfg.validate().map_err(|e| param_error(e, &[]))?;
+        Ok(cfg)
+    }
+
     fn robot_config(&self) -> anyhow::Result<RobotConfig> {
         let drive = match self.drive.get().as_str() {
             "differential" => DriveKind::Differential,

@@ -14,6 +14,8 @@ pub struct WorldFileError {
     pub file: PathBuf,
     /// The 1-based line of the problem, when the problem is tied to a line.
     pub line: Option<usize>,
+    /// The 1-based column (in characters) of the problem, when it is known.
+    pub column: Option<usize>,
     /// What was wrong and what was expected instead.
     pub message: String,
 }
@@ -24,6 +26,21 @@ impl WorldFileError {
         WorldFileError {
             file: file.into(),
             line: Some(line),
+            column: None,
+            message: message.into(),
+        }
+    }
+    /// An error at `line`:`column` (both 1-based) of `file`.
+    pub fn at_column(
+        file: impl Into<PathBuf>,
+        line: usize,
+        column: usize,
+        message: impl Into<String>,
+    ) -> Self {
+        WorldFileError {
+            file: file.into(),
+            line: Some(line),
+            column: Some(column),
             message: message.into(),
         }
     }
@@ -32,6 +49,7 @@ impl WorldFileError {
         WorldFileError {
             file: file.into(),
             line: None,
+            column: None,
             message: message.into(),
         }
     }
@@ -39,9 +57,11 @@ impl WorldFileError {
 
 impl fmt::Display for WorldFileError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.line {
-            Some(line) => write!(f, "{}:{}: {}", self.file.display(), line, self.message),
-            None => write!(f, "{}: {}", self.file.display(), self.message),
+        let file = self.file.display();
+        match (self.line, self.column) {
+            (Some(line), Some(col)) => write!(f, "{file}:{line}:{col}: {}", self.message),
+            (Some(line), None) => write!(f, "{file}:{line}: {}", self.message),
+            _ => write!(f, "{file}: {}", self.message),
         }
     }
 }

@@ -16,12 +16,14 @@
 //!
 //! * Header keys (all optional): `resolution` metres per cell (default 0.1), `origin` world
 //!   `x, y` of the grid's lower-left corner (default `0, 0`), `heading` start heading of the
-//!   `R` robots in degrees (default 0 = +x).
+//!   `R` robots in degrees (default 0 = +x); `dark` and `rough` (repeatable) a rectangle
+//!   `x0, y0, x1, y1` in metres of dark area or rough floor.
 //! * Header lines come before the grid, start with `# ` and contain at least one character
 //!   that is not a grid character (any word does), which tells them apart from a grid row
 //!   such as `# R  #`. A header of the form `# word: value` must use one of the keys above;
 //!   anything else (e.g. `# A hall with two rooms.`) is a comment.
-//! * Grid rows: `#` solid, `.` or space free, `R` robot start, `1`..`9` goals (free cells,
+//! * Grid rows: `#` solid, `.` or space free, `R` robot start, `V` a victim (free cell),
+//!   `1`..`9` goals (free cells,
 //!   visited in digit order; digits must run 1, 2, .. without gaps or repeats). The first text
 //!   row is the top of the world (largest y). Short rows are padded with free cells. Markers
 //!   sit at their cell's centre.
@@ -31,6 +33,7 @@ use std::path::Path;
 use petrel_actors::Pose2;
 
 use super::error::WorldFileError;
+use super::features::{Rect, WorldFeatures};
 use super::grid::Grid;
 
 /// A loaded world: the solid grid plus optional robot starts and goals from the file.
@@ -42,6 +45,8 @@ pub struct WorldMap {
     pub starts: Vec<Pose2>,
     /// Goals in visiting order (`1`..`9` markers); empty for PGM maps.
     pub goals: Vec<Pose2>,
+    /// Victims, dark areas and rough floor (empty unless the file declares them).
+    pub features: WorldFeatures,
 }
 
 /// Loads a world by extension: `.txt` (ASCII grid) or `.yaml`/`.yml` (map_server PGM + YAML).
@@ -67,6 +72,7 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
     let mut resolution = DEFAULT_RESOLUTION;
     let mut origin = (0.0, 0.0);
     let mut heading_deg = 0.0;
+    let mut features = WorldFeatures::default();
     // (line number, row text) of each grid row, top first.
     let mut rows: Vec<(usize, &str)> = Vec::new();
     let mut blank_after_grid: Option<usize> = None;
@@ -78,15 +84,16 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
             if line.trim().is_empty() {
                 continue;
             }
-            if let Some(header) = header_text(line) {
-                parse_header(
+            if let Some(header_line) = header_text(line) {
+                let mut header = Header {
                     file,
                     lineno,
-                    header,
-                    &mut resolution,
-                    &mut origin,
-                    &mut heading_deg,
-                )?;
+                    resolution: &mut resolution,
+                    origin: &mut origin,
+                    heading_deg: &mut heading_deg,
+                    features: &mut features,
+                };
+                header.parse(header_line)?;
                 continue;
             }
         }
@@ -106,7 +113,7 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
     if rows.is_empty() {
         return Err(WorldFileError::file(
             file,
-            "no grid rows; expected rows of '#', '.', ' ', 'R', '1'..'9'",
+            "no grid rows; expected rows of '#', '.', ' ', 'R', 'V', '1'..'9'",
         ));
     }
 
@@ -130,20 +137,21 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
                 '#' => grid.set(col, row, true),
                 '.' | ' ' => {}
                 'R' => starts.push(Pose2::new(cx, cy, heading)),
+                'V' => features.victims.push(petrel_actors::Point2::new(cx, cy)),
                 '1'..='9' => {
                     let k = ch as usize - '1' as usize;
                     if goals[k].is_some() {
-                        return Err(WorldFileError::at(file, *lineno, format!("goal '{ch}' appears twice; expected each goal digit once")));
+                        return Err(WorldFileError::at_column(file, *lineno, col as usize + 1, format!("goal '{ch}' appears twice; expected each goal digit once")));
                     }
                     goals[k] = Some(Pose2::new(cx, cy, 0.0));
                 }
                 other => {
-                    return Err(WorldFileError::at(
+                    return Err(WorldFileError::at_column(
                         file,
                         *lineno,
+                        col as usize + 1,
                         format!(
-                            "unexpected character {other:?} at column {}; expected '#', '.', ' ', 'R' or '1'..'9'",
-                            col + 1
+                            "unexpected character {other:?}; expected '#', '.', ' ', 'R', 'V' or '1'..'9'"
                         ),
                     ))
                 }
@@ -166,84 +174,108 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
         grid,
         starts,
         goals,
+        features,
     })
 }
 
 /// The header text after `# ` if `line` is a header line (see the module docs).
 fn header_text(line: &str) -> Option<&str> {
     let rest = line.strip_prefix("# ")?;
-    let is_grid_char = |c: char| matches!(c, '#' | '.' | ' ' | 'R' | '1'..='9');
+    let is_grid_char = |c: char| matches!(c, '#' | '.' | ' ' | 'R' | 'V' | '1'..='9');
     rest.contains(|c: char| !is_grid_char(c))
-        .then_some(rest.trim())
+        .then_some(rest.trim_end())
 }
 
-fn parse_header(
-    file: &Path,
+/// One header line being read, with the values it may set.
+struct Header<'a> {
+    file: &'a Path,
     lineno: usize,
-    header: &str,
-    resolution: &mut f64,
-    origin: &mut (f64, f64),
-    heading_deg: &mut f64,
-) -> Result<(), WorldFileError> {
-    let Some((key, value)) = header.split_once(':') else {
-        return Ok(());
-    };
-    let key = key.trim();
-    if key.contains(char::is_whitespace) {
-        return Ok(()); // free-text comment that happens to contain a colon
+    resolution: &'a mut f64,
+    origin: &'a mut (f64, f64),
+    heading_deg: &'a mut f64,
+    features: &'a mut WorldFeatures,
+}
+
+/// Column of the header value: after `# `, the key and the colon, then spaces.
+fn value_column(line_after_hash: &str, value: &str) -> usize {
+    let offset = line_after_hash.len() - value.len();
+    line_after_hash[..offset].chars().count() + 3
+}
+
+impl Header<'_> {
+    fn error(&self, column: usize, message: String) -> WorldFileError {
+        WorldFileError::at_column(self.file, self.lineno, column, message)
     }
-    let value = value.trim();
-    let number = |text: &str, what: &str| -> Result<f64, WorldFileError> {
-        text.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| {
-                WorldFileError::at(
-                    file,
-                    lineno,
-                    format!("`{key}`: expected {what}, got {text:?}"),
-                )
+
+    /// Numbers of a comma-separated header value, exactly `count` of them.
+    fn numbers(
+        &self,
+        key: &str,
+        value: &str,
+        column: usize,
+        what: &str,
+        count: usize,
+    ) -> Result<Vec<f64>, WorldFileError> {
+        let parts: Vec<&str> = value.split(',').collect();
+        if parts.len() != count {
+            return Err(self.error(column, format!("`{key}`: expected {what}, got {value:?}")));
+        }
+        parts
+            .iter()
+            .map(|p| {
+                p.trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        self.error(column, format!("`{key}`: expected {what}, got {value:?}"))
+                    })
             })
-    };
-    match key {
-        "resolution" => {
-            let r = number(value, "a number of metres per cell")?;
-            if r <= 0.0 {
-                return Err(WorldFileError::at(
-                    file,
-                    lineno,
-                    format!("`resolution`: expected metres per cell > 0, got {r}"),
-                ));
-            }
-            *resolution = r;
-        }
-        "origin" => {
-            let parts: Vec<&str> = value.split(',').collect();
-            if parts.len() != 2 {
-                return Err(WorldFileError::at(
-                    file,
-                    lineno,
-                    format!("`origin`: expected `x, y` in metres, got {value:?}"),
-                ));
-            }
-            *origin = (
-                number(parts[0], "x in metres")?,
-                number(parts[1], "y in metres")?,
-            );
-        }
-        "heading" => *heading_deg = number(value, "degrees")?,
-        other => {
-            return Err(WorldFileError::at(
-                file,
-                lineno,
-                format!(
-                    "unknown header key `{other}`; expected one of resolution, origin, heading"
-                ),
-            ))
-        }
+            .collect()
     }
-    Ok(())
+
+    fn parse(&mut self, header: &str) -> Result<(), WorldFileError> {
+        let Some((key, value)) = header.split_once(':') else {
+            return Ok(());
+        };
+        let key = key.trim();
+        if key.contains(char::is_whitespace) {
+            return Ok(()); // free-text comment that happens to contain a colon
+        }
+        let value = value.trim();
+        let column = value_column(header, value);
+        match key {
+            "resolution" => {
+                let r = self.numbers(key, value, column, "a number of metres per cell", 1)?[0];
+                if r <= 0.0 {
+                    return Err(self.error(column, format!("`resolution`: expected metres per cell > 0, got {r}")));
+                }
+                *self.resolution = r;
+            }
+            "origin" => {
+                let v = self.numbers(key, value, column, "`x, y` in metres", 2)?;
+                *self.origin = (v[0], v[1]);
+            }
+            "heading" => *self.heading_deg = self.numbers(key, value, column, "degrees", 1)?[0],
+            "dark" | "rough" => {
+                let v = self.numbers(key, value, column, "`x0, y0, x1, y1` in metres", 4)?;
+                let rect = Rect::from_corners([v[0], v[1], v[2], v[3]])
+                    .map_err(|e| self.error(column, format!("`{key}`: {e}")))?;
+                if key == "dark" {
+                    self.features.dark.push(rect);
+                } else {
+                    self.features.rough.push(rect);
+                }
+            }
+            other => {
+                return Err(self.error(
+                    3,
+                    format!("unknown header key `{other}`; expected one of resolution, origin, heading, dark, rough"),
+                ))
+            }
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -281,32 +313,35 @@ mod tests {
 
     #[test]
     fn bad_files_name_line_and_expectation() {
-        assert_eq!(parse("###\n#x#\n").unwrap_err(), "w.txt:2: unexpected character 'x' at column 2; expected '#', '.', ' ', 'R' or '1'..'9'");
+        assert_eq!(
+            parse("###\n#x#\n").unwrap_err(),
+            "w.txt:2:2: unexpected character 'x'; expected '#', '.', ' ', 'R', 'V' or '1'..'9'"
+        );
         assert_eq!(
             parse("# resolution: -2\n#\n").unwrap_err(),
-            "w.txt:1: `resolution`: expected metres per cell > 0, got -2"
+            "w.txt:1:15: `resolution`: expected metres per cell > 0, got -2"
         );
         assert_eq!(
             parse("# resolution: fine\n#\n").unwrap_err(),
-            "w.txt:1: `resolution`: expected a number of metres per cell, got \"fine\""
+            "w.txt:1:15: `resolution`: expected a number of metres per cell, got \"fine\""
         );
         assert_eq!(
             parse("# resolutoin: 0.1\n#\n").unwrap_err(),
-            "w.txt:1: unknown header key `resolutoin`; expected one of resolution, origin, heading"
+            "w.txt:1:3: unknown header key `resolutoin`; expected one of resolution, origin, heading, dark, rough"
         );
         assert_eq!(
             parse("# origin: 1\n#\n").unwrap_err(),
-            "w.txt:1: `origin`: expected `x, y` in metres, got \"1\""
+            "w.txt:1:11: `origin`: expected `x, y` in metres, got \"1\""
         );
         assert_eq!(
             parse("#1#\n#1#\n").unwrap_err(),
-            "w.txt:2: goal '1' appears twice; expected each goal digit once"
+            "w.txt:2:2: goal '1' appears twice; expected each goal digit once"
         );
         assert_eq!(parse("#1#\n#3#\n").unwrap_err(), "w.txt: goal '3' is present but goal '2' is missing; goals must be numbered 1, 2, .. without gaps");
         assert_eq!(parse("###\n\n###\n").unwrap_err(), "w.txt:2: empty line inside the grid; expected a grid row (use '.' or spaces for free cells)");
         assert_eq!(
             parse("# only a comment\n").unwrap_err(),
-            "w.txt: no grid rows; expected rows of '#', '.', ' ', 'R', '1'..'9'"
+            "w.txt: no grid rows; expected rows of '#', '.', ' ', 'R', 'V', '1'..'9'"
         );
         let e = load_world(Path::new("/nonexistent/w.txt"))
             .unwrap_err()
@@ -314,6 +349,37 @@ mod tests {
         assert!(e.starts_with("/nonexistent/w.txt: cannot read:"), "{e}");
         let e = load_world(Path::new("w.png")).unwrap_err().to_string();
         assert!(e.contains("unknown world file extension"), "{e}");
+    }
+
+    #[test]
+    fn victims_dark_and_rough_areas_are_read_with_positioned_errors() {
+        let w = parse("# dark: 0, 0, 1.5, 2\n# rough: 1, 1, 2, 2\n#  dark:  2, 2, 3, 3\n#####\n#RV #\n#  V#\n#####\n").unwrap();
+        assert_eq!(w.features.dark.len(), 2);
+        assert_eq!(
+            w.features.rough,
+            vec![Rect::from_corners([1.0, 1.0, 2.0, 2.0]).unwrap()]
+        );
+        let v: Vec<(f64, f64)> = w.features.victims.iter().map(|p| (p.0.x, p.0.y)).collect();
+        assert_eq!(
+            v,
+            vec![(0.25, 0.25), (0.35000000000000003, 0.15000000000000002)]
+        );
+        assert!(w.features.is_dark(1.0, 1.0) && w.features.is_rough(1.5, 1.5));
+        // Victims sit on free cells: the grid under them is not solid.
+        assert!(!w.grid.is_solid(2, 2));
+        assert_eq!(
+            parse("# dark: 0, 0, 1\n#\n").unwrap_err(),
+            "w.txt:1:9: `dark`: expected `x0, y0, x1, y1` in metres, got \"0, 0, 1\""
+        );
+        assert_eq!(
+            parse("#\n").map(|_| ()).and(parse("#  rough: 2, 0, 1, 1\n#\n").map(|_| ())).unwrap_err(),
+            "w.txt:1:11: `rough`: expected x0 < x1 and y0 < y1 (lower-left then upper-right corner), got [2, 0, 1, 1]"
+        );
+        // A world without the new keys has none of them.
+        assert_eq!(
+            parse("###\n#R#\n###\n").unwrap().features,
+            WorldFeatures::default()
+        );
     }
 
     #[test]

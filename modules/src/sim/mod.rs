@@ -7,10 +7,14 @@
 
 #![warn(missing_docs)]
 
+pub mod camera;
+pub mod context_log;
 pub mod error;
+pub mod features;
 pub mod grid;
 pub mod kinematics;
 pub mod map_io;
+pub mod map_yaml;
 pub mod pgm;
 pub mod raycast;
 pub mod render;
@@ -22,6 +26,7 @@ use petrel_actors::{LaserScan, Pose2, Twist2};
 use rand::SeedableRng;
 
 pub use error::{ParamError, WorldFileError};
+pub use features::{Rect, WorldFeatures};
 pub use grid::Grid;
 pub use kinematics::{DriveKind, Limits};
 pub use map_io::{load_world, parse_ascii, WorldMap};

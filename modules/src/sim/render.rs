@@ -5,11 +5,21 @@ use std::path::Path;
 use image::{Rgb, RgbImage};
 use petrel_actors::{OccupancyGrid, Point2, Pose2};
 
+use super::features::Rect;
+
 /// What to draw on top of the map.
 #[derive(Clone, Debug, Default)]
 pub struct RenderLayers<'a> {
-    /// Trajectory, oldest first; drawn blue to orange as time passes.
+    /// Trajectory, oldest first; drawn blue to orange as time passes, unless coloured.
     pub trajectory: &'a [Point2],
+    /// A colour per trajectory point (e.g. the active context); used when as long as it.
+    pub trajectory_colours: &'a [[u8; 3]],
+    /// Areas tinted over the map (dark rooms, rough floor), with their colour.
+    pub areas: &'a [(Rect, [u8; 3])],
+    /// Victims of the world: position and whether they were found (green) or missed (red).
+    pub victims: &'a [(Point2, bool)],
+    /// Where the robot reported victims (small black dots).
+    pub reported: &'a [Point2],
     /// A planned path, drawn thin green.
     pub path: &'a [Point2],
     /// Goals, drawn as numbered-by-order red rings (reached ones filled).
@@ -69,6 +79,19 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
     };
     let thick = (scale as f64 * 0.6).max(1.2);
 
+    for (rect, tint) in layers.areas {
+        let (x0, y0) = to_px(rect.x0, rect.y1);
+        let (x1, y1) = to_px(rect.x1, rect.y0);
+        for y in y0.max(0.0) as u32..(y1.max(0.0) as u32).min(img.height()) {
+            for x in x0.max(0.0) as u32..(x1.max(0.0) as u32).min(img.width()) {
+                let p = img.get_pixel_mut(x, y);
+                *p = Rgb(std::array::from_fn(|i| {
+                    (p.0[i] as f64 * 0.65 + tint[i] as f64 * 0.35) as u8
+                }));
+            }
+        }
+    }
+
     for pair in layers.path.windows(2) {
         line(
             &mut img,
@@ -79,13 +102,17 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
         );
     }
     let n = layers.trajectory.len().max(2) as f64;
+    let coloured = layers.trajectory_colours.len() == layers.trajectory.len();
     for (i, pair) in layers.trajectory.windows(2).enumerate() {
         let t = i as f64 / (n - 2.0).max(1.0);
-        let c = Rgb([
-            (30.0 + 225.0 * t) as u8,
-            (90.0 + 50.0 * t) as u8,
-            (220.0 - 200.0 * t) as u8,
-        ]);
+        let c = match coloured {
+            true => Rgb(layers.trajectory_colours[i + 1]),
+            false => Rgb([
+                (30.0 + 225.0 * t) as u8,
+                (90.0 + 50.0 * t) as u8,
+                (220.0 - 200.0 * t) as u8,
+            ]),
+        };
         line(
             &mut img,
             to_px(pair[0].0.x, pair[0].0.y),
@@ -113,6 +140,24 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
                 Rgb([205, 30, 45]),
             );
         }
+    }
+    for (v, found) in layers.victims {
+        let c = to_px(v.0.x, v.0.y);
+        let colour = if *found {
+            Rgb([20, 160, 60])
+        } else {
+            Rgb([215, 30, 40])
+        };
+        disc(&mut img, c, ring, colour);
+        disc(&mut img, c, ring * 0.6, Rgb([255, 255, 255]));
+    }
+    for r in layers.reported {
+        disc(
+            &mut img,
+            to_px(r.0.x, r.0.y),
+            (ring * 0.3).max(2.0),
+            Rgb([0, 0, 0]),
+        );
     }
     if let Some((pose, radius)) = layers.robot {
         let c = to_px(pose.x(), pose.y());

@@ -1,0 +1,145 @@
+use super::*;
+
+/// A map from text rows (top first): `#` occupied, `.` free, `?` unknown; 0.1 m cells.
+fn map(rows: &[&str]) -> OccupancyGrid {
+    let (w, h) = (rows[0].len(), rows.len());
+    let mut data = vec![0i8; w * h];
+    for (t, row) in rows.iter().enumerate() {
+        let r = h - 1 - t;
+        for (c, ch) in row.chars().enumerate() {
+            data[r * w + c] = match ch {
+                '#' => 100,
+                '?' => -1,
+                _ => 0,
+            };
+        }
+    }
+    OccupancyGrid {
+        width: w as u32,
+        height: h as u32,
+        resolution: 0.1,
+        origin: Pose2::default(),
+        data: data.into(),
+    }
+}
+
+fn params() -> FrontierParams {
+    FrontierParams {
+        clearance: 0.05,
+        ..FrontierParams::default()
+    }
+}
+
+/// A room whose right side is unknown, with a walled-off unknown pocket on the left.
+const ROOM: [&str; 10] = [
+    "##########????",
+    "#........#????",
+    "#.........????",
+    "#.........????",
+    "#.........????",
+    "#.........????",
+    "#..###...#????",
+    "#..#?#...#????",
+    "#..###...#????",
+    "##########????",
+];
+
+#[test]
+fn the_reachable_frontier_is_found_and_the_walled_pocket_is_not() {
+    let m = map(&ROOM);
+    let Exploration::Frontiers(f) = explore(&m, Pose2::new(0.25, 0.45, 0.0), &[], &params()) else {
+        panic!("expected frontiers");
+    };
+    assert_eq!(f.len(), 1, "{f:?}");
+    // The opening on the right is column 9, rows 4..=7 (y 0.4 .. 0.8), target near its middle.
+    let t = f[0].target;
+    assert!(
+        (t.0.x - 0.95).abs() < 1e-9 && (0.45..=0.75).contains(&t.0.y),
+        "{t:?}"
+    );
+    assert_eq!(f[0].size, 4);
+    assert!(f[0].travel > 0.6 && f[0].travel < 1.2, "{}", f[0].travel);
+}
+
+#[test]
+fn a_closed_map_is_done_an_unknown_robot_cell_waits() {
+    let closed: Vec<String> = ROOM
+        .iter()
+        .map(|r| r.replace("..????", "..#???").replace(".#????", ".#???#"))
+        .collect();
+    let closed: Vec<&str> = closed.iter().map(String::as_str).collect();
+    assert_eq!(
+        explore(&map(&closed), Pose2::new(0.25, 0.45, 0.0), &[], &params()),
+        Exploration::Done
+    );
+    assert_eq!(
+        explore(&map(&ROOM), Pose2::new(1.25, 0.45, 0.0), &[], &params()),
+        Exploration::Waiting
+    );
+    assert_eq!(
+        explore(&OccupancyGrid::default(), Pose2::default(), &[], &params()),
+        Exploration::Waiting
+    );
+}
+
+#[test]
+fn blacklisted_small_and_too_narrow_frontiers_are_skipped() {
+    let m = map(&ROOM);
+    let robot = Pose2::new(0.25, 0.45, 0.0);
+    let blacklist = [Point2::new(0.95, 0.6)];
+    assert_eq!(explore(&m, robot, &blacklist, &params()), Exploration::Done);
+    let big = FrontierParams {
+        min_frontier_cells: 5,
+        ..params()
+    };
+    assert_eq!(explore(&m, robot, &[], &big), Exploration::Done);
+    // With 0.3 m of clearance the robot cannot pass the 0.4 m gap: nothing reachable.
+    let wide = FrontierParams {
+        clearance: 0.3,
+        ..params()
+    };
+    assert_eq!(explore(&m, robot, &[], &wide), Exploration::Done);
+    let bad = FrontierParams {
+        min_frontier_cells: 0,
+        ..params()
+    };
+    assert_eq!(bad.validate().unwrap_err().param, "min_frontier_cells");
+}
+
+#[test]
+fn near_large_frontiers_come_first_and_known_area_counts_cells() {
+    let m = map(&[
+        "????????????",
+        "#..........#",
+        "#..........#",
+        "#..........#",
+        "#####..#####",
+        "#..........#",
+        "#.........?#",
+        "############",
+    ]);
+    let robot = Pose2::new(0.25, 0.15, 0.0);
+    let frontiers = |gain_weight| {
+        let p = FrontierParams {
+            min_frontier_cells: 1,
+            gain_weight,
+            ..params()
+        };
+        match explore(&m, robot, &[], &p) {
+            Exploration::Frontiers(f) => f,
+            other => panic!("expected frontiers, got {other:?}"),
+        }
+    };
+    let near = frontiers(0.0);
+    assert_eq!(near.len(), 2, "{near:?}");
+    assert!(
+        near[0].size == 2 && near[0].travel < near[1].travel,
+        "nearest first: {near:?}"
+    );
+    let large = frontiers(0.05);
+    assert_eq!(
+        large[0].size, 10,
+        "the large one is worth the detour: {large:?}"
+    );
+    assert!((known_area(&m) - 0.83).abs() < 1e-9, "{}", known_area(&m));
+}

@@ -1,0 +1,188 @@
+//! `nav.explorer`: frontier-based exploration; hands the path planner one frontier at a time.
+
+use petrel_actors::{
+    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Schedule,
+};
+
+use super::{count, param_error, MISSION_FAILED};
+use crate::nav::{explore, known_area, Exploration, FrontierParams};
+
+/// Simulated seconds a new target gets before the planner's flags are taken to be about it
+/// (the planner answers a new target at its next step; older flags are about the last one).
+const FLAG_GRACE_S: f64 = 0.5;
+
+/// `nav.explorer`: wraps [`explore`].
+pub struct ExplorerModule {
+    map: Input<OccupancyGrid>,
+    robot: Input<Pose2>,
+    arrived: Input<bool>,
+    failed: Input<bool>,
+    sim_time: Input<f64>,
+    clearance: Input<f64>,
+    min_frontier_cells: Input<i64>,
+    gain_weight: Input<f64>,
+    blacklist_radius: Input<f64>,
+    replan_s: Input<f64>,
+    keep_radius: Input<f64>,
+    give_up_s: Input<f64>,
+    end_run: Input<bool>,
+    timeout_s: Input<f64>,
+    target: Output<Pose2>,
+    done: Output<bool>,
+    frontiers: Output<i64>,
+    explored: Output<f64>,
+    state: Option<State>,
+}
+
+/// What exists after a successful init.
+struct State {
+    params: FrontierParams,
+    /// Current target and the simulated time it was handed out.
+    current: Option<(Point2, f64)>,
+    blacklist: Vec<Point2>,
+    last_plan: f64,
+    over: bool,
+}
+
+impl Module for ExplorerModule {
+    const TYPE: &'static str = "nav.explorer";
+    const DESCRIPTION: &'static str =
+        "Explores the map being built: sends the path planner to the best reachable frontier until none is left.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        ExplorerModule {
+            map: ports.input("in/map", OccupancyGrid::default(), "the map being built"),
+            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose"),
+            arrived: ports.input("in/arrived", false, "the planner reached the target"),
+            failed: ports.input("in/failed", false, "the planner finds no path to the target"),
+            sim_time: ports.input("in/simTime", 0.0, "simulated time, s"),
+            clearance: ports.param("params/clearance", 0.3, "distance the robot's centre keeps from walls, m (frontiers closer are unreachable)"),
+            min_frontier_cells: ports.param("params/min_frontier_cells", 4, "smaller frontiers are ignored, cells"),
+            gain_weight: ports.param("params/gain_weight", 0.05, "metres of travel one frontier cell is worth"),
+            blacklist_radius: ports.param("params/blacklist_radius", 0.6, "frontiers this close to a target reached or failed before are skipped, m"),
+            replan_s: ports.param("params/replan_s", 2.0, "re-evaluate frontiers at least this often, simulated s"),
+            keep_radius: ports.param("params/keep_radius", 1.0, "keep the current target while a frontier stays this close to it, m"),
+            give_up_s: ports.param("params/give_up_s", 60.0, "a target not reached within this many simulated seconds is given up (and skipped from then on)"),
+            end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
+            timeout_s: ports.param("params/timeout_s", 0.0, "simulated time after which exploration fails, s (0 = none)"),
+            target: ports.output("out/targetPose", Pose2::default(), "the frontier to explore next"),
+            done: ports.output("out/done", false, "no reachable frontier is left"),
+            frontiers: ports.output("out/frontiers", 0, "reachable frontiers at the last evaluation"),
+            explored: ports.output("out/explored", 0.0, "known area of the map, m²"),
+            state: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        // Simulated time too: a robot that arrived within the grace period, before a static map,
+        // must still get its next target (a step that decides nothing returns at once).
+        Schedule::new()
+            .on_change(&self.map)
+            .on_change(&self.arrived)
+            .on_change(&self.failed)
+            .on_change(&self.sim_time)
+    }
+
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let params = FrontierParams {
+            clearance: self.clearance.value(),
+            min_frontier_cells: count("min_frontier_cells", self.min_frontier_cells.value())?,
+            gain_weight: self.gain_weight.value(),
+            blacklist_radius: self.blacklist_radius.value(),
+            ..FrontierParams::default()
+        };
+        params.validate().map_err(|e| param_error(e, &[]))?;
+        for (name, v) in [
+            ("replan_s", self.replan_s.value()),
+            ("keep_radius", self.keep_radius.value()),
+            ("timeout_s", self.timeout_s.value()),
+            ("give_up_s", self.give_up_s.value()),
+        ] {
+            crate::sim::error::non_negative(name, v).map_err(|e| param_error(e, &[]))?;
+        }
+        self.state = Some(State {
+            params,
+            current: None,
+            blacklist: Vec::new(),
+            last_plan: f64::NEG_INFINITY,
+            over: false,
+        });
+        Ok(())
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let t = self.sim_time.value();
+        let state = self
+            .state
+            .as_mut()
+            .expect("stepping only after a successful init");
+        if state.over {
+            return Ok(());
+        }
+        let timeout = self.timeout_s.value();
+        if timeout > 0.0 && t > timeout && self.end_run.value() {
+            state.over = true;
+            ctx.stop_agent(
+                MISSION_FAILED,
+                format!("exploration failed: timeout after {t:.1} s"),
+            );
+            return Ok(());
+        }
+        let settled = state
+            .current
+            .is_some_and(|(_, since)| t - since >= FLAG_GRACE_S);
+        let overdue = state
+            .current
+            .is_some_and(|(_, since)| t - since > self.give_up_s.value());
+        let mut force = state.current.is_none();
+        if settled && (self.failed.value() || overdue) {
+            // No path to this frontier, or no way to get there in time (blocked, circling): do
+            // not pick it (or its neighbours) again.
+            let (p, _) = state.current.take().expect("settled");
+            state.blacklist.push(p);
+            force = true;
+        } else if settled && self.arrived.value() {
+            // Arrived and a frontier is still here: the laser cannot see it from this pose
+            // (behind the robot, under a table); going there again would change nothing.
+            let (p, _) = state.current.take().expect("settled");
+            state.blacklist.push(p);
+            force = true;
+        }
+        if !force && t - state.last_plan < self.replan_s.value() {
+            return Ok(());
+        }
+        let map = self.map.get();
+        self.explored.set(known_area(&map));
+        let decision = explore(&map, self.robot.value(), &state.blacklist, &state.params);
+        state.last_plan = t;
+        match decision {
+            Exploration::Waiting => {}
+            Exploration::Done => {
+                self.frontiers.set(0);
+                self.done.set(true);
+                state.over = true;
+                println!(
+                    "[{}] t = {t:6.1} s  exploration done: {:.0} m² known",
+                    ctx.module(),
+                    self.explored.value()
+                );
+                if self.end_run.value() {
+                    ctx.stop_agent(0, format!("exploration complete in {t:.1} s"));
+                }
+            }
+            Exploration::Frontiers(list) => {
+                self.frontiers.set(list.len() as i64);
+                let keep = self.keep_radius.value();
+                let kept = state.current.filter(|(p, _)| {
+                    !force && list.iter().any(|f| (f.target.0 - p.0).norm() <= keep)
+                });
+                if kept.is_none() {
+                    let next = list[0].target;
+                    state.current = Some((next, t));
+                    self.target.set(Pose2::new(next.0.x, next.0.y, 0.0));
+                }
+            }
+        }
+        Ok(())
+    }
+}

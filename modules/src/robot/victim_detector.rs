@@ -1,0 +1,99 @@
+//! `vision.victim_detector`: camera images in, victim detections and image quality out.
+
+use anyhow::anyhow;
+use petrel_actors::{Context, Image, Input, Module, Output, Ports, QueueReader, Schedule};
+
+use crate::vision::{detect, Detections, DetectorParams};
+
+/// `vision.victim_detector`: wraps [`detect`].
+pub struct VictimDetector {
+    images: QueueReader<Image>,
+    threshold: Input<f64>,
+    deblur: Input<f64>,
+    roi: Input<Vec<f64>>,
+    fov_deg: Input<f64>,
+    detections: Output<Detections>,
+    seen: Output<bool>,
+    brightness: Output<f64>,
+    sharpness: Output<f64>,
+    frames: Output<i64>,
+}
+
+impl Module for VictimDetector {
+    const TYPE: &'static str = "vision.victim_detector";
+    const DESCRIPTION: &'static str =
+        "Finds victims (checkerboard signature) in camera images; reports bearing, range, confidence and image quality.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        VictimDetector {
+            images: ports.queue_in("in/image", "camera frames (mono8)"),
+            threshold: ports.param("params/threshold", 12.0, "texture above the noise floor that marks a victim, grey levels (0, 255]; read every frame"),
+            deblur: ports.param("params/deblur", 0.0, "sharpening amount before detection, [0, 4], 0 = off (costs CPU); read every frame"),
+            roi: ports.param("params/roi", vec![0.0, 0.5, 1.0, 1.0], "region searched, fractions `[x0, y0, x1, y1]` of the image, top-left origin"),
+            fov_deg: ports.param("params/fov_deg", 60.0, "the camera's horizontal field of view, degrees"),
+            detections: ports.output("out/detections", Detections::default(), "victims in the latest frame: bearing (rad, left positive), range (m), confidence"),
+            seen: ports.output("out/victimSeen", false, "the latest frame holds a victim"),
+            brightness: ports.output("out/brightness", 0.5, "mean grey level of the latest frame, 0..1"),
+            sharpness: ports.output("out/sharpness", 0.0, "mean absolute Laplacian of the latest frame, grey levels"),
+            frames: ports.output("out/frames", 0, "frames processed"),
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_items(&self.images)
+    }
+
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.params()?;
+        Ok(())
+    }
+
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        // Only the newest frame matters: a detector that falls behind skips, never lags.
+        let latest = self.images.drain().pop();
+        let Some(image) = latest else {
+            return Ok(());
+        };
+        let params = self.params()?;
+        let img = &image.value;
+        let out = detect(&img.data, img.width as usize, img.height as usize, &params).ok_or_else(
+            || {
+                anyhow!(
+                    "in/image: expected {} x {} mono8 pixels, got {} bytes ({})",
+                    img.width,
+                    img.height,
+                    img.data.len(),
+                    img.encoding
+                )
+            },
+        )?;
+        self.frames.set(self.frames.value() + 1);
+        self.brightness.set(out.brightness);
+        self.sharpness.set(out.sharpness);
+        let seen = !out.detections.is_empty();
+        if seen != self.seen.value() {
+            self.seen.set(seen);
+        }
+        self.detections.set(Detections(out.detections));
+        Ok(())
+    }
+}
+
+impl VictimDetector {
+    fn params(&self) -> anyhow::Result<DetectorParams> {
+        let roi = self.roi.get();
+        let roi: [f64; 4] = roi.as_slice().try_into().map_err(|_| {
+            anyhow!("invalid parameter `params/roi`: expected `[x0, y0, x1, y1]`, got {roi:?}")
+        })?;
+        let params = DetectorParams {
+            threshold: self.threshold.value(),
+            deblur: self.deblur.value(),
+            roi,
+            fov: self.fov_deg.value().to_radians(),
+        };
+        params
+            .validate()
+            .map_err(|e| anyhow!("invalid parameter {e}"))?;
+        Ok(params)
+    }
+}

@@ -1,0 +1,219 @@
+use super::*;
+use crate::sim::camera::{render, CameraConfig, CameraMotion};
+use crate::sim::features::Rect;
+use crate::sim::{Grid, WorldFeatures};
+use petrel_actors::{Point2, Pose2, Twist2};
+use rand::SeedableRng;
+
+/// A 10 m x 5 m hall; the robot at (1, 2.5) facing +x; victims where asked.
+fn image(
+    victims: &[(f64, f64)],
+    dark: bool,
+    motion: CameraMotion,
+    cfg: &CameraConfig,
+    seed: u64,
+) -> Vec<u8> {
+    let mut grid = Grid::new(100, 50, 0.1, 0.0, 0.0).unwrap();
+    for c in 0..100 {
+        grid.set(c, 0, true);
+        grid.set(c, 49, true);
+    }
+    for r in 0..50 {
+        grid.set(0, r, true);
+        grid.set(99, r, true);
+    }
+    let features = WorldFeatures {
+        victims: victims.iter().map(|&(x, y)| Point2::new(x, y)).collect(),
+        dark: if dark {
+            vec![Rect::from_corners([0.0, 0.0, 10.0, 5.0]).unwrap()]
+        } else {
+            Vec::new()
+        },
+        ..WorldFeatures::default()
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    render(
+        &grid,
+        &features,
+        Pose2::new(1.0, 2.5, 0.0),
+        motion,
+        cfg,
+        &mut rng,
+    )
+}
+
+fn run(img: &[u8], p: &DetectorParams) -> DetectorOutput {
+    detect(img, 160, 120, p).unwrap()
+}
+
+#[test]
+fn a_victim_ahead_and_one_to_the_left_are_found_with_bearing_and_range() {
+    let cfg = CameraConfig::default();
+    let p = DetectorParams::default();
+    let out = run(
+        &image(
+            &[(3.0, 2.5), (4.0, 3.6)],
+            false,
+            CameraMotion::default(),
+            &cfg,
+            1,
+        ),
+        &p,
+    );
+    assert_eq!(out.detections.len(), 2, "{out:?}");
+    let mut d = out.detections.clone();
+    d.sort_by(|a, b| a.bearing.total_cmp(&b.bearing));
+    let ahead = d[0];
+    assert!(
+        ahead.bearing.abs() < 0.05 && (ahead.range - 2.0).abs() < 0.3,
+        "{ahead:?}"
+    );
+    let left = d[1];
+    let (bearing, range) = ((1.1f64).atan2(3.0), (1.1f64).hypot(3.0));
+    assert!(
+        (left.bearing - bearing).abs() < 0.05 && (left.range - range).abs() < 0.5,
+        "{left:?} vs {bearing} {range}"
+    );
+    assert!(out.brightness > 0.2 && ahead.confidence > 0.2);
+    // An empty hall gives nothing.
+    assert!(
+        run(&image(&[], false, CameraMotion::default(), &cfg, 1), &p)
+            .detections
+            .is_empty()
+    );
+}
+
+#[test]
+fn too_dark_images_miss_victims_until_exposure_and_gain_rise() {
+    let p = DetectorParams::default();
+    let victim = [(3.0, 2.5)];
+    let plain = CameraConfig::default();
+    let dark = run(
+        &image(&victim, true, CameraMotion::default(), &plain, 2),
+        &p,
+    );
+    assert!(
+        dark.detections.is_empty() && dark.brightness < 0.05,
+        "{dark:?}"
+    );
+    let adapted = CameraConfig {
+        exposure_ms: 40.0,
+        gain: 4.0,
+        ..plain
+    };
+    let seen = run(
+        &image(&victim, true, CameraMotion::default(), &adapted, 2),
+        &p,
+    );
+    assert_eq!(seen.detections.len(), 1, "{seen:?}");
+    // No false victims out of amplified noise, sharpened or not.
+    let sharpening = DetectorParams {
+        deblur: 1.0,
+        ..p.clone()
+    };
+    for seed in 0..20 {
+        let img = image(&[], true, CameraMotion::default(), &adapted, seed);
+        let empty = run(&img, &p);
+        assert!(empty.detections.is_empty(), "seed {seed}: {empty:?}");
+        let sharpened = run(&img, &sharpening);
+        assert!(
+            sharpened.detections.is_empty(),
+            "seed {seed}, deblur: {sharpened:?}"
+        );
+    }
+}
+
+#[test]
+fn blurred_images_miss_victims_and_lose_sharpness_deblur_costs_and_helps_a_little() {
+    let p = DetectorParams::default();
+    let victim = [(3.0, 2.5)];
+    let cfg = CameraConfig {
+        exposure_ms: 30.0,
+        ..CameraConfig::default()
+    };
+    let still = run(&image(&victim, false, CameraMotion::default(), &cfg, 3), &p);
+    let turn = CameraMotion {
+        speed: Twist2::new(0.3, 1.5),
+        rough: false,
+    };
+    let blurred = run(&image(&victim, false, turn, &cfg, 3), &p);
+    assert_eq!(still.detections.len(), 1, "{still:?}");
+    assert!(blurred.detections.is_empty(), "{blurred:?}");
+    assert!(
+        blurred.sharpness < 0.85 * still.sharpness,
+        "{} vs {}",
+        blurred.sharpness,
+        still.sharpness
+    );
+    let sharpened = run(
+        &image(&victim, false, turn, &cfg, 3),
+        &DetectorParams {
+            deblur: 2.0,
+            ..p.clone()
+        },
+    );
+    assert!(sharpened.sharpness > blurred.sharpness);
+    assert!(detect(&[0; 10], 160, 120, &p).is_none());
+    assert!(DetectorParams {
+        roi: [0.5, 0.0, 0.2, 1.0],
+        ..p
+    }
+    .validate()
+    .unwrap_err()
+    .contains("params/roi"));
+}
+
+#[test]
+fn no_false_victims_in_the_dark_room_of_the_rescue_world() {
+    // Looking around the dark storeroom with exposure and gain raised: walls lit through the
+    // door saturate beside dark, amplified, noisy ones. Noise is not a victim.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/rescue/rescue.txt");
+    let w = crate::sim::load_world(std::path::Path::new(path)).unwrap();
+    let cfg = CameraConfig {
+        exposure_ms: 30.0,
+        gain: 4.0,
+        ..CameraConfig::default()
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+    let (mut false_victims, mut frames) = (0, 0);
+    for deblur in [0.0, 1.0] {
+        let p = DetectorParams {
+            deblur,
+            ..DetectorParams::default()
+        };
+        for k in 0..96 {
+            let (xi, yi, hi) = (k % 3, (k / 3) % 4, k / 12);
+            let pose = Pose2::new(
+                12.2 + xi as f64 * 1.2,
+                6.8 + yi as f64 * 1.2,
+                hi as f64 * 0.785,
+            );
+            if w.grid.disc_collides(pose.x(), pose.y(), 0.25) {
+                continue;
+            }
+            let img = render(
+                &w.grid,
+                &w.features,
+                pose,
+                CameraMotion::default(),
+                &cfg,
+                &mut rng,
+            );
+            frames += 1;
+            for d in run(&img, &p).detections {
+                let a = pose.theta() + d.bearing;
+                let (x, y) = (pose.x() + d.range * a.cos(), pose.y() + d.range * a.sin());
+                if !w
+                    .features
+                    .victims
+                    .iter()
+                    .any(|v| (v.0.x - x).hypot(v.0.y - y) < 1.0)
+                {
+                    false_victims += 1;
+                }
+            }
+        }
+    }
+    assert!(frames > 100);
+    assert_eq!(false_victims, 0, "in {frames} frames");
+}
