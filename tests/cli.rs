@@ -424,11 +424,49 @@ fn check_reports_a_missing_file_where_the_config_names_it() {
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
     let expected = format!(
-        "{}:2:47: error: module `robot`: `params/world` names {}, which does not exist",
+        "{}:2:47: error: module `robot`: `params/world` names {}, but it does not exist",
         config.display(),
         dir.path().join("maps/nowhere.txt").display()
     );
     assert!(err.contains(&expected), "{err}");
+
+    // Not a regular file (a FIFO would block the start forever), a symlink loop, a map image
+    // that is a device: each named for what it is, before anything runs.
+    let fifo = dir.path().join("fifo.txt");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let (a, b) = (dir.path().join("a.txt"), dir.path().join("b.txt"));
+    std::os::unix::fs::symlink(&b, &a).unwrap();
+    std::os::unix::fs::symlink(&a, &b).unwrap();
+    std::fs::write(
+        dir.path().join("zero.yaml"),
+        "image: /dev/zero\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.2\n",
+    )
+    .unwrap();
+    for (world, problem) in [
+        (
+            "fifo.txt",
+            "but it is not a regular file (a FIFO, device or socket)",
+        ),
+        ("a.txt", "but it is a symlink loop"),
+        (
+            "zero.yaml",
+            "/dev/zero: cannot read map image: it is not a regular file",
+        ),
+    ] {
+        std::fs::write(
+            &config,
+            format!("Agent(name: \"r1\", modules: [\n  (name: \"robot\", type: \"sim.world\", values: {{\"params/world\": \"{world}\"}}),\n])"),
+        )
+        .unwrap();
+        let out = petrel(&["check", config.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{world}");
+        let err = text(&out.stderr);
+        assert!(err.contains(problem), "{world}: {err}");
+    }
 }
 
 #[test]

@@ -25,16 +25,7 @@ pub mod limits {
 /// Reads the file at `path`, a `what` ("config", "plan"...), of at most `limit` bytes. The
 /// error says what is wrong with the path, without repeating it.
 pub fn read_bytes(path: &Path, what: &str, limit: u64) -> Result<Vec<u8>, String> {
-    let meta = std::fs::metadata(path)
-        .map_err(|e| format!("cannot read {what}: {}", describe(path, &e)))?;
-    if meta.is_dir() {
-        return Err(format!("cannot read {what}: it is a directory"));
-    }
-    if !meta.is_file() {
-        return Err(format!(
-            "cannot read {what}: it is not a regular file (a FIFO, device or socket)"
-        ));
-    }
+    let meta = regular_file(path).map_err(|e| format!("cannot read {what}: {e}"))?;
     if meta.len() > limit {
         return Err(format!(
             "cannot read {what}: it is {} bytes, above the {} limit for a {what}",
@@ -52,6 +43,19 @@ pub fn read_bytes(path: &Path, what: &str, limit: u64) -> Result<Vec<u8>, String
         ));
     }
     Ok(bytes)
+}
+
+/// The metadata of `path` if it is a regular file (links followed), else what it is instead:
+/// `it does not exist`, `it is a directory`, `it is a symlink loop`, ...
+pub fn regular_file(path: &Path) -> Result<std::fs::Metadata, String> {
+    let meta = std::fs::metadata(path).map_err(|e| describe(path, &e))?;
+    if meta.is_dir() {
+        return Err("it is a directory".into());
+    }
+    if !meta.is_file() {
+        return Err("it is not a regular file (a FIFO, device or socket)".into());
+    }
+    Ok(meta)
 }
 
 /// Reads a UTF-8 text file as [`read_bytes`] does, without its byte-order mark if it has one.

@@ -217,15 +217,14 @@ fn check_files(file: &ConfigFile, built: &Registry) -> (Vec<ConfigError>, Vec<St
             let Some(path) = file_param(built, module, &decl.path) else {
                 continue;
             };
-            if path.is_empty() || path.as_path().is_file() {
+            if path.is_empty() {
                 continue;
             }
-            let problem = match path.as_path().exists() {
-                true => "is not a file",
-                false => "does not exist",
+            let Err(problem) = petrel_actors::files::regular_file(path.as_path()) else {
+                continue;
             };
             let message = format!(
-                "module `{module}`: `{}` names {path}, which {problem} (relative paths are taken from the config file's directory)",
+                "module `{module}`: `{}` names {path}, but {problem} (relative paths are taken from the config file's directory)",
                 decl.path
             );
             errors.push(file.error(module, Some(&decl.path), message));

@@ -49,12 +49,19 @@ pub struct WorldMap {
     pub features: WorldFeatures,
 }
 
+/// Reads a world file's text: a regular file within the world size limit, byte-order mark
+/// dropped (a FIFO or `/dev/zero` named by mistake is refused, not read forever).
+pub(crate) fn read_world_text(path: &Path) -> Result<String, WorldFileError> {
+    use petrel_actors::files;
+    files::read_text(path, "world file", files::limits::WORLD)
+        .map_err(|e| WorldFileError::file(path, e))
+}
+
 /// Loads a world by extension: `.txt` (ASCII grid) or `.yaml`/`.yml` (map_server PGM + YAML).
 pub fn load_world(path: &Path) -> Result<WorldMap, WorldFileError> {
     match path.extension().and_then(|e| e.to_str()) {
         Some("txt") => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| WorldFileError::file(path, format!("cannot read: {e}")))?;
+            let text = read_world_text(path)?;
             parse_ascii(path, &text)
         }
         Some("yaml") | Some("yml") => super::pgm::load_map_yaml(path),

@@ -19,14 +19,11 @@ pub use super::map_yaml::{parse_map_yaml, MapYaml};
 
 /// Loads a map_server YAML file and the PGM image it names.
 pub fn load_map_yaml(path: &Path) -> Result<WorldMap, WorldFileError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| WorldFileError::file(path, format!("cannot read: {e}")))?;
+    let text = super::map_io::read_world_text(path)?;
     let meta = parse_map_yaml(path, &text)?;
-    let bytes = std::fs::read(&meta.image).map_err(|e| {
-        WorldFileError::file(
-            &meta.image,
-            format!("cannot read image named by {}: {e}", path.display()),
-        )
+    let limit = petrel_actors::files::limits::WORLD;
+    let bytes = petrel_actors::files::read_bytes(&meta.image, "map image", limit).map_err(|e| {
+        WorldFileError::file(&meta.image, format!("{e} (named by {})", path.display()))
     })?;
     let image = parse_pgm(&meta.image, &bytes)?;
     let grid = image_to_grid(&meta, &image)
