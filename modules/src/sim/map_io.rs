@@ -353,7 +353,10 @@ mod tests {
         let e = load_world(Path::new("/nonexistent/w.txt"))
             .unwrap_err()
             .to_string();
-        assert!(e.starts_with("/nonexistent/w.txt: cannot read:"), "{e}");
+        assert_eq!(
+            e,
+            "/nonexistent/w.txt: cannot read world file: it does not exist"
+        );
         let e = load_world(Path::new("w.png")).unwrap_err().to_string();
         assert!(e.contains("unknown world file extension"), "{e}");
     }
