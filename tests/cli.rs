@@ -17,6 +17,15 @@ fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
+/// Writes config `text` as `name` in a fresh temporary directory (alive as long as the returned
+/// guard) and returns its path.
+fn temp_config(name: &str, text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
+}
+
 #[test]
 fn check_accepts_the_shipped_demo_config() {
     let out = petrel(&["check", "configs/pipeline.ron"]);
@@ -549,17 +558,14 @@ fn graph_draws_modules_and_links_as_dot() {
 
 #[test]
 fn a_module_panic_is_one_error_event_in_its_span_and_nothing_beside_the_log() {
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("panics.ron");
-    std::fs::write(
-        &config,
+    let (_dir, config) = temp_config(
+        "panics.ron",
         r#"Agent(name: "r", modules: [
     (name: "c", type: "demo.counter", restart: temporary, values: {"params/period_ms": 10}),
     (name: "chaos", type: "demo.chaos",
      values: {"params/targets": "c", "params/faults": "panic", "params/mean_interval_ms": 20}),
 ])"#,
-    )
-    .unwrap();
+    );
     let out = bounded::output_within_deadline(
         Command::new(env!("CARGO_BIN_EXE_petrel"))
             .args(["run", config.to_str().unwrap(), "--for", "3s"])
@@ -645,17 +651,14 @@ fn a_world_file_that_does_not_parse_is_refused_by_check_and_run_before_anything_
 
 #[test]
 fn a_module_that_wakes_itself_starves_neither_the_others_nor_the_stop_on_one_worker() {
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("self.ron");
     // `s` reads its own output: every step wakes it again, forever.
-    std::fs::write(
-        &config,
+    let (_dir, config) = temp_config(
+        "self.ron",
         r#"Agent(name: "r", modules: [
     (name: "s", type: "demo.scale", links: {"in/value": "s/out/value"}, values: {"params/factor": 1.0001}),
     (name: "c", type: "demo.counter", values: {"params/period_ms": 100}),
 ])"#,
-    )
-    .unwrap();
+    );
     let out = petrel(&[
         "run",
         config.to_str().unwrap(),
