@@ -4,11 +4,11 @@ use std::process::Command;
 
 #[test]
 fn the_mission_demo_ends_by_itself_at_the_goal_with_exit_0() {
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(["run", "configs/mission-demo.ron"])
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", "configs/mission-demo.ron"])
+            .env("RUST_LOG", "warn"),
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(
@@ -35,10 +35,9 @@ fn the_mission_demo_ends_by_itself_at_the_goal_with_exit_0() {
 
 #[test]
 fn check_accepts_the_mission_demo() {
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(["check", "configs/mission-demo.ron"])
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel")).args(["check", "configs/mission-demo.ron"]),
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -66,7 +65,7 @@ fn plan_simulate_exit_codes_say_goal_fail_or_still_running_and_read_scripts_from
             .unwrap()
             .write_all(script.as_bytes())
             .unwrap();
-        let out = child.wait_with_output().unwrap();
+        let out = crate::bounded::wait_within_deadline(child, "petrel plan simulate");
         (
             out.status.code(),
             String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -81,10 +80,9 @@ fn plan_simulate_exit_codes_say_goal_fail_or_still_running_and_read_scripts_from
         out.ends_with("{\"result\":\"running\",\"step\":2}\n"),
         "{out}"
     );
-    let help = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(["plan", "simulate", "--help"])
-        .output()
-        .unwrap();
+    let help = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel")).args(["plan", "simulate", "--help"]),
+    );
     let help = String::from_utf8_lossy(&help.stdout);
     assert!(
         help.contains("--script <FILE|->") && help.contains("4 when --steps runs out"),
@@ -104,17 +102,17 @@ fn a_run_stopped_by_for_while_the_mission_runs_says_so_and_exits_4() {
         ])"#,
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args([
-            "run",
-            &config.display().to_string(),
-            "--for",
-            "300ms",
-            "--no-remote",
-        ])
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                &config.display().to_string(),
+                "--for",
+                "300ms",
+                "--no-remote",
+            ])
+            .env("RUST_LOG", "warn"),
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(4), "{stdout}");
     assert!(stdout.contains("mission still running: r1/m"), "{stdout}");
@@ -134,17 +132,17 @@ fn a_give_up_exits_3_naming_the_agent_wide_limit_even_though_a_module_failed() {
             ])"#,
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args([
-            "run",
-            &config.display().to_string(),
-            "--for",
-            "20s",
-            "--no-remote",
-        ])
-        .env("RUST_LOG", "off")
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                &config.display().to_string(),
+                "--for",
+                "20s",
+                "--no-remote",
+            ])
+            .env("RUST_LOG", "off"),
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(3), "{stdout}");
     assert!(
@@ -166,10 +164,9 @@ fn check_warns_about_a_binding_no_action_uses_with_the_nearest_name() {
         ])"#,
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(["check", &config.display().to_string()])
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel")).args(["check", &config.display().to_string()]),
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "a warning, not an error: {stderr}");
     assert!(
@@ -199,17 +196,17 @@ fn a_simulator_drives_mission_time_without_a_link() {
         ),
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args([
-            "run",
-            &config.display().to_string(),
-            "--for",
-            "3s",
-            "--no-remote",
-        ])
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("petrel runs");
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                &config.display().to_string(),
+                "--for",
+                "3s",
+                "--no-remote",
+            ])
+            .env("RUST_LOG", "warn"),
+    );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "ended before --for: {stdout}");
     assert!(stdout.contains("mission `w` ended: goal"), "{stdout}");

@@ -67,10 +67,7 @@ fn no_deadlock(what: &str, r: &CheckReport) {
 }
 
 fn petrel(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .args(args)
-        .output()
-        .expect("petrel runs")
+    crate::bounded::output_within_deadline(Command::new(env!("CARGO_BIN_EXE_petrel")).args(args))
 }
 
 #[test]

@@ -2,6 +2,8 @@
 //! mission demo run by the real binary.
 
 mod bindings;
+#[path = "../common/bounded.rs"]
+mod bounded;
 mod cli;
 mod execution;
 mod guide;
