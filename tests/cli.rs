@@ -753,15 +753,18 @@ fn outputs_never_replace_inputs_and_bad_destinations_are_refused_before_running(
     let config_arg = config.to_str().unwrap();
 
     // The snapshot would replace the config (named another way): refused, nothing run.
-    let same = dir.path().join(".").join("pipeline.ron");
-    let out = petrel(&[
-        "run",
-        config_arg,
-        "--for",
-        "30s",
-        "--snapshot-out",
-        same.to_str().unwrap(),
-    ]);
+    // Both refusals come before the 30 s run would start.
+    let snapshot_to = |out: &std::path::Path| {
+        petrel(&[
+            "run",
+            config_arg,
+            "--for",
+            "30s",
+            "--snapshot-out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let out = snapshot_to(&dir.path().join(".").join("pipeline.ron"));
     assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
     assert!(
         text(&out.stderr).contains("which this run reads"),
@@ -775,15 +778,7 @@ fn outputs_never_replace_inputs_and_bad_destinations_are_refused_before_running(
     assert_eq!(std::fs::read_to_string(&config).unwrap(), original);
 
     // A destination that cannot be written is found before the run, not after it.
-    let nowhere = dir.path().join("no/such/dir/snap.ron");
-    let out = petrel(&[
-        "run",
-        config_arg,
-        "--for",
-        "30s",
-        "--snapshot-out",
-        nowhere.to_str().unwrap(),
-    ]);
+    let out = snapshot_to(&dir.path().join("no/such/dir/snap.ron"));
     assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
     assert!(
         text(&out.stderr).starts_with("error: --snapshot-out "),

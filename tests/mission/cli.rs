@@ -102,18 +102,7 @@ fn a_run_stopped_by_for_while_the_mission_runs_says_so_and_exits_4() {
         ])"#,
     )
     .unwrap();
-    let out = crate::bounded::output_within_deadline(
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args([
-                "run",
-                &config.display().to_string(),
-                "--for",
-                "300ms",
-                "--no-remote",
-            ])
-            .env("RUST_LOG", "warn"),
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let (out, stdout) = run_for(&config, "300ms");
     assert_eq!(out.status.code(), Some(4), "{stdout}");
     assert!(stdout.contains("mission still running: r1/m"), "{stdout}");
 }
@@ -132,18 +121,7 @@ fn a_give_up_exits_3_naming_the_agent_wide_limit_even_though_a_module_failed() {
             ])"#,
     )
     .unwrap();
-    let out = crate::bounded::output_within_deadline(
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args([
-                "run",
-                &config.display().to_string(),
-                "--for",
-                "20s",
-                "--no-remote",
-            ])
-            .env("RUST_LOG", "off"),
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let (out, stdout) = run_for(&config, "20s");
     assert_eq!(out.status.code(), Some(3), "{stdout}");
     assert!(
         stdout.contains("the agent-wide restart limit (supervision max_restarts: 2 within_s: 10) was reached; restarts so far: `producer` 2"),
@@ -210,4 +188,22 @@ fn a_simulator_drives_mission_time_without_a_link() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "ended before --for: {stdout}");
     assert!(stdout.contains("mission `w` ended: goal"), "{stdout}");
+}
+
+/// `petrel run CONFIG --for DURATION --no-remote` (logs off), under the process deadline;
+/// returns the output and its standard output as text.
+fn run_for(config: &std::path::Path, duration: &str) -> (std::process::Output, String) {
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                &config.display().to_string(),
+                "--for",
+                duration,
+                "--no-remote",
+            ])
+            .env("RUST_LOG", "off"),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    (out, stdout)
 }
