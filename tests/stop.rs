@@ -74,9 +74,11 @@ fn run_for_ends_the_process_when_a_spinning_step_holds_the_only_worker() {
 }
 
 #[test]
-fn with_a_free_worker_the_summary_says_which_module_was_killed() {
+fn a_module_that_does_not_stop_in_time_is_killed_and_the_summary_says_so() {
     let dir = tempfile::tempdir().unwrap();
-    let config = config(dir.path(), "spin");
+    // `hang`: a step that awaits forever, which the runtime can kill. (A step that blocks its
+    // thread may strand tasks tokio queued on that worker, so only the watchdog can end it.)
+    let config = config(dir.path(), "hang");
     let (code, summary, log) = run(
         dir.path(),
         &[

@@ -53,7 +53,7 @@ impl StopGuard {
             .build()?;
         std::thread::Builder::new()
             .name("petrel-stop-guard".into())
-            .spawn(move || runtime.block_on(watch_over(event_rx, request_tx, limit + SLACK)))?;
+            .spawn(move || runtime.block_on(watch_over(event_rx, request_tx, limit)))?;
         Ok(StopGuard { events, requests })
     }
 
@@ -94,11 +94,18 @@ impl StopGuard {
     }
 }
 
+/// A stop under way: when it began, and what every module was doing when the stop timeout
+/// ran out (taken then, so a step that began after the stop request still counts).
+struct Stopping {
+    since: Instant,
+    at_timeout: Option<Vec<StepSample>>,
+}
+
 /// The watchdog thread's loop; ends when the modules have stopped or the run's side is gone.
 async fn watch_over(
     mut events: mpsc::UnboundedReceiver<Event>,
     requests: watch::Sender<Option<StopRequest>>,
-    limit: Duration,
+    timeout: Duration,
 ) {
     use tokio::signal::unix::{signal, SignalKind};
     let (Ok(mut interrupts), Ok(mut terminations)) = (
@@ -110,29 +117,37 @@ async fn watch_over(
         );
         return;
     };
-    // `--for`: when, and the duration asked for.
     let mut probes: Vec<(String, StepProbe)> = Vec::new();
+    // `--for`: when, and the duration asked for.
     let mut run_until: Option<(Instant, Duration)> = None;
-    // When the stop began, and what every module was doing then.
-    let mut stop: Option<(Instant, Vec<StepSample>)> = None;
-    let ask = |stop: &mut Option<(Instant, Vec<StepSample>)>,
-               probes: &[(String, StepProbe)],
-               reason: String| {
+    let mut stop: Option<Stopping> = None;
+    let begin = |stop: &mut Option<Stopping>| {
+        stop.get_or_insert_with(|| Stopping {
+            since: Instant::now(),
+            at_timeout: None,
+        });
+    };
+    let ask = |stop: &mut Option<Stopping>, reason: String| {
         requests.send_replace(Some(StopRequest { reason, code: 0 }));
-        stop.get_or_insert_with(|| (Instant::now(), sample(probes)));
+        begin(stop);
     };
     loop {
         let deadline = match &stop {
-            Some((since, _)) => Some(*since + limit),
+            Some(Stopping {
+                since,
+                at_timeout: None,
+            }) => Some(*since + timeout),
+            Some(Stopping {
+                since,
+                at_timeout: Some(_),
+            }) => Some(*since + timeout + SLACK),
             None => run_until.map(|(at, _)| at),
         };
         tokio::select! {
             event = events.recv() => match event {
                 Some(Event::Watch(agent, probe)) => probes.push((agent, probe)),
                 Some(Event::RunFor(d)) => run_until = Some((Instant::now() + d, d)),
-                Some(Event::Stopping) => {
-                    stop.get_or_insert_with(|| (Instant::now(), sample(&probes)));
-                }
+                Some(Event::Stopping) => begin(&mut stop),
                 Some(Event::ModulesStopped) | None => return,
             },
             _ = interrupts.recv() => match stop {
@@ -142,19 +157,22 @@ async fn watch_over(
                 }
                 None => {
                     tracing::info!("stopping (Ctrl-C again to exit at once)");
-                    ask(&mut stop, &probes, "interrupted".into());
+                    ask(&mut stop, "interrupted".into());
                 }
             },
-            _ = terminations.recv() => ask(&mut stop, &probes, "terminated (SIGTERM)".into()),
-            _ = sleep_until(deadline) => match &stop {
-                Some((_, before)) => {
+            _ = terminations.recv() => ask(&mut stop, "terminated (SIGTERM)".into()),
+            _ = sleep_until(deadline) => match &mut stop {
+                Some(Stopping { at_timeout: at_timeout @ None, .. }) => {
+                    *at_timeout = Some(sample(&probes));
+                }
+                Some(Stopping { at_timeout: Some(before), .. }) => {
                     let stuck = stuck_modules(&probes, before);
-                    eprintln!("error: {}", forced_exit_message(limit, &stuck));
+                    eprintln!("error: {}", forced_exit_message(timeout + SLACK, &stuck));
                     std::process::exit(EXIT_FAILED.into());
                 }
                 None => {
                     let ran = run_until.take().map(|(_, d)| d).unwrap_or_default();
-                    ask(&mut stop, &probes, format!("ran for {}", humantime::format_duration(ran)));
+                    ask(&mut stop, format!("ran for {}", humantime::format_duration(ran)));
                 }
             },
         }
@@ -172,7 +190,7 @@ fn sample(probes: &[(String, StepProbe)]) -> Vec<StepSample> {
     probes.iter().map(|(_, probe)| probe.sample()).collect()
 }
 
-/// `agent/module` for every module inside the same step as when the stop began.
+/// `agent/module` for every module still inside the step it was in when the stop timeout ran out.
 fn stuck_modules(probes: &[(String, StepProbe)], before: &[StepSample]) -> Vec<String> {
     probes
         .iter()
@@ -194,7 +212,7 @@ fn forced_exit_message(limit: Duration, stuck: &[String]) -> String {
             "the modules did not stop within {waited}, though none is inside a step; ending the process"
         ),
         _ => format!(
-            "the modules did not stop within {waited}: ending the process, which kills {} (inside a step since the stop began: a loop that never yields or a blocking call)",
+            "the modules did not stop within {waited}: ending the process, which kills {} (inside a step since the stop timeout ran out: a loop that never yields or a blocking call)",
             stuck.join(", ")
         ),
     }
