@@ -87,7 +87,7 @@ impl Module for VictimMapper {
         for d in &self.detections.get().0 {
             if let Some(p) = core.add(pose, d) {
                 confirmed = true;
-                println!(
+                petrel_actors::outln!(
                     "[{}] victim {} confirmed at ({:.2}, {:.2})",
                     ctx.module(),
                     self.found.value() + 1,
