@@ -38,6 +38,23 @@ pub use petrel_team as team;
 
 use petrel_actors::{Module, ModuleRegistry};
 
+/// Loads an agent config as `petrel run` and `petrel check` do: its `contexts:` field adds the
+/// `contexts` module, and missions run on the agent's simulator clock when it has one.
+pub fn load(
+    config: impl AsRef<std::path::Path>,
+) -> Result<petrel_actors::ConfigFile, petrel_actors::ConfigErrors> {
+    cli::load(&config.as_ref().to_path_buf(), &[])
+}
+
+/// What `petrel check` runs on one agent's config: builds its registry and asks every module
+/// type, context manager and mission what it would refuse at init. A config that passes starts.
+pub fn check(
+    file: &petrel_actors::ConfigFile,
+    registry: &petrel_actors::ModuleRegistry,
+) -> Result<(), petrel_actors::ConfigErrors> {
+    cli::check_all(file, registry).map(|_| ())
+}
+
 /// Builds a `petrel` command line with the built-in module types plus your own.
 #[derive(Clone)]
 pub struct Petrel {

@@ -77,10 +77,11 @@ fn modules_lists_and_describes_types() {
     let out = petrel(&["modules", "describe", "demo.scale"]);
     let described = text(&out.stdout);
     assert!(
-        described.lines().any(|l| l.split_whitespace().take(4).eq([
+        described.lines().any(|l| l.split_whitespace().take(5).eq([
             "params/factor",
             "param",
             "f64",
+            "finite",
             "1.0"
         ])),
         "{described}"

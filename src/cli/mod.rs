@@ -2,6 +2,7 @@
 //! running agents (`ls`, `get`, `set`).
 
 mod check;
+pub(crate) use check::check_all;
 mod chrome;
 mod follow;
 mod graph;

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Schedule,
+    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Range, Schedule,
 };
 
 use crate::sim::context_log::ContextLog;
@@ -118,12 +118,18 @@ impl Module for Recorder {
                 String::new(),
                 "PNG file written at the end (empty = none)",
             ),
-            sample_m: ports.param(
+            sample_m: ports.param_in(
                 "params/sample_m",
                 0.05,
+                Range::new(0.001, 100.0),
                 "spacing of recorded trajectory points, m",
             ),
-            robot_radius: ports.param("params/robot_radius", 0.2, "robot radius drawn, m"),
+            robot_radius: ports.param_in(
+                "params/robot_radius",
+                0.2,
+                Range::new(0.01, 5.0),
+                "robot radius drawn, m",
+            ),
             distance: ports.output("out/distance", 0.0, "distance travelled, m"),
             pose_error: ports.output(
                 "out/poseError",

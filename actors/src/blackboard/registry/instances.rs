@@ -123,6 +123,7 @@ impl Registry {
             default: None,
             doc: "failures, restarts and give-ups of this agent's modules".into(),
             capacity: Some(EVENTS_CAPACITY),
+            range: None,
         };
         let handle = Handle::QueueOut(QueueCore::new(&key, type_info, EVENTS_CAPACITY));
         self.entries.insert(

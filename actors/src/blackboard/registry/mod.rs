@@ -141,6 +141,7 @@ impl Registry {
                         default: Some(Arc::new(0_i64)),
                         doc: format!("items `{}` lost by lagging behind its queue", decl.path),
                         capacity: None,
+                        range: None,
                     };
                     let key = format!("{module}/{}", dropped.path);
                     let entry = Entry {
@@ -384,9 +385,20 @@ impl Registry {
         value: AnyValue,
     ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
-        let kind = self.entries[&key].decl.kind;
+        let decl = &self.entries[&key].decl;
+        let kind = decl.kind;
         if !kind.settable() {
             return Err(BlackboardError::NotSettable { key, kind });
+        }
+        if let Some(check) = decl.range {
+            if let Some(refused) = check.refuses(&value) {
+                return Err(BlackboardError::OutOfRange {
+                    value: crate::range::short_number(refused),
+                    range: check.range.expected(),
+                    doc: decl.doc.clone(),
+                    key,
+                });
+            }
         }
         self.set_runtime(&key, type_info, value)
     }
