@@ -1,7 +1,8 @@
 //! Whole-system rescue tests: the shipped rescue configs (simulator with camera, scan-matching
-//! localizer, mapper, explorer, planner, avoidance, victim detector and mapper, context rules,
-//! supervision, recorder) run as real agents on tokio's paused clock, in an ASCII world and in
-//! a map_server YAML world, with and without injected faults.
+//! localizer, mapper, explorer, planner, avoidance, victim detector and mapper, the mission
+//! plan, context rules, supervision, recorder) run as real agents on tokio's paused clock, in
+//! an ASCII world and in a map_server YAML world, with and without injected faults. Each must
+//! end with the plan at its goal.
 
 use std::path::Path;
 use std::time::Duration;
@@ -35,6 +36,7 @@ fn config(name: &str, dir: &Path) -> ConfigFile {
 /// What a rescue run achieved.
 struct Outcome {
     exit_code: u8,
+    plan_result: String,
     victims: usize,
     found: usize,
     false_victims: usize,
@@ -52,12 +54,13 @@ async fn rescue(name: &str) -> Outcome {
         .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
     let exit = tokio::time::timeout(GUARD, agent.finished())
         .await
-        .expect("the exploration should end by itself");
+        .expect("the mission should end by itself");
     let bb = agent.blackboard().clone();
     let truth = bb.get::<Path2>("robot/out/worldVictims").await.unwrap();
     let found = bb.get::<Path2>("victims/out/victims").await.unwrap();
     let collisions = *bb.get::<i64>("robot/out/collisions").await.unwrap();
     let max_pose_error = *bb.get::<f64>("recorder/out/poseErrorMax").await.unwrap();
+    let plan_result = bb.get::<String>("mission/out/result").await.unwrap();
     let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
     let mut matched = 0;
     let mut worst = 0.0f64;
@@ -74,7 +77,7 @@ async fn rescue(name: &str) -> Outcome {
     }
     let restarts = summary.modules.iter().map(|m| m.restarts).sum();
     println!(
-        "{name}: {} ({}), victims {matched}/{} (+{} false, worst error {worst:.2} m), {collisions} collisions, pose error max {max_pose_error:.3} m, {restarts} restarts",
+        "{name}: {} ({}, plan {plan_result}), victims {matched}/{} (+{} false, worst error {worst:.2} m), {collisions} collisions, pose error max {max_pose_error:.3} m, {restarts} restarts",
         exit.code,
         exit.reason,
         truth.points().len(),
@@ -85,6 +88,7 @@ async fn rescue(name: &str) -> Outcome {
         .starts_with(b"\x89PNG"));
     Outcome {
         exit_code: exit.code,
+        plan_result: plan_result.to_string(),
         victims: truth.points().len(),
         found: matched,
         false_victims: found.points().len().saturating_sub(matched),
@@ -96,7 +100,8 @@ async fn rescue(name: &str) -> Outcome {
 }
 
 fn assert_rescued(o: &Outcome, victims: usize) {
-    assert_eq!(o.exit_code, 0, "exploration complete");
+    assert_eq!(o.plan_result, "goal", "the plan reached its goal");
+    assert_eq!(o.exit_code, 0, "the mission ended the run at its goal");
     assert_eq!(o.victims, victims);
     assert_eq!(o.found, victims, "every victim found within 0.5 m");
     assert_eq!(o.false_victims, 0);
