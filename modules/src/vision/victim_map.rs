@@ -10,7 +10,8 @@
 //! A mission then handles seen candidates one at a time: the *target* is the pending (seen,
 //! neither reported nor dismissed) candidate nearest to the robot, kept until it is reported
 //! (it joins the found list) or dismissed (a mission that could not confirm it); its approach
-//! pose is `standoff` metres from it on the side the robot saw it from, facing it. Sightings of
+//! pose is `standoff` metres from it on the line to the robot, facing it (the robot's own
+//! position once it is that close). Sightings of
 //! a dismissed candidate are absorbed by it and raise nothing again.
 
 use petrel_actors::{Point2, Pose2};
@@ -104,7 +105,7 @@ impl Candidate {
 pub struct Target {
     /// Its position, map frame.
     pub position: Point2,
-    /// Where to look at it from: `standoff` away, on the side it was seen from, facing it.
+    /// Where to look at it from: `standoff` away on the line to the robot, facing it.
     pub approach: Pose2,
     /// One of the last `view_frames` frames saw it.
     pub in_view: bool,
@@ -117,8 +118,8 @@ pub struct VictimMap {
     candidates: Vec<Candidate>,
     /// Frames so far (see [`VictimMap::next_frame`]).
     frame: u64,
-    /// The target's index and the robot position it was picked from.
-    target: Option<(usize, Point2)>,
+    /// The target's index.
+    target: Option<usize>,
     /// Reported candidates, in report order.
     reported: Vec<usize>,
 }
@@ -216,7 +217,7 @@ impl VictimMap {
         };
         if !self
             .target
-            .is_some_and(|(i, _)| open(&self.candidates[i], &self.params))
+            .is_some_and(|i| open(&self.candidates[i], &self.params))
         {
             self.target = self
                 .candidates
@@ -225,15 +226,16 @@ impl VictimMap {
                 .filter(|(_, c)| open(c, &self.params))
                 .map(|(i, c)| (i, (c.position().0 - robot.0).norm()))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(i, _)| (i, robot));
+                .map(|(i, _)| i);
         }
-        let (i, from) = self.target?;
+        let i = self.target?;
         let c = &self.candidates[i];
         let position = c.position();
-        let away = from.0 - position.0;
+        // On the line from the victim to the robot, so that the robot drives straight at it and
+        // ends up facing it; a robot already that close stays where it is.
+        let away = robot.0 - position.0;
         let approach = if away.norm() <= self.params.standoff {
-            // Picked from closer than the standoff: look from where the robot was.
-            from.0
+            robot.0
         } else {
             position.0 + away.normalize() * self.params.standoff
         };
@@ -247,7 +249,7 @@ impl VictimMap {
 
     /// Reports the target: it joins the found list. Returns its position (None: no target).
     pub fn report(&mut self) -> Option<Point2> {
-        let (i, _) = self.target.take()?;
+        let i = self.target.take()?;
         self.candidates[i].handling = Handling::Reported;
         self.reported.push(i);
         Some(self.candidates[i].position())
@@ -255,7 +257,7 @@ impl VictimMap {
 
     /// Dismisses the target (not a victim after all). Returns its position (None: no target).
     pub fn dismiss(&mut self) -> Option<Point2> {
-        let (i, _) = self.target.take()?;
+        let i = self.target.take()?;
         self.candidates[i].handling = Handling::Dismissed;
         Some(self.candidates[i].position())
     }
