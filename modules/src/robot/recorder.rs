@@ -366,7 +366,11 @@ impl Recorder {
         let contexts = self.contexts.get();
         line += &format!(
             "  contexts: {}",
-            if contexts.is_empty() { "-" } else { contexts.as_str() }
+            if contexts.is_empty() {
+                "-"
+            } else {
+                contexts.as_str()
+            }
         );
         println!("{line}");
     }

@@ -144,7 +144,9 @@ impl Module for VictimMapper {
             self.dismiss_done.set(self.dismiss.value());
         }
         let reported = core.reported();
-        if reported.len() as i64 != self.found.value() || reported.as_slice() != self.victims.get().points() {
+        if reported.len() as i64 != self.found.value()
+            || reported.as_slice() != self.victims.get().points()
+        {
             self.found.set(reported.len() as i64);
             self.victims.set(reported.into());
         }
@@ -154,18 +156,17 @@ impl Module for VictimMapper {
         }
         set_changed(&self.pending, core.pending() as i64);
         let target = core.target(pose.position());
-        let distance = target.map_or(NO_TARGET_DISTANCE, |t| (t.position.0 - pose.position().0).norm());
+        let distance = target.map_or(NO_TARGET_DISTANCE, |t| {
+            (t.position.0 - pose.position().0).norm()
+        });
         set_changed(&self.target_distance, distance);
         set_changed(&self.target_in_view, target.is_some_and(|t| t.in_view));
-        if let (Some(t), Ok(_)) = (target, std::env::var("RM_DEBUG")) {
-            let dets: Vec<String> = frame.value.0.iter().map(|d| format!("b{:.2} r{:.2} c{:.2}", d.bearing, d.range, d.confidence)).collect();
-            eprintln!("DBG robot ({:.2},{:.2},{:.2}) target ({:.2},{:.2}) appr ({:.2},{:.2}) view {} dets {:?}", pose.x(), pose.y(), pose.theta(), t.position.0.x, t.position.0.y, t.approach.x(), t.approach.y(), t.in_view, dets);
-        }
         if let Some(t) = target {
             // The approach pose moves as sightings refine the position: tell the planner only
             // of moves that matter, so it does not replan at every frame.
             let old = self.target.value();
-            if (old.position().0 - t.approach.position().0).norm() > 0.15 || old == Pose2::default() {
+            if (old.position().0 - t.approach.position().0).norm() > 0.15 || old == Pose2::default()
+            {
                 self.target.set(t.approach);
             }
         }

@@ -289,7 +289,10 @@ impl Binder<'_> {
         for (input, source) in &b.link {
             match self.link(input, source).await {
                 Ok(original) => a.links.push((input.clone(), source.clone(), original)),
-                Err(e) => self.problem(input, format!("{what}.link[\"{input}\"] (action `{full}`): {e}")),
+                Err(e) => self.problem(
+                    input,
+                    format!("{what}.link[\"{input}\"] (action `{full}`): {e}"),
+                ),
             }
         }
         a.restore = b.restore;
