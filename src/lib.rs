@@ -75,4 +75,14 @@ impl Petrel {
     pub fn main(self) -> std::process::ExitCode {
         cli::main(self.registry, std::env::args_os())
     }
+
+    /// Runs the `petrel` command line with `args` (the first names the program), e.g. from a
+    /// test of your own module types.
+    pub fn main_with<I, T>(self, args: I) -> std::process::ExitCode
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString>,
+    {
+        cli::main(self.registry, args.into_iter().map(Into::into))
+    }
 }

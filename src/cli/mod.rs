@@ -15,6 +15,7 @@ mod record;
 mod record_log;
 mod remote;
 mod run;
+mod stop_guard;
 mod top;
 mod trace;
 
@@ -223,7 +224,8 @@ pub(crate) struct RunArgs {
     #[arg(long)]
     snapshot_out: Option<PathBuf>,
     /// How long each module gets to stop before it is killed (default: each module's
-    /// `shutdown_timeout_ms`, else the agent's `supervision.shutdown_timeout_ms`, 5 s).
+    /// `shutdown_timeout_ms`, else the agent's `supervision.shutdown_timeout_ms`, 5 s). If a
+    /// step holds its thread for good, the process ends at the longest timeout + 0.5 s.
     #[arg(long, value_parser = humantime::parse_duration)]
     stop_timeout: Option<std::time::Duration>,
     /// Log format on standard error (filter with RUST_LOG, default `info`).

@@ -13,6 +13,7 @@ use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
 use super::check::{check_all, check_team};
+use super::stop_guard::StopGuard;
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
@@ -52,7 +53,10 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    runtime.block_on(run_agents(registry, &args, files))
+    let code = runtime.block_on(run_agents(registry, &args, files));
+    // A killed module whose step never yields still holds its worker thread: do not wait for it.
+    runtime.shutdown_timeout(std::time::Duration::from_millis(100));
+    code
 }
 
 /// Checked before anything runs: a snapshot that cannot be written, or would replace a file
@@ -98,13 +102,20 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         Ok(options) => options,
         Err(code) => return code,
     };
+    let guard = match StopGuard::start(stop_limit(args, &files)) {
+        Ok(guard) => guard,
+        Err(e) => {
+            eprintln!("error: cannot start the stop watchdog: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let mut agents = Vec::new();
     let mut teams = Vec::new();
-    let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
+    let started = start_all(registry, args, &files, &mut agents, &mut teams, &guard).await;
     let registration = match started {
         Ok(registration) => registration,
         Err(code) => {
-            stop_all(&agents, teams, args).await;
+            stop_all(&agents, teams, args, &guard).await;
             for agent in agents {
                 agent.shutdown().await;
             }
@@ -115,23 +126,19 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         Some(options) => match super::record::start(options, &agents).await {
             Ok(r) => Some(r),
             Err(code) => {
-                stop_all(&agents, Vec::new(), args).await;
+                stop_all(&agents, Vec::new(), args, &guard).await;
                 return code;
             }
         },
         None => None,
     };
-    let forever = std::future::pending::<()>();
+    if let Some(duration) = args.duration {
+        guard.run_for(duration);
+    }
     let (mut why, mut code) = tokio::select! {
         exit = first_exit(&agents) => (exit.reason, exit.code),
-        _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), 0),
+        asked = guard.requested() => (asked.reason, asked.code),
         _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
-        _ = async {
-            match args.duration {
-                Some(d) => tokio::time::sleep(d).await,
-                None => forever.await,
-            }
-        } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), 0),
     };
     if args.duration.is_some() && code == 0 && why.starts_with("ran for") {
         let pending = pending_missions(&agents, &files).await;
@@ -145,7 +152,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     for agent in &agents {
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }
-    let summaries = stop_all(&agents, teams, args).await;
+    let summaries = stop_all(&agents, teams, args, &guard).await;
     if let Some(recorder) = recorder {
         if let Err(e) = super::record::finish(recorder).await {
             tracing::error!("{e}");
@@ -180,10 +187,10 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let failed = summaries
         .iter()
         .flat_map(|s| &s.modules)
-        .any(|m| m.status == status::FAILED);
+        .any(|m| m.status == status::FAILED || m.status == status::KILLED);
     if failed {
         // A log event, so `--log-format json` consumers see it too.
-        tracing::error!("some modules failed: see the summary and the log");
+        tracing::error!("some modules failed or were killed: see the summary and the log");
         // A more specific reason (the supervisor gave up, a mission failed) keeps its code.
         if code == 0 {
             code = EXIT_FAILED;
@@ -218,6 +225,27 @@ async fn pending_missions(agents: &[Agent], files: &[ConfigFile]) -> Vec<String>
     pending
 }
 
+/// The longest a module of these agents may take to stop: `--stop-timeout`, else the longest
+/// `shutdown_timeout_ms` their configs give.
+fn stop_limit(args: &RunArgs, files: &[ConfigFile]) -> std::time::Duration {
+    args.stop_timeout.unwrap_or_else(|| {
+        let ms = files
+            .iter()
+            .flat_map(|f| {
+                let agent = f.config.supervision.shutdown_timeout_ms;
+                std::iter::once(agent).chain(
+                    f.config
+                        .modules
+                        .iter()
+                        .filter_map(|m| m.shutdown_timeout_ms),
+                )
+            })
+            .max()
+            .unwrap_or(0);
+        std::time::Duration::from_millis(ms)
+    })
+}
+
 /// Starts every agent, then joins each to its team or makes it reachable by tools (unless
 /// `--no-remote`); the registration makes the run findable while it is held.
 async fn start_all(
@@ -226,11 +254,15 @@ async fn start_all(
     files: &[ConfigFile],
     agents: &mut Vec<Agent>,
     teams: &mut Vec<Team>,
+    guard: &StopGuard,
 ) -> Result<Option<Registration>, ExitCode> {
     let not_started = args.replay.as_ref().map_or(&[][..], |r| &r.replace[..]);
     for file in files {
         match Agent::start_without(file, registry, not_started).await {
-            Ok(agent) => agents.push(agent),
+            Ok(agent) => {
+                guard.watch(agent.name(), agent.step_probe());
+                agents.push(agent);
+            }
             Err(StartError::Config(errors)) => return Err(bad_input(&errors)),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -244,17 +276,21 @@ async fn start_all(
     super::reach::join_all(agents, files, teams).await
 }
 
-/// Stops every agent's modules (last started first), then leaves the teams.
+/// Stops every agent's modules (last started first), then leaves the teams. The `guard`, once
+/// told, ends the process if the modules take longer than their stop timeout.
 async fn stop_all(
     agents: &[Agent],
     teams: Vec<Team>,
     args: &RunArgs,
+    guard: &StopGuard,
 ) -> Vec<petrel_actors::RunSummary> {
+    guard.stopping();
     let mut summaries = Vec::new();
     for agent in agents.iter().rev() {
         summaries.push(agent.stop_modules(args.stop_timeout).await);
     }
     summaries.reverse();
+    guard.modules_stopped();
     for team in teams {
         team.leave().await;
     }

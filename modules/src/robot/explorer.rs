@@ -174,7 +174,7 @@ impl Module for ExplorerModule {
                 self.frontiers.set(0);
                 self.done.set(true);
                 state.over = true;
-                println!(
+                petrel_actors::outln!(
                     "[{}] t = {t:6.1} s  exploration done: {:.0} m² known",
                     ctx.module(),
                     self.explored.value()

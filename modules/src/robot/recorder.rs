@@ -231,9 +231,9 @@ impl Module for Recorder {
             .iter()
             .map(|g| Pose2::new(g.0.x, g.0.y, 0.0))
             .collect();
-        println!("\n── mission summary ─────────────────────────");
+        petrel_actors::outln!("\n── mission summary ─────────────────────────");
         if !goals.is_empty() {
-            println!(
+            petrel_actors::outln!(
                 "goals reached    {} / {}",
                 self.reached.value(),
                 goals.len()
@@ -248,7 +248,7 @@ impl Module for Recorder {
                 .flatten()
                 .map(|e| format!("{e:.2}"))
                 .collect();
-            println!(
+            petrel_actors::outln!(
                 "victims found    {} / {} (position errors {} m; {} false)",
                 errors.len(),
                 truth.points().len(),
@@ -261,31 +261,31 @@ impl Module for Recorder {
             );
             for (v, e) in truth.points().iter().zip(&matched) {
                 if e.is_none() {
-                    println!("  missed victim  ({:.2}, {:.2})", v.0.x, v.0.y);
+                    petrel_actors::outln!("  missed victim  ({:.2}, {:.2})", v.0.x, v.0.y);
                 }
             }
         }
         let totals = self.context_log.totals(sim);
         if !totals.is_empty() {
-            println!("contexts         (switches on, time active)");
+            petrel_actors::outln!("contexts         (switches on, time active)");
             for (name, on, secs) in &totals {
-                println!("  {name:<14} {on:>3}x  {secs:6.1} s");
+                petrel_actors::outln!("  {name:<14} {on:>3}x  {secs:6.1} s");
             }
         }
         let explored = self.explored.value();
         if explored > 0.0 {
-            println!("explored area    {explored:.0} m²");
+            petrel_actors::outln!("explored area    {explored:.0} m²");
         }
-        println!("path length      {:.1} m", self.distance.value());
-        println!("collisions       {}", self.collisions.value());
+        petrel_actors::outln!("path length      {:.1} m", self.distance.value());
+        petrel_actors::outln!("collisions       {}", self.collisions.value());
         if let (sum, n @ 1.., max) = self.error_stats {
-            println!(
+            petrel_actors::outln!(
                 "pose error       mean {:.3} m, max {max:.3} m (estimate vs truth)",
                 sum / n as f64
             );
         }
-        println!("sim time         {sim:.1} s");
-        println!(
+        petrel_actors::outln!("sim time         {sim:.1} s");
+        petrel_actors::outln!(
             "wall time        {wall:.1} s ({:.1}x real time)",
             sim / wall.max(1e-9)
         );
@@ -311,7 +311,11 @@ impl Module for Recorder {
                 .collect();
             let layers = RenderLayers {
                 trajectory: &self.trajectory,
-                trajectory_colours: &self.colours,
+                // Without contexts, the trajectory shows time instead (blue to orange).
+                trajectory_colours: match totals.is_empty() {
+                    true => &[],
+                    false => &self.colours,
+                },
                 areas: &areas,
                 victims: &victims,
                 reported: found.points(),
@@ -328,14 +332,14 @@ impl Module for Recorder {
             };
             save_png(Path::new(png.as_str()), &self.map.get(), &layers)
                 .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;
-            println!("map + trajectory {png}");
+            petrel_actors::outln!("map + trajectory {png}");
             if !totals.is_empty() {
                 let legend: Vec<String> = totals
                     .iter()
                     .enumerate()
                     .map(|(i, (n, _, _))| format!("{n} {:?}", context_colour(n, i)))
                     .collect();
-                println!(
+                petrel_actors::outln!(
                     "  trajectory colour by context: none {NO_CONTEXT:?}, {}",
                     legend.join(", ")
                 );
@@ -372,7 +376,7 @@ impl Recorder {
                 contexts.as_str()
             }
         );
-        println!("{line}");
+        petrel_actors::outln!("{line}");
     }
 
     /// Appends a trajectory point, coloured by the highest-priority active context.

@@ -128,7 +128,7 @@ impl Module for GoalSequencerModule {
             self.reached.set(now.reached as i64);
         }
         let line = |what: &str| {
-            println!(
+            petrel_actors::outln!(
                 "[{}] t = {t:6.1} s  pose ({:6.2}, {:6.2}, {:4.0}°)  goals {}/{total}  {what}",
                 ctx.module(),
                 pose.x(),

@@ -105,7 +105,7 @@ impl Module for VictimMapper {
             core.next_frame();
             for d in &frame.value.0 {
                 if let Some(p) = core.add(pose, d) {
-                    println!(
+                    petrel_actors::outln!(
                         "[{}] victim seen at ({:.2}, {:.2})",
                         ctx.module(),
                         p.0.x,
@@ -118,7 +118,7 @@ impl Module for VictimMapper {
         if self.report.value() != self.report_done.value() {
             if self.report.value() {
                 if let Some(p) = core.report() {
-                    println!(
+                    petrel_actors::outln!(
                         "[{}] victim {} reported at ({:.2}, {:.2})",
                         ctx.module(),
                         self.found.value() + 1,
@@ -132,7 +132,7 @@ impl Module for VictimMapper {
         if self.dismiss.value() != self.dismiss_done.value() {
             if self.dismiss.value() {
                 if let Some(p) = core.dismiss() {
-                    println!(
+                    petrel_actors::outln!(
                         "[{}] not a victim: candidate at ({:.2}, {:.2}) dismissed",
                         ctx.module(),
                         p.0.x,
