@@ -1,7 +1,8 @@
 //! Whole-system rescue tests: the shipped rescue configs (simulator with camera, scan-matching
-//! localizer, mapper, explorer, planner, avoidance, victim detector and mapper, context rules,
-//! supervision, recorder) run as real agents on tokio's paused clock, in an ASCII world and in
-//! a map_server YAML world, with and without injected faults.
+//! localizer, mapper, explorer, planner, avoidance, victim detector and mapper, the mission
+//! plan, context rules, supervision, recorder) run as real agents on tokio's paused clock, in
+//! an ASCII world and in a map_server YAML world, with and without injected faults. Each must
+//! end with the plan at its goal.
 
 use std::path::Path;
 use std::time::Duration;
@@ -35,6 +36,7 @@ fn config(name: &str, dir: &Path) -> ConfigFile {
 /// What a rescue run achieved.
 struct Outcome {
     exit_code: u8,
+    plan_result: String,
     victims: usize,
     found: usize,
     false_victims: usize,
@@ -52,12 +54,13 @@ async fn rescue(name: &str) -> Outcome {
         .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
     let exit = tokio::time::timeout(GUARD, agent.finished())
         .await
-        .expect("the exploration should end by itself");
+        .expect("the mission should end by itself");
     let bb = agent.blackboard().clone();
     let truth = bb.get::<Path2>("robot/out/worldVictims").await.unwrap();
     let found = bb.get::<Path2>("victims/out/victims").await.unwrap();
     let collisions = *bb.get::<i64>("robot/out/collisions").await.unwrap();
     let max_pose_error = *bb.get::<f64>("recorder/out/poseErrorMax").await.unwrap();
+    let plan_result = bb.get::<String>("mission/out/result").await.unwrap();
     let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
     let mut matched = 0;
     let mut worst = 0.0f64;
@@ -74,7 +77,7 @@ async fn rescue(name: &str) -> Outcome {
     }
     let restarts = summary.modules.iter().map(|m| m.restarts).sum();
     println!(
-        "{name}: {} ({}), victims {matched}/{} (+{} false, worst error {worst:.2} m), {collisions} collisions, pose error max {max_pose_error:.3} m, {restarts} restarts",
+        "{name}: {} ({}, plan {plan_result}), victims {matched}/{} (+{} false, worst error {worst:.2} m), {collisions} collisions, pose error max {max_pose_error:.3} m, {restarts} restarts",
         exit.code,
         exit.reason,
         truth.points().len(),
@@ -85,6 +88,7 @@ async fn rescue(name: &str) -> Outcome {
         .starts_with(b"\x89PNG"));
     Outcome {
         exit_code: exit.code,
+        plan_result: plan_result.to_string(),
         victims: truth.points().len(),
         found: matched,
         false_victims: found.points().len().saturating_sub(matched),
@@ -96,7 +100,8 @@ async fn rescue(name: &str) -> Outcome {
 }
 
 fn assert_rescued(o: &Outcome, victims: usize) {
-    assert_eq!(o.exit_code, 0, "exploration complete");
+    assert_eq!(o.plan_result, "goal", "the plan reached its goal");
+    assert_eq!(o.exit_code, 0, "the mission ended the run at its goal");
     assert_eq!(o.victims, victims);
     assert_eq!(o.found, victims, "every victim found within 0.5 m");
     assert_eq!(o.false_victims, 0);
@@ -117,7 +122,7 @@ async fn every_victim_is_found_in_the_ascii_rescue_world() {
 }
 
 #[tokio::test(start_paused = true)]
-#[ignore = "known gap: the victim in the warehouse's top-right nook (17.5, 17.5) is missed on the paused clock (4/5 found, 0 false, 0 collisions); run with --ignored"]
+#[ignore = "known gap: the warehouse's top-right nook victim (17.5, 17.5) is passed only 0.9 m away, too close for the detector, and seen from nowhere else (BENCHMARKS.md, rescue robot); 4/5 found, 0 false, 0 collisions, plan goal; run with --ignored"]
 async fn every_victim_is_found_in_the_map_server_warehouse() {
     let o = rescue("robot-warehouse.ron").await;
     assert_rescued(&o, 5);
@@ -132,4 +137,72 @@ async fn the_rescue_finishes_with_faults_injected() {
         "faults were injected and healed: {}",
         o.restarts
     );
+}
+
+/// The shipped mission plan against scripted worlds (`petrel plan simulate`'s simulator):
+/// which actions start, and how the plan ends.
+fn simulate_mission(script: &str) -> (String, petrel::plans::PlanStatus) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/rescue");
+    let plan = petrel::plans::load_plan(&dir.join("mission.plan"), Some(&dir.join("mission.er")))
+        .unwrap_or_else(|e| panic!("mission.plan should load: {e}"))
+        .plan;
+    let script = petrel::plans::Script::parse(script, "script").unwrap();
+    let mut out = Vec::new();
+    let status = petrel::plans::simulate(&plan, &script, 200, &mut out).unwrap();
+    (String::from_utf8(out).unwrap(), status)
+}
+
+#[test]
+fn the_mission_plan_interrupts_exploring_for_a_victim_and_resumes() {
+    let (trace, status) = simulate_mission("finish explore 6\ncond victim_waiting 2 6");
+    assert_eq!(status, petrel::plans::PlanStatus::Goal, "{trace}");
+    for call in [
+        "explore.interrupt",
+        "approach.start",
+        "confirm.start",
+        "report.start",
+        "say_every_victim_reported.start",
+    ] {
+        assert!(trace.contains(call), "no {call} in\n{trace}");
+    }
+    assert_eq!(
+        trace.matches("explore.start").count(),
+        2,
+        "explores again after the report:\n{trace}"
+    );
+    assert!(!trace.contains("dismiss.start"), "{trace}");
+}
+
+#[test]
+fn the_mission_plan_recovers_when_lost_dismisses_what_it_cannot_confirm_and_fails_on_time() {
+    let (trace, status) = simulate_mission("finish explore 8\ncond lost 2 3");
+    assert_eq!(status, petrel::plans::PlanStatus::Goal, "{trace}");
+    assert!(
+        trace.contains("recover.start") && trace.matches("explore.start").count() == 2,
+        "{trace}"
+    );
+
+    let (trace, status) =
+        simulate_mission("finish explore 6\ncond victim_waiting 2 6\nfail confirm 1");
+    assert_eq!(status, petrel::plans::PlanStatus::Goal, "{trace}");
+    assert!(
+        trace.contains("dismiss.start") && !trace.contains("report.start"),
+        "{trace}"
+    );
+
+    let (trace, status) =
+        simulate_mission("finish explore 6\ncond victim_waiting 2 6\nfail approach 1");
+    assert_eq!(
+        status,
+        petrel::plans::PlanStatus::Goal,
+        "an unreachable victim is confirmed from afar:\n{trace}"
+    );
+    assert!(
+        trace.contains("confirm.start") && trace.contains("report.start"),
+        "{trace}"
+    );
+
+    let (trace, status) = simulate_mission("finish explore -1\ncond time_up 5 200");
+    assert_eq!(status, petrel::plans::PlanStatus::Fail, "{trace}");
+    assert!(trace.contains("say_time_is_up.start"), "{trace}");
 }

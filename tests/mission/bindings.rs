@@ -222,3 +222,61 @@ async fn expressions_read_the_latest_item_of_a_queue() {
     );
     stop(agent).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn linked_inputs_follow_the_action_and_get_their_link_back() {
+    // `b` links c1's increment to c2's value (2 after `a`) while it runs: c1 counts in twos.
+    let plans = Plans::new(&[("link.plan", "a; b")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/actions": {{
+            "a": (enable: ["c2"], finished: "c2/out/value >= 2"),
+            "b": (enable: ["c1"], link: {{"c1/params/increment": "c2/out/value"}},
+                  finished: "c1/out/value >= 4"),
+        }}"#,
+        plans.path("link.plan")
+    )))
+    .await;
+    assert_eq!(finished(&agent).await.code, 0);
+    let bb = agent.blackboard();
+    assert_eq!(
+        *bb.get::<f64>("c1/out/value").await.unwrap(),
+        4.0,
+        "two steps of 2"
+    );
+    assert_eq!(
+        bb.link_of("c1/params/increment").await.unwrap(),
+        None,
+        "link restored"
+    );
+    assert_eq!(*bb.get::<f64>("c1/params/increment").await.unwrap(), 1.0);
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn links_of_the_wrong_type_or_to_outputs_are_refused_at_init() {
+    let plans = Plans::new(&[("badlink.plan", "a; b")]);
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/actions": {{
+            "a": (link: {{"c1/params/increment": "m/out/result"}}, finished: "true"),
+            "b": (link: {{"c1/out/value": "c2/out/value"}}, finished: "true"),
+        }}"#,
+        plans.path("badlink.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 2, "{}", exit.reason);
+    let summary = stop(agent).await;
+    let err = summary
+        .module("m")
+        .unwrap()
+        .last_error
+        .clone()
+        .unwrap_or_default();
+    for want in [
+        r#"m/params/actions["a"].link["c1/params/increment"] (action `a`): `c1/params/increment` is a "#,
+        "but `m/out/result` is a ",
+        r#"m/params/actions["b"].link["c1/out/value"] (action `b`): `c1/out/value` is not an input or parameter"#,
+    ] {
+        assert!(err.contains(want), "missing `{want}` in:\n{err}");
+    }
+}

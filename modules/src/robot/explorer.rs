@@ -11,6 +11,10 @@ use crate::nav::{explore, known_area, Exploration, FrontierParams};
 /// (the planner answers a new target at its next step; older flags are about the last one).
 const FLAG_GRACE_S: f64 = 0.5;
 
+/// Simulated seconds without a step after which the explorer was paused (disabled, e.g. by a
+/// mission that sent the robot elsewhere): its target then starts afresh, without blame.
+const PAUSE_S: f64 = 1.0;
+
 /// `nav.explorer`: wraps [`explore`].
 pub struct ExplorerModule {
     map: Input<OccupancyGrid>,
@@ -41,6 +45,8 @@ struct State {
     current: Option<(Point2, f64)>,
     blacklist: Vec<Point2>,
     last_plan: f64,
+    /// Simulated time of the last step.
+    last_step: f64,
     over: bool,
 }
 
@@ -105,6 +111,7 @@ impl Module for ExplorerModule {
             current: None,
             blacklist: Vec::new(),
             last_plan: f64::NEG_INFINITY,
+            last_step: f64::NEG_INFINITY,
             over: false,
         });
         Ok(())
@@ -119,6 +126,12 @@ impl Module for ExplorerModule {
         if state.over {
             return Ok(());
         }
+        if t - state.last_step > PAUSE_S && state.current.is_some() {
+            // Back from a pause: the robot is elsewhere, the planner's flags are about another
+            // target, and the time away says nothing about this one. Choose again.
+            state.current = None;
+        }
+        state.last_step = t;
         let timeout = self.timeout_s.value();
         if timeout > 0.0 && t > timeout && self.end_run.value() {
             state.over = true;

@@ -38,6 +38,10 @@ pub struct Recorder {
     true_victims: Input<Path2>,
     explored: Input<f64>,
     contexts: Input<String>,
+    activity: Input<String>,
+    progress_s: Input<f64>,
+    /// Simulated time of the last progress line.
+    last_progress: f64,
     dark: Input<Vec<f64>>,
     rough: Input<Vec<f64>>,
     context_log: ContextLog,
@@ -99,6 +103,18 @@ impl Module for Recorder {
                 String::new(),
                 "active contexts, highest priority first (link to contexts/out/active)",
             ),
+            activity: ports.input(
+                "in/activity",
+                String::new(),
+                "what the robot is doing, for progress lines (link to a mission's out/running)",
+            ),
+            progress_s: ports.param_in(
+                "params/progress_s",
+                0.0,
+                Range::new(0.0, 1e7),
+                "print a progress line every this many simulated seconds (0 = none)",
+            ),
+            last_progress: 0.0,
             dark: ports.input(
                 "in/darkAreas",
                 Vec::new(),
@@ -200,6 +216,12 @@ impl Module for Recorder {
             }
         }
         self.last = Some(p);
+        let t = self.sim_time.value();
+        let every = self.progress_s.value();
+        if every > 0.0 && t - self.last_progress >= every {
+            self.last_progress = t;
+            self.progress(t);
+        }
         Ok(())
     }
 
@@ -335,6 +357,35 @@ impl Module for Recorder {
 }
 
 impl Recorder {
+    /// One progress line: simulated time, share of the map known, victims found, what the
+    /// robot is doing, active contexts.
+    fn progress(&self, t: f64) {
+        let map = self.map.get();
+        let area = map.width as f64 * map.height as f64 * map.resolution * map.resolution;
+        let mut line = format!("[{}] t = {t:6.1} s", "progress");
+        if area > 0.0 {
+            line += &format!("  explored {:3.0} %", 100.0 * self.explored.value() / area);
+        }
+        let truth = self.true_victims.get().points().len();
+        if truth > 0 {
+            line += &format!("  victims {} / {truth}", self.victims.get().points().len());
+        }
+        let activity = self.activity.get();
+        if !activity.is_empty() {
+            line += &format!("  doing: {activity}");
+        }
+        let contexts = self.contexts.get();
+        line += &format!(
+            "  contexts: {}",
+            if contexts.is_empty() {
+                "-"
+            } else {
+                contexts.as_str()
+            }
+        );
+        petrel_actors::outln!("{line}");
+    }
+
     /// Appends a trajectory point, coloured by the highest-priority active context.
     fn record(&mut self, p: Point2) {
         let active = self.contexts.get();

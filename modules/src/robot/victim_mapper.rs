@@ -1,4 +1,5 @@
-//! `vision.victim_mapper`: detections + estimated pose in, victims in the map frame out.
+//! `vision.victim_mapper`: detections + estimated pose in, victims in the map frame out, and
+//! the one a mission handles now (its target, report and dismiss).
 
 use anyhow::anyhow;
 use petrel_actors::types::Path2;
@@ -7,72 +8,73 @@ use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Range, Schedul
 use super::count;
 use crate::vision::{Detections, VictimMap, VictimMapParams};
 
+/// `targetDistance` when there is no target: farther than any map.
+const NO_TARGET_DISTANCE: f64 = 1e6;
+
 /// `vision.victim_mapper`: wraps [`VictimMap`].
 pub struct VictimMapper {
     detections: Input<Detections>,
     robot: Input<Pose2>,
+    report: Input<bool>,
+    dismiss: Input<bool>,
     merge_radius: Input<f64>,
     confirm_hits: Input<i64>,
     min_confidence: Input<f64>,
     max_range: Input<f64>,
+    standoff: Input<f64>,
+    view_frames: Input<i64>,
     victims: Output<Path2>,
     found: Output<i64>,
+    seen: Output<Path2>,
+    pending: Output<i64>,
+    target: Output<Pose2>,
+    target_distance: Output<f64>,
+    target_in_view: Output<bool>,
+    report_done: Output<bool>,
+    dismiss_done: Output<bool>,
+    dismissed: Output<i64>,
+    /// The detections version last added (a step may be for a command only).
+    frame_version: Option<u64>,
     core: Option<VictimMap>,
 }
 
 impl Module for VictimMapper {
     const TYPE: &'static str = "vision.victim_mapper";
     const DESCRIPTION: &'static str =
-        "Turns repeated victim detections and the robot pose into de-duplicated victim positions in the map frame.";
+        "Turns repeated victim detections and the robot pose into de-duplicated victim positions in the map frame; a mission reports or dismisses them one at a time.";
 
     fn declare(ports: &mut Ports) -> Self {
         VictimMapper {
-            detections: ports.input(
-                "in/detections",
-                Detections::default(),
-                "detections of the latest frame",
-            ),
-            robot: ports.input(
-                "in/robotPose",
-                Pose2::default(),
-                "estimated robot pose (camera at its centre, looking ahead)",
-            ),
-            merge_radius: ports.param_in(
-                "params/merge_radius",
-                1.5,
-                Range::new(0.01, 100.0),
-                "sightings this close are one victim, m",
-            ),
-            confirm_hits: ports.param_in(
-                "params/confirm_hits",
-                3,
-                Range::new(1.0, 1000.0),
-                "sightings that confirm a victim",
-            ),
-            min_confidence: ports.param_in(
-                "params/min_confidence",
-                0.1,
-                Range::new(0.0, 1.0),
-                "weaker detections are ignored, 0..1",
-            ),
-            max_range: ports.param_in(
-                "params/max_range",
-                5.0,
-                Range::new(0.1, 100.0),
-                "farther detections are ignored, m",
-            ),
-            victims: ports.output(
-                "out/victims",
-                Path2::default(),
-                "confirmed victims, map frame, in the order found",
-            ),
-            found: ports.output("out/found", 0, "confirmed victims"),
+            detections: ports.input("in/detections", Detections::default(), "detections of the latest frame"),
+            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead)"),
+            report: ports.input("in/report", false, "while true: the target is reported (joins out/victims), then out/reportDone is true"),
+            dismiss: ports.input("in/dismiss", false, "while true: the target is dismissed (not a victim), then out/dismissDone is true"),
+            merge_radius: ports.param_in("params/merge_radius", 1.5, Range::new(0.01, 100.0), "sightings this close are one victim, m"),
+            confirm_hits: ports.param_in("params/confirm_hits", 3, Range::new(1.0, 1000.0), "sightings that make a seen victim"),
+            min_confidence: ports.param_in("params/min_confidence", 0.1, Range::new(0.0, 1.0), "weaker detections are ignored, 0..1"),
+            max_range: ports.param_in("params/max_range", 5.0, Range::new(0.1, 100.0), "farther detections are ignored, m"),
+            standoff: ports.param_in("params/standoff", 1.0, Range::new(0.01, 20.0), "distance of the approach pose from the target, m"),
+            view_frames: ports.param_in("params/view_frames", 3, Range::new(1.0, 1000.0), "the target is in view while one of the last this many frames saw it"),
+            victims: ports.output("out/victims", Path2::default(), "reported victims (the found list), map frame, in report order"),
+            found: ports.output("out/found", 0, "reported victims"),
+            seen: ports.output("out/seen", Path2::default(), "seen victims, reported or pending, map frame"),
+            pending: ports.output("out/pending", 0, "seen victims neither reported nor dismissed"),
+            target: ports.output("out/target", Pose2::default(), "approach pose of the target (the pending victim handled now): standoff away, facing it"),
+            target_distance: ports.output("out/targetDistance", NO_TARGET_DISTANCE, "robot to target, m (1e6 when none)"),
+            target_in_view: ports.output("out/targetInView", false, "the target is in the camera's view"),
+            report_done: ports.output("out/reportDone", false, "in/report was carried out (false again when in/report is)"),
+            dismiss_done: ports.output("out/dismissDone", false, "in/dismiss was carried out (false again when in/dismiss is)"),
+            dismissed: ports.output("out/dismissed", 0, "candidates dismissed so far"),
+            frame_version: None,
             core: None,
         }
     }
 
     fn schedule(&self) -> Schedule {
-        Schedule::new().on_change(&self.detections)
+        Schedule::new()
+            .on_change(&self.detections)
+            .on_change(&self.report)
+            .on_change(&self.dismiss)
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
@@ -81,6 +83,8 @@ impl Module for VictimMapper {
             confirm_hits: count("confirm_hits", self.confirm_hits.value())? as u32,
             min_confidence: self.min_confidence.value(),
             max_range: self.max_range.value(),
+            standoff: self.standoff.value(),
+            view_frames: count("view_frames", self.view_frames.value())? as u32,
         };
         params
             .validate()
@@ -95,26 +99,84 @@ impl Module for VictimMapper {
             .as_mut()
             .expect("stepping only after a successful init");
         let pose = self.robot.value();
-        let mut confirmed = false;
-        for d in &self.detections.get().0 {
-            if let Some(p) = core.add(pose, d) {
-                confirmed = true;
-                petrel_actors::outln!(
-                    "[{}] victim {} confirmed at ({:.2}, {:.2})",
-                    ctx.module(),
-                    self.found.value() + 1,
-                    p.0.x,
-                    p.0.y
-                );
-                self.found.set(self.found.value() + 1);
+        let frame = self.detections.read();
+        if self.frame_version != Some(frame.version) {
+            self.frame_version = Some(frame.version);
+            core.next_frame();
+            for d in &frame.value.0 {
+                if let Some(p) = core.add(pose, d) {
+                    petrel_actors::outln!(
+                        "[{}] victim seen at ({:.2}, {:.2})",
+                        ctx.module(),
+                        p.0.x,
+                        p.0.y
+                    );
+                }
             }
         }
-        // Positions keep improving with every sighting; publish them when a victim is added
-        // or every time a confirmed one was seen again.
-        let now = core.confirmed();
-        if confirmed || (!now.is_empty() && !self.detections.get().0.is_empty()) {
-            self.victims.set(now.into());
+        // Commands: carried out once per request, acknowledged until the request is withdrawn.
+        if self.report.value() != self.report_done.value() {
+            if self.report.value() {
+                if let Some(p) = core.report() {
+                    petrel_actors::outln!(
+                        "[{}] victim {} reported at ({:.2}, {:.2})",
+                        ctx.module(),
+                        self.found.value() + 1,
+                        p.0.x,
+                        p.0.y
+                    );
+                }
+            }
+            self.report_done.set(self.report.value());
+        }
+        if self.dismiss.value() != self.dismiss_done.value() {
+            if self.dismiss.value() {
+                if let Some(p) = core.dismiss() {
+                    petrel_actors::outln!(
+                        "[{}] not a victim: candidate at ({:.2}, {:.2}) dismissed",
+                        ctx.module(),
+                        p.0.x,
+                        p.0.y
+                    );
+                    self.dismissed.set(self.dismissed.value() + 1);
+                }
+            }
+            self.dismiss_done.set(self.dismiss.value());
+        }
+        let reported = core.reported();
+        if reported.len() as i64 != self.found.value()
+            || reported.as_slice() != self.victims.get().points()
+        {
+            self.found.set(reported.len() as i64);
+            self.victims.set(reported.into());
+        }
+        let seen = core.seen();
+        if seen.as_slice() != self.seen.get().points() {
+            self.seen.set(seen.into());
+        }
+        set_changed(&self.pending, core.pending() as i64);
+        let target = core.target(pose.position());
+        let distance = target.map_or(NO_TARGET_DISTANCE, |t| {
+            (t.position.0 - pose.position().0).norm()
+        });
+        set_changed(&self.target_distance, distance);
+        set_changed(&self.target_in_view, target.is_some_and(|t| t.in_view));
+        if let Some(t) = target {
+            // The approach pose moves as sightings refine the position: tell the planner only
+            // of moves that matter, so it does not replan at every frame.
+            let old = self.target.value();
+            if (old.position().0 - t.approach.position().0).norm() > 0.15 || old == Pose2::default()
+            {
+                self.target.set(t.approach);
+            }
         }
         Ok(())
+    }
+}
+
+/// Writes `v` if it differs from the output's value (watchers wake only on news).
+fn set_changed<T: petrel_actors::PropertyType + PartialEq>(out: &Output<T>, v: T) {
+    if *out.get() != v {
+        out.set(v);
     }
 }

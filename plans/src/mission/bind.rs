@@ -24,6 +24,9 @@ pub(crate) struct BoundAction {
     pub set: Vec<(AnyHandle, AnyValue)>,
     /// What `set` replaced, while the action is active.
     pub saved: Option<Vec<AnyValue>>,
+    /// Input, the source it is linked to while the action runs, and its link when the mission
+    /// was bound (what `restore` puts back).
+    pub links: Vec<(String, String, Option<String>)>,
     pub restore: bool,
     pub finished: Option<ExprId>,
     pub failed: Option<ExprId>,
@@ -51,6 +54,16 @@ pub(crate) struct Bound {
     /// Atoms with no expression: read from the mission's `in/conditions`.
     pub defaults: Vec<String>,
     pub actions: HashMap<String, BoundAction>,
+    /// Relinks that actions' calls asked for, in order, carried out after the plan step
+    /// (linking is a blackboard request, which a plan step cannot wait for).
+    pub relinks: Vec<Relink>,
+}
+
+/// One relink an action call asked for: `input` to `source`, or unlinked.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Relink {
+    pub input: String,
+    pub source: Option<String>,
 }
 
 /// Actions (sub-plans' included) and external conditions of a plan, each once, sorted.
@@ -135,6 +148,23 @@ impl Binder<'_> {
             .ok_or_else(|| format!("unknown property `{path}`"))
     }
 
+    /// Checks that `input` can be linked to `source` (an input or parameter, a source of the
+    /// same type); returns the link `input` has now, which `restore` puts back.
+    async fn link(&mut self, input: &str, source: &str) -> Result<Option<String>, String> {
+        let to = self.handle(input).await?;
+        if !matches!(input.split('/').nth(1), Some("in" | "params")) {
+            return Err(format!(
+                "`{input}` is not an input or parameter; only those can be linked"
+            ));
+        }
+        let from = self.handle(source).await?;
+        let (want, have) = (to.type_info().name(), from.type_info().name());
+        if want != have {
+            return Err(format!("`{input}` is a {want}, but `{source}` is a {have}"));
+        }
+        self.bb.link_of(input).await.map_err(|e| e.to_string())
+    }
+
     /// Checks boolean expression `src`, reporting errors as `what: line:col: message`, located
     /// at `needle`.
     async fn expr(&mut self, src: &str, what: &str, needle: &str) -> Option<ExprId> {
@@ -175,6 +205,7 @@ impl Binder<'_> {
             enable: Vec::new(),
             set: Vec::new(),
             saved: None,
+            links: Vec::new(),
             restore: true,
             finished: None,
             failed: None,
@@ -253,6 +284,15 @@ impl Binder<'_> {
                     );
                     self.problem(path, message);
                 }
+            }
+        }
+        for (input, source) in &b.link {
+            match self.link(input, source).await {
+                Ok(original) => a.links.push((input.clone(), source.clone(), original)),
+                Err(e) => self.problem(
+                    input,
+                    format!("{what}.link[\"{input}\"] (action `{full}`): {e}"),
+                ),
             }
         }
         a.restore = b.restore;
@@ -368,6 +408,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
             conditions,
             defaults,
             actions,
+            relinks: Vec::new(),
         }),
         warnings,
     }

@@ -17,7 +17,11 @@ pub struct ActionBinding {
     /// Properties set on start / resume (`module/path` → value). A value that is exactly
     /// `"$N"` becomes the parameter read as RON (a number stays a number).
     pub set: BTreeMap<String, ron::Value>,
-    /// Whether end / interrupt / fail put back the values `set` replaced (default true).
+    /// Inputs relinked on start / resume (`module/in/x` → `other/out/y`): the action points a
+    /// module at a source it chooses while it runs (the planner's target at a victim).
+    pub link: BTreeMap<String, String>,
+    /// Whether end / interrupt / fail put back the values `set` replaced and the links `link`
+    /// changed (default true).
     pub restore: bool,
     /// Boolean expression: the action finished (empty: only an interrupt ends it).
     pub finished: String,
@@ -55,12 +59,13 @@ impl<'de> Deserialize<'de> for ActionBindings {
                 match field.as_str() {
                     "enable" => b.enable = value.into_rust().map_err(bad)?,
                     "set" => b.set = value.into_rust().map_err(bad)?,
+                    "link" => b.link = value.into_rust().map_err(bad)?,
                     "restore" => b.restore = value.into_rust().map_err(bad)?,
                     "finished" => b.finished = value.into_rust().map_err(bad)?,
                     "failed" => b.failed = value.into_rust().map_err(bad)?,
                     other => {
                         return Err(serde::de::Error::custom(format!(
-                            "action `{name}`: unknown field `{other}`; expected enable, set, restore, finished or failed"
+                            "action `{name}`: unknown field `{other}`; expected enable, set, link, restore, finished or failed"
                         )))
                     }
                 }

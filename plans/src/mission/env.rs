@@ -4,7 +4,7 @@
 
 use tokio::time::Instant;
 
-use super::bind::{Bound, BoundAction};
+use super::bind::{Bound, BoundAction, Relink};
 use super::config::Flags;
 use super::memory::{MissionMemory, RunningAction};
 use crate::exec::Environment;
@@ -21,8 +21,9 @@ pub(crate) struct MissionEnv<'a> {
 }
 
 impl BoundAction {
-    /// `start` / `resume`: remember what `set` replaces (once), write it, enable the modules.
-    pub fn activate(&mut self) {
+    /// `start` / `resume`: remember what `set` replaces (once), write it, enable the modules,
+    /// ask for the action's links (into `relinks`).
+    pub fn activate(&mut self, relinks: &mut Vec<Relink>) {
         if self.saved.is_none() {
             self.saved = Some(self.set.iter().map(|(h, _)| h.value()).collect());
         }
@@ -32,12 +33,23 @@ impl BoundAction {
         for e in &self.enable {
             write(e, std::sync::Arc::new(true));
         }
+        relinks.extend(self.links.iter().map(|(input, source, _)| Relink {
+            input: input.clone(),
+            source: Some(source.clone()),
+        }));
     }
 
-    /// `end` / `interrupt` / `fail`: disable the modules, put back what `set` replaced.
-    pub fn deactivate(&mut self) {
+    /// `end` / `interrupt` / `fail`: disable the modules, put back what `set` replaced and
+    /// (into `relinks`) the links `link` changed.
+    pub fn deactivate(&mut self, relinks: &mut Vec<Relink>) {
         for e in &self.enable {
             write(e, std::sync::Arc::new(false));
+        }
+        if self.restore && self.saved.is_some() {
+            relinks.extend(self.links.iter().map(|(input, _, original)| Relink {
+                input: input.clone(),
+                source: original.clone(),
+            }));
         }
         if let Some(saved) = self.saved.take() {
             if self.restore {
@@ -144,9 +156,11 @@ impl Environment for MissionEnv<'_> {
                 if let Some(text) = &a.log {
                     tracing::info!(action = name, "{text}");
                 }
-                a.activate();
+                a.activate(&mut self.bound.relinks);
             }
-            CallKind::End | CallKind::Interrupt | CallKind::Fail => a.deactivate(),
+            CallKind::End | CallKind::Interrupt | CallKind::Fail => {
+                a.deactivate(&mut self.bound.relinks)
+            }
         }
     }
 }

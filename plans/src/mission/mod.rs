@@ -12,6 +12,7 @@
 //!         "count": (
 //!             enable: ["counter"],              // enabled while the action runs
 //!             set: {"counter/state/count": 0},  // written at start, restored at the end
+//!             link: {"counter/in/tick": "clock/out/tick"},  // relinked at start, restored at the end
 //!             restore: true,                    // (default)
 //!             finished: "counter/out/value >= $1",  // boolean expressions
 //!             failed: "counter/stats/failures > 0",

@@ -10,7 +10,7 @@ use petrel_actors::{
 use tokio::sync::watch;
 use tokio::time::Instant;
 
-use super::bind::Bound;
+use super::bind::{Bound, Relink};
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
 use super::env::MissionEnv;
 use super::memory::MissionMemory;
@@ -126,6 +126,7 @@ impl Module for Mission {
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
         for round in 1.. {
             let report = run.round(now, secs, &self.flags.get());
+            relink(ctx, &mut run.bound.relinks).await;
             fired += report.fired.len();
             if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
                 break;
@@ -151,8 +152,9 @@ impl Module for Mission {
         if status != PlanStatus::Running {
             run.done = true;
             for a in run.bound.actions.values_mut().filter(|a| a.active()) {
-                a.deactivate();
+                a.deactivate(&mut run.bound.relinks);
             }
+            relink(ctx, &mut run.bound.relinks).await;
             let mut reason = format!("mission `{}` ended: {}", run.plan.name(), status.as_str());
             if let Some(action) = run.state.unhandled_failure(&run.plan) {
                 let why = run
@@ -363,6 +365,21 @@ impl Mission {
         publish(&self.marking, marking(&run.plan, &run.state));
         self.run = Some(run);
         Ok(())
+    }
+}
+
+/// Carries out the relinks the plan step's calls asked for, in order; a refused one is logged
+/// (they were checked when the mission was bound).
+async fn relink(ctx: &Context, relinks: &mut Vec<Relink>) {
+    for r in relinks.drain(..) {
+        let bb = ctx.blackboard();
+        let result = match &r.source {
+            Some(source) => bb.link(&r.input, source).await,
+            None => bb.unlink(&r.input).await,
+        };
+        if let Err(e) = result {
+            tracing::error!(input = %r.input, source = ?r.source, error = %e, "binding relink refused");
+        }
     }
 }
 
