@@ -759,3 +759,25 @@ fn outputs_never_replace_inputs_and_bad_destinations_are_refused_before_running(
     assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
     assert_eq!(std::fs::read_to_string(&plan).unwrap(), "a; b\n");
 }
+
+#[test]
+fn check_warns_about_a_module_that_reads_its_own_output() {
+    let (_dir, config) = temp_config(
+        "self.ron",
+        r#"Agent(name: "r", modules: [
+    (name: "c", type: "demo.counter"),
+    (name: "s", type: "demo.scale", links: {"in/value": "s/out/value"}),
+])"#,
+    );
+    let out = petrel(&["check", config.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(0), "a warning, not an error");
+    let warnings = text(&out.stderr);
+    assert!(
+        warnings.contains(&format!(
+            "{}:3:45: warning: module `s`: `in/value` reads its own `out/value`",
+            config.display()
+        )),
+        "{warnings}"
+    );
+    assert!(!warnings.contains("module `c`"), "{warnings}");
+}

@@ -179,6 +179,15 @@ pub(crate) fn check_all(
             errors.extend(rule_errors);
         }
     }
+    for (module, input, output) in self_feeding_links(&built) {
+        let message = format!(
+            "module `{module}`: `{input}` reads its own `{output}`: every step that changes it wakes the next, a loop that runs as fast as the CPU allows unless the module stops changing it"
+        );
+        eprintln!(
+            "{}",
+            file.error(&module, Some(&input), message).as_warning()
+        );
+    }
     let missions: Vec<&str> = file
         .config
         .modules
@@ -196,6 +205,24 @@ pub(crate) fn check_all(
         true => Ok(agent),
         false => Err(ConfigErrors(errors)),
     }
+}
+
+/// Inputs linked to an output or state of their own module, as (module, input, output) paths.
+fn self_feeding_links(built: &Registry) -> Vec<(String, String, String)> {
+    let mut found = Vec::new();
+    for module in built.modules() {
+        let prefix = format!("{module}/");
+        for decl in built.declarations(module) {
+            let key = format!("{prefix}{}", decl.path);
+            let Some(target) = built.link_of(&key) else {
+                continue;
+            };
+            if let Some(own) = target.strip_prefix(&prefix) {
+                found.push((module.clone(), decl.path.clone(), own.to_string()));
+            }
+        }
+    }
+    found
 }
 
 /// The value of `module`'s file parameter `path`, if it has one.
@@ -261,8 +288,8 @@ fn check_missions(file: &ConfigFile, built: Registry, missions: &[&str]) -> Vec<
                 Ok(warnings) => {
                     for w in warnings {
                         eprintln!(
-                            "warning: {}",
-                            file.error(module, Some(&w.needle), w.message)
+                            "{}",
+                            file.error(module, Some(&w.needle), w.message).as_warning()
                         );
                     }
                 }

@@ -51,19 +51,29 @@ impl ConfigError {
     }
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl ConfigError {
+    /// The same place and message as a warning: `file:line:column: warning: message`.
+    pub fn as_warning(&self) -> String {
+        self.show("warning")
+    }
+
+    fn show(&self, severity: &str) -> String {
         match self.line {
-            0 => write!(f, "{}: error: {}", self.file.display(), self.message),
-            _ => write!(
-                f,
-                "{}:{}:{}: error: {}",
+            0 => format!("{}: {severity}: {}", self.file.display(), self.message),
+            _ => format!(
+                "{}:{}:{}: {severity}: {}",
                 self.file.display(),
                 self.line,
                 self.column,
                 self.message
             ),
         }
+    }
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.show("error"))
     }
 }
 
