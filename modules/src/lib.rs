@@ -9,6 +9,7 @@
 pub mod demo;
 pub mod nav;
 pub mod robot;
+pub mod seeded;
 pub mod sim;
 pub mod vision;
 

@@ -2,8 +2,7 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context as _};
 use petrel_actors::{AnyHandle, Context, Module, Output, Param, Ports, Range, Schedule};
-use rand::rngs::SmallRng;
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 
 /// Faults `demo.chaos` knows how to inject.
 const FAULTS: [&str; 3] = ["panic", "hang", "error"];
@@ -21,7 +20,7 @@ pub struct Chaos {
     injected: Output<i64>,
     handles: Vec<(String, AnyHandle)>,
     kinds: Vec<&'static str>,
-    rng: SmallRng,
+    rng: crate::seeded::SeededRng,
 }
 
 /// Splits a comma-separated list, trimming blanks.
@@ -59,7 +58,7 @@ impl Module for Chaos {
             injected: ports.output("out/injected", 0, "faults injected so far"),
             handles: Vec::new(),
             kinds: Vec::new(),
-            rng: SmallRng::seed_from_u64(1),
+            rng: crate::seeded::seeded(1),
         }
     }
 
@@ -91,7 +90,7 @@ impl Module for Chaos {
         if self.kinds.is_empty() {
             bail!("params/faults is empty; expected panic, hang or error");
         }
-        self.rng = SmallRng::seed_from_u64(self.seed.value() as u64);
+        self.rng = crate::seeded::seeded(self.seed.value() as u64);
         Ok(())
     }
 

@@ -8,7 +8,6 @@ use petrel_actors::{
     CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2,
     QueueWriter, Range, Schedule, Twist2, Unrecoverable,
 };
-use rand::SeedableRng;
 use tokio::time::Instant;
 
 use super::{check_params, count, param_error};
@@ -100,7 +99,7 @@ struct Sim {
     /// Victims and dark and rough areas, for the camera.
     features: WorldFeatures,
     /// The camera's own noise stream and the simulated time of its next frame.
-    camera_rng: rand::rngs::StdRng,
+    camera_rng: crate::seeded::SeededRng,
     next_frame: f64,
 }
 
@@ -238,7 +237,7 @@ impl Module for SimWorld {
             last_wake: ctx.now(),
             command_seen: (0, 0.0),
             features: map.features,
-            camera_rng: rand::rngs::StdRng::seed_from_u64(seed ^ 0xCA3E_7A00),
+            camera_rng: crate::seeded::seeded(seed ^ 0xCA3E_7A00),
             next_frame: 0.0,
         });
         Ok(())

@@ -23,7 +23,6 @@ pub mod robot;
 use std::sync::Arc;
 
 use petrel_actors::{LaserScan, Pose2, Twist2};
-use rand::SeedableRng;
 
 pub use error::{ParamError, WorldFileError};
 pub use features::{Rect, WorldFeatures};
@@ -114,9 +113,8 @@ impl World {
         }
         let id = self.robots.len();
         // Each robot has its own stream so adding a robot does not change the others' noise.
-        let rng = rand::rngs::StdRng::seed_from_u64(
-            self.seed ^ (id as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-        );
+        let rng =
+            crate::seeded::seeded(self.seed ^ (id as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
         self.robots.push(Robot {
             config,
             pose: start,

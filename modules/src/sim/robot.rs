@@ -2,8 +2,8 @@
 
 use std::f64::consts::PI;
 
+use crate::seeded::SeededRng;
 use petrel_actors::{LaserScan, Pose2, Twist2};
-use rand::rngs::StdRng;
 use rand_distr::{Distribution, Normal};
 
 use super::error::{non_negative, positive, ParamError};
@@ -131,7 +131,7 @@ pub(crate) struct Robot {
     pub(crate) collisions: u64,
     pub(crate) in_contact: bool,
     pub(crate) next_scan: Option<f64>,
-    pub(crate) rng: StdRng,
+    pub(crate) rng: SeededRng,
 }
 
 /// Fraction of the radius that one collision sub-step may move the robot: small enough that a
@@ -292,6 +292,6 @@ fn ray_disc(x: f64, y: f64, angle: f64, d: Disc) -> f64 {
 }
 
 /// One sample of N(0, std); std 0 still draws so that the RNG stream does not depend on motion.
-fn gauss(rng: &mut StdRng, std: f64) -> f64 {
+fn gauss(rng: &mut SeededRng, std: f64) -> f64 {
     Normal::new(0.0, std.max(0.0)).map_or(0.0, |n| n.sample(rng))
 }
