@@ -264,7 +264,8 @@ function drawMap(m) {
 
 function drawCamera(image) {
   const canvas = $("camera");
-  if (!image) { canvas.hidden = true; return; }
+  // No camera, or no frame yet (a queue's default item is an empty image).
+  if (!image || !image.width || !image.height) { canvas.hidden = true; return; }
   canvas.hidden = false;
   canvas.width = image.width; canvas.height = image.height;
   const ctx = canvas.getContext("2d");

@@ -31,6 +31,14 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         eprintln!("error: --overlay and --snapshot-out take one agent; run each agent with its own `petrel run` to use them");
         return ExitCode::from(EXIT_BAD_INPUT);
     }
+    if let Some(addr) = args.console {
+        // The token rules are checked before anything starts (binding comes later).
+        let given = args.console_token.as_deref();
+        if let Err(e) = petrel_console::core::access::Access::for_bind(addr, given, String::new) {
+            eprintln!("error: --console {addr}: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
     if let Some(out) = &args.snapshot_out {
         if let Err(e) = check_destination(out, &args) {
             eprintln!("error: --snapshot-out {}: {e}", out.display());
@@ -121,6 +129,19 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         },
         None => None,
     };
+    let console = match args.console {
+        Some(addr) => {
+            match super::console::start(addr, args.console_token.clone(), &agents).await {
+                Ok(console) => Some(console),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    stop_all(&agents, Vec::new(), args).await;
+                    return ExitCode::from(EXIT_BAD_INPUT);
+                }
+            }
+        }
+        None => None,
+    };
     let forever = std::future::pending::<()>();
     let (mut why, mut code) = tokio::select! {
         exit = first_exit(&agents) => (exit.reason, exit.code),
@@ -142,6 +163,9 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     }
     // Tools stop finding the run before its agents stop answering.
     drop(registration);
+    if let Some(console) = console {
+        super::console::stop(console).await;
+    }
     for agent in &agents {
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }

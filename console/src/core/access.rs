@@ -21,6 +21,9 @@ pub enum BindError {
     /// A short token is guessable.
     #[error("the console token is {0} characters long; give at least {MIN_TOKEN_LEN}")]
     ShortToken(usize),
+    /// The token travels in URLs: only characters that need no escaping.
+    #[error("the console token may hold only letters, digits, `-`, `_`, `.` and `~`; `{0}` is none of these")]
+    TokenChar(char),
 }
 
 /// Shortest token accepted from the command line.
@@ -48,6 +51,9 @@ impl Access {
             Some(t) if t.chars().count() < MIN_TOKEN_LEN => {
                 Err(BindError::ShortToken(t.chars().count()))
             }
+            Some(t) if !t.chars().all(url_safe) => Err(BindError::TokenChar(
+                t.chars().find(|c| !url_safe(*c)).unwrap_or(' '),
+            )),
             Some(t) => Ok(Access {
                 token: Some(t.to_string()),
                 generated: false,
@@ -71,6 +77,10 @@ impl Access {
             (Some(_), None) => false,
         }
     }
+}
+
+fn url_safe(c: char) -> bool {
+    c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '~')
 }
 
 /// Compares in time that depends only on the lengths, so a token is not guessed byte by byte.
@@ -190,6 +200,10 @@ mod tests {
         assert_eq!(
             Access::for_bind(addr("10.0.0.1:1"), Some(""), String::new),
             Err(BindError::EmptyToken)
+        );
+        assert_eq!(
+            Access::for_bind(addr("10.0.0.1:1"), Some("0123456789abcdef&x"), String::new),
+            Err(BindError::TokenChar('&'))
         );
     }
 

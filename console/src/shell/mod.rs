@@ -121,7 +121,7 @@ fn generate_token() -> Result<String, String> {
 
 fn router(shared: Arc<Shared>) -> Router {
     Router::new()
-        .route("/", get(|| asset(INDEX_HTML, "text/html; charset=utf-8")))
+        .route("/", get(index))
         .route(
             "/app.js",
             get(|| asset(APP_JS, "text/javascript; charset=utf-8")),
@@ -149,6 +149,27 @@ fn router(shared: Arc<Shared>) -> Router {
 const INDEX_HTML: &str = include_str!("../../assets/index.html");
 const APP_JS: &str = include_str!("../../assets/app.js");
 const STYLE_CSS: &str = include_str!("../../assets/style.css");
+
+/// The page; with a token, its script and style sheet are asked for with it (a browser sends
+/// the page's query to neither).
+async fn index(State(shared): State<Arc<Shared>>) -> Response {
+    let page = match &shared.access.token {
+        Some(t) => INDEX_HTML
+            .replace("\"app.js\"", &format!("\"app.js?token={t}\""))
+            .replace("\"style.css\"", &format!("\"style.css?token={t}\"")),
+        None => INDEX_HTML.to_string(),
+    };
+    (
+        [
+            (header::CONTENT_TYPE, "text/html; charset=utf-8"),
+            (header::CACHE_CONTROL, "no-store"),
+            // The token is in the page's address: never pass it on.
+            (header::REFERRER_POLICY, "no-referrer"),
+        ],
+        page,
+    )
+        .into_response()
+}
 
 async fn asset(body: &'static str, content_type: &'static str) -> Response {
     (
