@@ -98,7 +98,18 @@ async fn the_websocket_pushes_a_value_as_it_changes() {
     }
     assert!(seen[1].0 > seen[0].0, "a newer version is pushed: {seen:?}");
     assert_ne!(seen[1].1, seen[0].1, "the value changed: {seen:?}");
+    // Stopping the console closes its sockets (it does not wait for clients to leave).
     console.stop().await;
+    let closed = async {
+        while let Some(Ok(m)) = futures_util::StreamExt::next(&mut socket).await {
+            if m.is_close() {
+                return;
+            }
+        }
+    };
+    tokio::time::timeout(DEADLINE, closed)
+        .await
+        .expect("the socket closed when the console stopped");
     agent.stop(None).await;
 }
 

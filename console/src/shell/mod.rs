@@ -101,17 +101,25 @@ impl Console {
         }
     }
 
-    /// Stops serving: open WebSockets close, background readers end.
+    /// Stops serving: open WebSockets close, background readers end, and the server waits
+    /// (at most a second) for answers under way.
     pub async fn stop(mut self) {
+        self.shared.stop();
         if let Some(s) = self.shutdown.take() {
             let _ = s.send(());
         }
-        self.shared.stop();
-        // Open WebSockets would hold a graceful shutdown forever: end the server outright.
-        self.server.abort();
-        let _ = (&mut self.server).await;
+        if tokio::time::timeout(STOP_GRACE, &mut self.server)
+            .await
+            .is_err()
+        {
+            self.server.abort();
+            let _ = (&mut self.server).await;
+        }
     }
 }
+
+/// How long a stopping console waits for requests under way.
+const STOP_GRACE: std::time::Duration = std::time::Duration::from_secs(1);
 
 fn generate_token() -> Result<String, String> {
     let mut bytes = [0u8; 16];

@@ -100,6 +100,8 @@ pub(crate) struct Shared {
     pub bound: SocketAddr,
     pub started: Instant,
     tasks: Mutex<Vec<JoinHandle<()>>>,
+    /// Turns true when the console stops: open WebSockets close on it.
+    stopping: tokio::sync::watch::Sender<bool>,
 }
 
 impl Shared {
@@ -135,6 +137,7 @@ impl Shared {
             bound,
             started,
             tasks: Mutex::new(tasks),
+            stopping: tokio::sync::watch::Sender::new(false),
         }
     }
 
@@ -143,10 +146,19 @@ impl Shared {
         self.agents.iter().find(|a| a.name == name)
     }
 
-    /// Ends the background readers.
+    /// Ends the background readers and tells open WebSockets to close.
     pub fn stop(&self) {
+        self.stopping.send_replace(true);
         for task in self.tasks.lock().drain(..) {
             task.abort();
+        }
+    }
+
+    /// Resolves when the console stops.
+    pub fn stopped(&self) -> impl std::future::Future<Output = ()> + Send + 'static {
+        let mut stopping = self.stopping.subscribe();
+        async move {
+            let _ = stopping.wait_for(|s| *s).await;
         }
     }
 }

@@ -40,7 +40,7 @@ pub(crate) async fn upgrade(
     }
     ws.on_upgrade(move |socket| async move {
         let agent = shared.agent(&q.agent).expect("checked before the upgrade");
-        if let Err(e) = serve(socket, agent).await {
+        if let Err(e) = serve(socket, agent, shared.stopped()).await {
             tracing::debug!(error = %e, "console socket closed");
         }
     })
@@ -63,11 +63,16 @@ struct Watched {
     throttle: Throttle,
 }
 
-async fn serve(mut socket: WebSocket, agent: &AgentState) -> Result<(), axum::Error> {
+async fn serve(
+    mut socket: WebSocket,
+    agent: &AgentState,
+    stopped: impl std::future::Future<Output = ()>,
+) -> Result<(), axum::Error> {
     let mut watched = Watched {
         handles: Vec::new(),
         throttle: Throttle::default(),
     };
+    let mut stopped = std::pin::pin!(stopped);
     loop {
         let wake = tokio::time::Instant::from_std(watched.throttle.next_check(Instant::now()));
         tokio::select! {
@@ -86,6 +91,10 @@ async fn serve(mut socket: WebSocket, agent: &AgentState) -> Result<(), axum::Er
                 }
             }
             _ = tokio::time::sleep_until(wake) => {}
+            _ = &mut stopped => {
+                let _ = socket.send(Message::Close(None)).await;
+                return Ok(());
+            }
         }
         let now = Instant::now();
         let values: Vec<_> = watched
