@@ -3,7 +3,8 @@
 
 use std::collections::VecDeque;
 
-use petrel_actors::AgentListing;
+use petrel_actors::types::Path2;
+use petrel_actors::{AgentListing, AnyValue, Image, LaserScan, OccupancyGrid};
 use serde::Serialize;
 use serde_json::Value;
 
@@ -145,6 +146,27 @@ pub fn graph(listing: &AgentListing) -> GraphView {
     }
 }
 
+/// A one-line summary of a bulky value (grid, image, scan, path) in place of its display:
+/// formatting 40,000 grid cells to show the first few costs more than the module that made them.
+pub fn bulky_summary(value: &AnyValue) -> Option<String> {
+    if let Some(g) = value.downcast_ref::<OccupancyGrid>() {
+        return Some(format!(
+            "OccupancyGrid {}×{} cells of {} m",
+            g.width, g.height, g.resolution
+        ));
+    }
+    if let Some(i) = value.downcast_ref::<Image>() {
+        return Some(format!("Image {}×{} {}", i.width, i.height, i.encoding));
+    }
+    if let Some(l) = value.downcast_ref::<LaserScan>() {
+        return Some(format!("LaserScan {} rays", l.ranges.len()));
+    }
+    if let Some(p) = value.downcast_ref::<Path2>() {
+        return Some(format!("Path2 {} points", p.points().len()));
+    }
+    None
+}
+
 /// The last `capacity` things that happened, oldest first.
 #[derive(Debug, Clone)]
 pub struct Recent<T> {
@@ -265,6 +287,27 @@ mod tests {
                     queue: true
                 },
             ]
+        );
+    }
+
+    #[test]
+    fn bulky_values_are_summarised_without_formatting_their_contents() {
+        let grid: AnyValue = std::sync::Arc::new(OccupancyGrid {
+            width: 200,
+            height: 100,
+            resolution: 0.05,
+            origin: Default::default(),
+            data: vec![0i8; 20_000].into(),
+        });
+        assert_eq!(
+            bulky_summary(&grid).as_deref(),
+            Some("OccupancyGrid 200×100 cells of 0.05 m")
+        );
+        let path: AnyValue = std::sync::Arc::new(Path2::default());
+        assert_eq!(bulky_summary(&path).as_deref(), Some("Path2 0 points"));
+        assert_eq!(
+            bulky_summary(&(std::sync::Arc::new(1.5f64) as AnyValue)),
+            None
         );
     }
 

@@ -2,7 +2,7 @@
 //! events, context switches, plan firings), each read through a tap as it happens.
 
 use std::sync::Arc;
-use std::time::Instant;
+use tokio::time::Instant;
 
 use parking_lot::Mutex;
 use petrel_actors::team::{QueueTap, Tap, ValueTap};

@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::Arc;
-use std::time::Instant;
+use tokio::time::Instant;
 
 use parking_lot::Mutex;
 use petrel_actors::{AgentListing, AnyHandle, Blackboard, BlackboardError};
@@ -14,7 +14,7 @@ use tokio::task::JoinHandle;
 use crate::core::access::Access;
 use crate::core::plan::{Firing, PlanGraph};
 use crate::core::throttle::is_bulky;
-use crate::core::view::Recent;
+use crate::core::view::{self, Recent};
 use crate::{AgentSource, LogTail};
 
 /// Events and switches kept per agent.
@@ -87,7 +87,7 @@ pub(crate) fn value_view(handle: &AnyHandle, full: bool) -> ValueView {
         key: handle.key().to_string(),
         type_name: type_info.name().to_string(),
         version: sample.version,
-        text: type_info.short(&sample.value),
+        text: view::bulky_summary(&sample.value).unwrap_or_else(|| type_info.short(&sample.value)),
         json,
     }
 }

@@ -74,7 +74,8 @@ async fn serve(
     };
     let mut stopped = std::pin::pin!(stopped);
     loop {
-        let wake = tokio::time::Instant::from_std(watched.throttle.next_check(Instant::now()));
+        // Tokio's clock, not the system's: under a paused test clock the two differ.
+        let wake = tokio::time::Instant::from_std(watched.throttle.next_check(now()));
         tokio::select! {
             incoming = socket.recv() => {
                 let Some(message) = incoming.transpose()? else { return Ok(()) };
@@ -96,7 +97,7 @@ async fn serve(
                 return Ok(());
             }
         }
-        let now = Instant::now();
+        let now = now();
         let values: Vec<_> = watched
             .handles
             .iter()
@@ -108,6 +109,10 @@ async fn serve(
             send(&mut socket, json!({ "values": values })).await?;
         }
     }
+}
+
+fn now() -> Instant {
+    tokio::time::Instant::now().into_std()
 }
 
 async fn send(socket: &mut WebSocket, message: Value) -> Result<(), axum::Error> {
