@@ -15,13 +15,28 @@ use serde_json::{json, Value};
 use super::state::{value_view, AgentState, Shared};
 use crate::core::{access, map, plan, view};
 
-type Api = Result<Json<Value>, Response>;
+type Api = Result<Json<Value>, ApiError>;
 
-fn error(status: StatusCode, message: impl Into<String>) -> Response {
-    (status, Json(json!({ "error": message.into() }))).into_response()
+/// A refused request: its status and the reason, answered as `{"error": reason}`.
+pub(crate) struct ApiError {
+    status: StatusCode,
+    message: String,
 }
 
-fn agent<'a>(shared: &'a Shared, name: &str) -> Result<&'a AgentState, Response> {
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        (self.status, Json(json!({ "error": self.message }))).into_response()
+    }
+}
+
+fn error(status: StatusCode, message: impl Into<String>) -> ApiError {
+    ApiError {
+        status,
+        message: message.into(),
+    }
+}
+
+fn agent<'a>(shared: &'a Shared, name: &str) -> Result<&'a AgentState, ApiError> {
     shared.agent(name).ok_or_else(|| {
         let known: Vec<&str> = shared.agents.iter().map(|a| a.name.as_str()).collect();
         error(
@@ -31,7 +46,7 @@ fn agent<'a>(shared: &'a Shared, name: &str) -> Result<&'a AgentState, Response>
     })
 }
 
-fn unavailable(e: impl std::fmt::Display) -> Response {
+fn unavailable(e: impl std::fmt::Display) -> ApiError {
     error(StatusCode::SERVICE_UNAVAILABLE, e.to_string())
 }
 
