@@ -32,15 +32,13 @@ async fn a_robot_s_map_and_camera_are_served() {
     let console = console_for(&agent, None).await;
     let addr = console.local_addr();
 
-    // Wait, over the WebSocket, for the first grid and the first camera frame.
+    // Wait, over the WebSocket, for the first grid, scan and camera frame (a queue's latest
+    // item is followed from when it is first asked for: until the next push, its default).
     let mut socket = websocket(addr, "/api/ws?agent=robot1", &[]).await.unwrap();
-    send(
-        &mut socket,
-        json!({"watch": ["mapper/out/map", "robot/out/image"]}),
-    )
-    .await;
-    let (mut grid, mut frame) = (false, false);
-    while !(grid && frame) {
+    let watch = ["mapper/out/map", "robot/out/image", "robot/out/laserScan"];
+    send(&mut socket, json!({ "watch": watch })).await;
+    let (mut grid, mut frame, mut scan) = (false, false, false);
+    while !(grid && frame && scan) {
         for v in next(&mut socket).await["values"]
             .as_array()
             .into_iter()
@@ -49,6 +47,7 @@ async fn a_robot_s_map_and_camera_are_served() {
             let text = v["text"].as_str().unwrap();
             grid |= v["key"] == "mapper/out/map" && !text.starts_with("OccupancyGrid 0×0");
             frame |= v["key"] == "robot/out/image" && text == "Image 160×120 mono8";
+            scan |= v["key"] == "robot/out/laserScan" && text == "LaserScan 181 rays";
         }
     }
 

@@ -119,8 +119,8 @@ pub enum OriginError {
 }
 
 /// Checks `Host` and `Origin` against the bound address: the host must be the bound address
-/// itself or, on loopback, `localhost`/`127.0.0.1`/`[::1]` with the bound port; an `Origin`
-/// must be `http://` followed by that same host.
+/// itself or, on loopback, `localhost`/`127.0.0.1`/`[::1]` (bound to every interface, any name)
+/// with the bound port; an `Origin` must be `http://` followed by that same host.
 pub fn check_origin(
     bound: SocketAddr,
     host: Option<&str>,
@@ -149,7 +149,13 @@ fn host_is_console(bound: SocketAddr, host: &str) -> bool {
     if name == bound.ip().to_string() {
         return true;
     }
-    bound.ip().is_loopback() && matches!(name, "localhost" | "127.0.0.1" | "::1")
+    match bound.ip() {
+        ip if ip.is_loopback() => matches!(name, "localhost" | "127.0.0.1" | "::1"),
+        // Bound to every interface: reached by any of the machine's names. Beyond loopback a
+        // token is always required, and a rebinding page does not have it.
+        ip if ip.is_unspecified() => true,
+        _ => false,
+    }
 }
 
 /// Whether the console may write a property of this kind: parameters and controls only, as
@@ -239,6 +245,10 @@ mod tests {
         let wide = addr("192.0.2.7:9000");
         assert!(check_origin(wide, Some("192.0.2.7:9000"), Some("http://192.0.2.7:9000")).is_ok());
         assert!(check_origin(wide, Some("localhost:9000"), None).is_err());
+        let every = addr("0.0.0.0:9000");
+        assert!(check_origin(every, Some("robot.lan:9000"), Some("http://robot.lan:9000")).is_ok());
+        assert!(check_origin(every, Some("robot.lan:9001"), None).is_err());
+        assert!(check_origin(every, Some("robot.lan:9000"), Some("http://evil.example")).is_err());
     }
 
     #[test]
