@@ -291,7 +291,11 @@ async function refresh() {
       api(agentPath("/events")), api(agentPath("/contexts")), api("/api/logs"), api(agentPath("/plans"))]);
     feed("events", events.events, (e) => `${e.time_s.toFixed(2)}s ${e.module} ${e.kind}: ${e.reason}`);
     $("active").textContent = Object.entries(contexts.active).map(([m, a]) => `${m}: ${a || "(none)"}`).join("; ") || "no context manager";
-    feed("switches", contexts.switches, (s) => `${s.module}: ${JSON.stringify(s.change)}`);
+    feed("switches", contexts.switches, (s) => {
+      const c = s.change || {};
+      return c.context === undefined ? `${s.module}: ${JSON.stringify(c)}`
+        : `${Number(c.time_s).toFixed(2)}s ${s.module}: ${c.context} ${c.active ? "on" : "off"}`;
+    });
     $("log").textContent = logs.lines.slice(-200).map((l) =>
       `${new Date(l.unix_ms).toISOString().slice(11, 23)} ${l.level} ${l.target}: ${l.message}`).join("\n");
     if (plans.plans.length) drawPlan(plans.plans[0]);

@@ -166,7 +166,9 @@ pub fn writable(kind: PropertyKind) -> bool {
 
 /// Why a write was refused, in words for the field it came from.
 pub fn refusal(key: &str, kind: PropertyKind) -> String {
-    format!("`{key}` is a {kind} property: the console writes only params/ and control/ properties")
+    format!(
+        "`{key}` ({kind}) cannot be set from the console: only params/ and control/ properties can"
+    )
 }
 
 #[cfg(test)]
