@@ -100,6 +100,9 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     // Listen before the agents start, so a SIGHUP sent as soon as the rules are loaded is a
     // reload, not the default "terminate".
     let hangups = Hangups::listen();
+    // Likewise Ctrl-C: from here on it stops the run cleanly (a tool that sends SIGINT as soon
+    // as the console answers must not kill the process before the wait below begins).
+    let mut interrupts = Interrupts::listen();
     let workers = tokio::runtime::Handle::current().metrics().num_workers();
     tracing::info!(workers, "modules run on {workers} worker thread(s)");
     let recording = match super::record::options(args.record.as_ref(), args.record_format, &files) {
@@ -119,6 +122,24 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             return code;
         }
     };
+    // Before the recorder, so a console that cannot listen leaves no recording behind.
+    let console = match args.console {
+        Some(addr) => {
+            match super::console::start(addr, args.console_token.clone(), &agents).await {
+                Ok(console) => Some(console),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    drop(registration);
+                    stop_all(&agents, teams, args).await;
+                    for agent in agents {
+                        agent.shutdown().await;
+                    }
+                    return ExitCode::from(EXIT_BAD_INPUT);
+                }
+            }
+        }
+        None => None,
+    };
     let recorder = match recording {
         Some(options) => match super::record::start(options, &agents).await {
             Ok(r) => Some(r),
@@ -129,23 +150,10 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         },
         None => None,
     };
-    let console = match args.console {
-        Some(addr) => {
-            match super::console::start(addr, args.console_token.clone(), &agents).await {
-                Ok(console) => Some(console),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    stop_all(&agents, Vec::new(), args).await;
-                    return ExitCode::from(EXIT_BAD_INPUT);
-                }
-            }
-        }
-        None => None,
-    };
     let forever = std::future::pending::<()>();
     let (mut why, mut code) = tokio::select! {
         exit = first_exit(&agents) => (exit.reason, exit.code),
-        _ = tokio::signal::ctrl_c() => ("interrupted".to_string(), 0),
+        _ = interrupts.next() => ("interrupted".to_string(), 0),
         _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
         _ = async {
             match args.duration {
@@ -298,6 +306,35 @@ async fn first_exit(agents: &[Agent]) -> AgentExit {
         Poll::Pending
     })
     .await
+}
+
+/// Ctrl-C (SIGINT on Unix), listened for from its creation on.
+struct Interrupts {
+    #[cfg(unix)]
+    signals: Option<tokio::signal::unix::Signal>,
+}
+
+impl Interrupts {
+    fn listen() -> Self {
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{signal, SignalKind};
+            Interrupts {
+                signals: signal(SignalKind::interrupt()).ok(),
+            }
+        }
+        #[cfg(not(unix))]
+        Interrupts {}
+    }
+
+    async fn next(&mut self) {
+        #[cfg(unix)]
+        if let Some(signals) = &mut self.signals {
+            signals.recv().await;
+            return;
+        }
+        let _ = tokio::signal::ctrl_c().await;
+    }
 }
 
 /// SIGHUPs received (on Unix; elsewhere, none ever arrive).
