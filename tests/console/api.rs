@@ -263,3 +263,49 @@ async fn wait_running(socket: &mut Socket, want: &str) {
         }
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_fault_injected_through_a_control_shows_as_supervisor_events() {
+    let agent = demo_agent().await;
+    let console = console_for(&agent, None).await;
+    let addr = console.local_addr();
+    let mut socket = websocket(addr, "/api/ws?agent=robot1", &[]).await.unwrap();
+    send(&mut socket, json!({"watch": ["sensor/stats/restarts"]})).await;
+
+    let body = json!({"key": "sensor/control/fault", "value": "\"panic\""}).to_string();
+    let set = http(addr, "POST", "/api/agents/robot1/set", &[], Some(&body)).await;
+    assert_eq!(set.status, 200, "controls are writable: {}", set.body);
+    // The supervisor restarts the sensor...
+    loop {
+        let m = next(&mut socket).await;
+        if m["values"][0]["json"].as_i64().unwrap_or(0) >= 1 {
+            break;
+        }
+    }
+    // ...and the console's reader of `_supervisor/events` has them (it reads on its own task:
+    // ask until it has caught up, within the deadline).
+    let deadline = tokio::time::Instant::now() + DEADLINE;
+    let kinds = loop {
+        let events = get(addr, "/api/agents/robot1/events").await.json();
+        let kinds: Vec<String> = events["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|e| e["module"] == "sensor")
+            .map(|e| e["kind"].as_str().unwrap().to_string())
+            .collect();
+        if kinds.iter().any(|k| k == "restarted") || tokio::time::Instant::now() > deadline {
+            break kinds;
+        }
+        tokio::task::yield_now().await;
+    };
+    assert_eq!(kinds[..2], ["failed", "restarted"], "{kinds:?}");
+    let modules = get(addr, "/api/agents").await.json();
+    let sensor = &modules["agents"][0]["modules"][0];
+    assert_eq!(
+        (sensor["name"].clone(), sensor["restarts"].clone()),
+        (json!("sensor"), json!(1))
+    );
+    console.stop().await;
+    agent.stop(None).await;
+}
