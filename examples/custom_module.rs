@@ -46,3 +46,42 @@ impl Module for MovingAverage {
 fn main() -> std::process::ExitCode {
     petrel::Petrel::new().module::<MovingAverage>().main()
 }
+
+// `cargo test` runs this example's config with the module (Cargo.toml: `test = true`).
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_example_config_runs_and_averages_the_counter() {
+        let dir = std::env::temp_dir().join(format!("petrel-example-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let snapshot = dir.join("snapshot.ron");
+        let code = petrel::Petrel::new()
+            .module::<super::MovingAverage>()
+            .main_with([
+                "petrel",
+                "run",
+                concat!(env!("CARGO_MANIFEST_DIR"), "/examples/custom_module.ron"),
+                "--for",
+                "1s",
+                "--no-remote",
+                "--snapshot-out",
+                snapshot.to_str().unwrap(),
+            ]);
+        assert_eq!(code, std::process::ExitCode::SUCCESS);
+        let config = petrel::actors::ConfigFile::load(&snapshot).unwrap().config;
+        let value = |module: &str, path: &str| -> f64 {
+            let m = config.modules.iter().find(|m| m.name == module).unwrap();
+            m.values[path].clone().into_rust().unwrap()
+        };
+        let mean = value("avg", "out/mean");
+        // The mean of five consecutive counts is the middle one; the counter may have counted
+        // once more after the average stopped (modules stop in reverse order).
+        let count = value("count", "out/value");
+        assert!(mean >= 1.0 && mean.fract() == 0.0, "mean {mean}");
+        assert!(
+            (count - 3.0..=count - 2.0).contains(&mean),
+            "mean {mean} of counts up to {count}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -39,6 +39,23 @@ pub use petrel_team as team;
 
 use petrel_actors::{Module, ModuleRegistry};
 
+/// Loads an agent config as `petrel run` and `petrel check` do: its `contexts:` field adds the
+/// `contexts` module, and missions run on the agent's simulator clock when it has one.
+pub fn load(
+    config: impl AsRef<std::path::Path>,
+) -> Result<petrel_actors::ConfigFile, petrel_actors::ConfigErrors> {
+    cli::load(&config.as_ref().to_path_buf(), &[])
+}
+
+/// What `petrel check` runs on one agent's config: builds its registry and asks every module
+/// type, context manager and mission what it would refuse at init. A config that passes starts.
+pub fn check(
+    file: &petrel_actors::ConfigFile,
+    registry: &petrel_actors::ModuleRegistry,
+) -> Result<(), petrel_actors::ConfigErrors> {
+    cli::check_all(file, registry).map(|_| ())
+}
+
 /// Builds a `petrel` command line with the built-in module types plus your own.
 #[derive(Clone)]
 pub struct Petrel {
@@ -75,5 +92,15 @@ impl Petrel {
     /// Parses the process arguments and runs the `petrel` command line.
     pub fn main(self) -> std::process::ExitCode {
         cli::main(self.registry, std::env::args_os())
+    }
+
+    /// Runs the `petrel` command line with `args` (the first names the program), e.g. from a
+    /// test of your own module types.
+    pub fn main_with<I, T>(self, args: I) -> std::process::ExitCode
+    where
+        I: IntoIterator<Item = T>,
+        T: Into<std::ffi::OsString>,
+    {
+        cli::main(self.registry, args.into_iter().map(Into::into))
     }
 }

@@ -2,6 +2,8 @@
 
 #[path = "common/bounded.rs"]
 mod bounded;
+#[path = "common/running.rs"]
+mod running;
 
 use std::process::{Command, Output};
 
@@ -75,10 +77,11 @@ fn modules_lists_and_describes_types() {
     let out = petrel(&["modules", "describe", "demo.scale"]);
     let described = text(&out.stdout);
     assert!(
-        described.lines().any(|l| l.split_whitespace().take(4).eq([
+        described.lines().any(|l| l.split_whitespace().take(5).eq([
             "params/factor",
             "param",
             "f64",
+            "finite",
             "1.0"
         ])),
         "{described}"
@@ -222,74 +225,6 @@ fn check_validates_context_rules_with_the_config() {
     );
 }
 
-/// Runs `petrel run` in the background, reading its log line by line.
-#[cfg(unix)]
-struct Running {
-    child: std::process::Child,
-    /// Log lines, read on their own thread so that waiting for one has a deadline.
-    log: std::sync::mpsc::Receiver<String>,
-}
-
-#[cfg(unix)]
-impl Running {
-    /// Starts `petrel run CONFIG`, reachable by tools through the discovery records in `records`.
-    fn start(config: &std::path::Path, records: &std::path::Path) -> Self {
-        use std::io::BufRead;
-        let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args(["run", config.to_str().unwrap(), "--for", "120s"])
-            .env("RUST_LOG", "info")
-            .env("PETREL_RUNTIME_DIR", records)
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .expect("petrel runs");
-        let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
-        let (send, log) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in stderr.lines().map_while(Result::ok) {
-                if send.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Running { child, log }
-    }
-
-    /// Reads the log up to the first line containing `needle` and returns it with the lines
-    /// before it; fails if none comes within the process deadline.
-    fn wait_for(&mut self, needle: &str) -> (String, Vec<String>) {
-        let deadline = std::time::Instant::now() + bounded::PROCESS_DEADLINE;
-        let mut before = Vec::new();
-        loop {
-            let left = deadline.saturating_duration_since(std::time::Instant::now());
-            match self.log.recv_timeout(left) {
-                Ok(line) if line.contains(needle) => return (line, before),
-                Ok(line) => before.push(line),
-                Err(e) => panic!("no `{needle}` in petrel's log ({e}); before: {before:#?}"),
-            }
-        }
-    }
-
-    fn signal(&self, name: &str) {
-        let sent = Command::new("kill")
-            .args([&format!("-{name}"), &self.child.id().to_string()])
-            .status()
-            .expect("kill runs");
-        assert!(sent.success());
-    }
-}
-
-#[cfg(unix)]
-impl Drop for Running {
-    /// A failed test leaves no process behind.
-    fn drop(&mut self) {
-        if self.child.try_wait().ok().flatten().is_none() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-    }
-}
-
 #[cfg(unix)]
 #[test]
 fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
@@ -308,7 +243,10 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
         )
     };
     std::fs::write(&rules, rule("fast", "s/out/value > -1000", true)).unwrap();
-    let mut petrel = Running::start(&config, dir.path());
+    let mut petrel = running::Running::start(
+        &["run", config.to_str().unwrap(), "--for", "120s"],
+        dir.path(),
+    );
     petrel.wait_for("context rules loaded");
     let (set, _) = petrel.wait_for("context sets");
     assert!(

@@ -61,6 +61,14 @@ async fn navigate(name: &str) {
         get_i("robot/out/collisions").await,
     );
     let sim_time = *bb.get::<f64>("robot/out/simTime").await.unwrap();
+    let map = bb
+        .get::<petrel::actors::OccupancyGrid>("mapper/out/map")
+        .await
+        .unwrap();
+    let goals = bb
+        .get::<petrel::actors::types::Path2>("goals/params/goals")
+        .await
+        .unwrap();
     let distance = *bb.get::<f64>("recorder/out/distance").await.unwrap();
     let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
     println!("{name}: {exit:?}, {reached} goals, {distance:.1} m, {sim_time:.1} s sim, {collisions} collisions");
@@ -77,8 +85,58 @@ async fn navigate(name: &str) {
         "{name}: {distance} m in {sim_time} s"
     );
     assert_eq!(summary.failures(), 0, "{name}:\n{summary}");
-    let bytes = std::fs::read(&png).expect("the recorder wrote the PNG at cleanup");
-    assert!(bytes.starts_with(b"\x89PNG"), "{name}: not a PNG");
+    let png = image::open(&png)
+        .expect("the recorder wrote a PNG at cleanup")
+        .to_rgb8();
+    check_png(name, &png, &map, &goals.0, distance);
+}
+
+/// The PNG shows the map the robot built, every goal where it is (reached: a red ring with a
+/// small white centre), and the trajectory (blue to orange) about as long as the distance driven.
+fn check_png(
+    name: &str,
+    png: &image::RgbImage,
+    map: &petrel::actors::OccupancyGrid,
+    goals: &[petrel::actors::Point2],
+    distance: f64,
+) {
+    // The renderer's documented scale: the largest of 1..=8 pixels per cell within 1000 px.
+    let scale = (1000 / map.width.max(map.height)).clamp(1, 8);
+    assert_eq!(
+        png.dimensions(),
+        (map.width * scale, map.height * scale),
+        "{name}: one square of pixels per map cell"
+    );
+    let px_per_m = scale as f64 / map.resolution;
+    let ring = (0.3 * px_per_m).max(4.0);
+    let at = |x: f64, y: f64| {
+        let col = (x - map.origin.x()) * px_per_m;
+        let row = png.height() as f64 - (y - map.origin.y()) * px_per_m;
+        png.get_pixel(col as u32, row as u32).0
+    };
+    // The last goal is where the robot stopped, drawn over it: check the others.
+    for (i, g) in goals.iter().enumerate().take(goals.len() - 1) {
+        let (x, y) = (g.0.x, g.0.y);
+        assert_eq!(at(x, y), [255, 255, 255], "{name}: goal {i} centre");
+        assert_eq!(
+            at(x - 0.6 * ring / px_per_m, y),
+            [205, 30, 45],
+            "{name}: goal {i} drawn reached (a ring with a small centre)"
+        );
+    }
+    // Trajectory pixels: the blue-to-orange ramp (r = 30 + 225t, g = 90 + 50t, b = 220 - 200t).
+    let on_ramp = |p: &image::Rgb<u8>| {
+        let [r, g, b] = p.0.map(f64::from);
+        let t = (r - 30.0) / 225.0;
+        (0.0..=1.0).contains(&t)
+            && (g - (90.0 + 50.0 * t)).abs() <= 1.5
+            && (b - (220.0 - 200.0 * t)).abs() <= 1.5
+    };
+    let drawn = png.pixels().filter(|p| on_ramp(p)).count() as f64;
+    assert!(
+        drawn >= 0.5 * distance * px_per_m,
+        "{name}: {drawn} trajectory pixels for {distance:.1} m at {px_per_m} px/m"
+    );
 }
 
 #[tokio::test(start_paused = true)]

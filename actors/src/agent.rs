@@ -9,6 +9,7 @@ use tokio::task::JoinHandle;
 use crate::blackboard::Blackboard;
 use crate::config::{ConfigErrors, ConfigFile, ModuleConfig};
 use crate::module_types::ModuleRegistry;
+use crate::step_probe::StepProbe;
 use crate::summary::RunSummary;
 use crate::supervision::Intensity;
 use crate::supervisor::{
@@ -66,6 +67,7 @@ impl AgentControl {
 /// A running agent: one blackboard, one supervisor, its modules.
 pub struct Agent {
     control: AgentControl,
+    probe: StepProbe,
     name: String,
     blackboard: Blackboard,
     supervisor: ActorRef<SupervisorMsg>,
@@ -127,6 +129,7 @@ impl Agent {
             .await
             .map_err(|e| StartError::Spawn(e.to_string()))?;
         let control = AgentControl::new();
+        let probe = StepProbe::default();
         let args = SupervisorArgs {
             types: types.clone(),
             agent: Arc::from(name.as_str()),
@@ -136,12 +139,14 @@ impl Agent {
             groups,
             modules,
             events,
+            probe: probe.clone(),
         };
         let (supervisor, sup_join) = Actor::spawn(None, AgentSupervisor, args)
             .await
             .map_err(|e| StartError::Spawn(e.to_string()))?;
         Ok(Agent {
             control,
+            probe,
             name,
             blackboard,
             supervisor,
@@ -175,6 +180,12 @@ impl Agent {
     /// The agent's name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Which of the agent's modules are inside a step, readable from any thread (a stop
+    /// watchdog names with it the modules that hold their threads).
+    pub fn step_probe(&self) -> StepProbe {
+        self.probe.clone()
     }
 
     /// The agent's blackboard, to read, set and relink properties while it runs.

@@ -113,9 +113,16 @@ pub struct PropertyDecl {
     pub doc: String,
     /// Default capacity, for queue outputs.
     pub capacity: Option<usize>,
+    /// The values a numeric parameter accepts (every `f64` parameter: finite ones at least).
+    pub(crate) range: Option<crate::range::RangeCheck>,
 }
 
 impl PropertyDecl {
+    /// The values it accepts, for numeric parameters.
+    pub fn range(&self) -> Option<crate::Range> {
+        self.range.map(|r| r.range)
+    }
+
     /// The default value as RON text, or `-` for queues.
     pub fn default_text(&self) -> String {
         match &self.default {
@@ -183,9 +190,42 @@ impl Ports {
         Input::new(self.value(PropertyKind::Input, path, default, doc))
     }
 
-    /// Declares a parameter `params/...` with its default value.
+    /// Declares a parameter `params/...` with its default value. An `f64` parameter accepts
+    /// finite values; use [`param_in`](Ports::param_in) to say which.
     pub fn param<T: PropertyType>(&mut self, path: &str, default: T, doc: &str) -> Input<T> {
-        Input::new(self.value(PropertyKind::Param, path, default, doc))
+        let input = Input::new(self.value(PropertyKind::Param, path, default, doc));
+        if TypeInfo::of::<T>() == TypeInfo::of::<f64>() {
+            self.limit_last(crate::Range::FINITE);
+        }
+        input
+    }
+
+    /// Declares a numeric parameter that accepts only values within `range`: a config, an
+    /// overlay, a tool or a context rule setting another value is refused, naming the range.
+    pub fn param_in<T: crate::Numeric>(
+        &mut self,
+        path: &str,
+        default: T,
+        range: crate::Range,
+        doc: &str,
+    ) -> Input<T> {
+        let input = Input::new(self.value(PropertyKind::Param, path, default, doc));
+        self.limit_last(range);
+        input
+    }
+
+    fn limit_last(&mut self, range: crate::Range) {
+        let check = crate::range::RangeCheck::new(range);
+        let decl = self.decls.last_mut().expect("just declared");
+        if let Some(default) = &decl.default {
+            if check.refuses(default).is_some() {
+                self.errors.push(format!(
+                    "parameter `{}` of module `{}`: its default is outside its range {range}",
+                    decl.path, self.module
+                ));
+            }
+        }
+        decl.range = Some(check);
     }
 
     /// Declares an output `out/...` with its initial value.
@@ -310,6 +350,7 @@ impl Ports {
             default,
             doc: doc.to_string(),
             capacity,
+            range: None,
         });
     }
 

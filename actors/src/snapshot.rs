@@ -2,7 +2,9 @@
 //!
 //! A snapshot lists every module with its type, the value of every settable property (inputs
 //! and parameters that are not linked, outputs, state, `enabled`), its links and queue
-//! capacities. It is a complete config (`petrel run snapshot.ron` resumes the agent) and a valid
+//! capacities, and the settings the config gave beyond properties (supervision, groups,
+//! recording; each module's group, restart policy, watchdog and stop timeout). It is a complete
+//! config (`petrel run snapshot.ron` resumes the agent) and a valid
 //! overlay over the original config (`petrel run base.ron --overlay snapshot.ron`).
 
 use std::fmt::Write;
@@ -25,6 +27,9 @@ pub(crate) fn write(registry: &Registry) -> String {
     let _ = writeln!(out, "Agent(\n    name: {:?},", registry.agent());
     if let Some(team) = registry.team() {
         let _ = writeln!(out, "    team: {},", team.to_ron());
+    }
+    for field in registry.agent_settings() {
+        let _ = writeln!(out, "    {field},");
     }
     let _ = writeln!(out, "    modules: [");
     for module in registry.modules() {
@@ -65,6 +70,9 @@ pub(crate) fn write(registry: &Registry) -> String {
             "        (\n            name: {module:?},\n            type: {:?},",
             registry.module_type(module).unwrap_or_default()
         );
+        for field in registry.module_settings(module) {
+            let _ = writeln!(out, "            {field},");
+        }
         for (field, items) in [
             ("values", values),
             ("links", links),

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context as _};
 use petrel_actors::team::RemoteFeed;
-use petrel_actors::{Context, FilePath, Input, Module, Output, Ports, Schedule};
+use petrel_actors::{Context, FilePath, Input, Module, Output, Ports, Range, Schedule};
 use tokio::time::Instant;
 
 use crate::read::Recording;
@@ -54,7 +54,7 @@ impl Module for Playback {
         Playback {
             file: ports.param("params/file", FilePath::default(), "the recording (`.mcap`, relative to the config file)"),
             modules: ports.param("params/modules", String::new(), "the modules whose recorded outputs are replayed, comma separated (they must not run)"),
-            rate: ports.param("params/rate", 1.0, "recorded time scale: 2 = twice as fast; 0 = as fast as possible"),
+            rate: ports.param_in("params/rate", 1.0, Range::new(0.0, 1000.0), "recorded time scale: 2 = twice as fast; 0 = as fast as possible"),
             salvage: ports.param("params/salvage", false, "replay what is readable of a damaged file instead of failing"),
             stop_at_end: ports.param("params/stop_at_end", false, "end the run when the recording is replayed"),
             published: ports.output("out/published", 0, "messages published so far"),

@@ -126,6 +126,11 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
         Ok(t) => t,
         Err(code) => return code,
     };
+    if targets.is_empty() {
+        // Following nothing would end at once and look like a quiet run.
+        eprintln!("error: no `petrel run` is running on this machine for this user");
+        return ExitCode::from(super::EXIT_FAILED);
+    }
     super::top::with_clients(&targets, |clients| async move {
         let (tx, mut rx) = tokio::sync::mpsc::channel(1024);
         let (opened_tx, mut opened) = tokio::sync::mpsc::channel(64);

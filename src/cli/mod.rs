@@ -2,6 +2,7 @@
 //! running agents (`ls`, `get`, `set`).
 
 mod check;
+pub(crate) use check::check_all;
 mod chrome;
 pub mod console;
 mod console_log;
@@ -17,6 +18,7 @@ mod record;
 mod record_log;
 mod remote;
 mod run;
+mod stop_guard;
 mod top;
 mod trace;
 
@@ -225,7 +227,8 @@ pub(crate) struct RunArgs {
     #[arg(long)]
     snapshot_out: Option<PathBuf>,
     /// How long each module gets to stop before it is killed (default: each module's
-    /// `shutdown_timeout_ms`, else the agent's `supervision.shutdown_timeout_ms`, 5 s).
+    /// `shutdown_timeout_ms`, else the agent's `supervision.shutdown_timeout_ms`, 5 s). If a
+    /// step holds its thread for good, the process ends at the longest timeout + 0.5 s.
     #[arg(long, value_parser = humantime::parse_duration)]
     stop_timeout: Option<std::time::Duration>,
     /// Log format on standard error (filter with RUST_LOG, default `info`).

@@ -38,7 +38,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
         .properties()
         .into_iter()
         .partition(|p| !p.kind.is_builtin());
-    let rows: Vec<[String; 5]> = own
+    let rows: Vec<[String; 6]> = own
         .iter()
         .chain(&runtime)
         .map(|p| {
@@ -46,13 +46,14 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
                 p.path.clone(),
                 p.kind.to_string(),
                 p.type_info.name().to_string(),
+                p.range().map_or_else(String::new, |r| r.to_string()),
                 p.default_text(),
                 p.doc.clone(),
             ]
         })
         .collect();
-    let header = ["property", "kind", "type", "default", "doc"].map(String::from);
-    let widths: Vec<usize> = (0..4)
+    let header = ["property", "kind", "type", "range", "default", "doc"].map(String::from);
+    let widths: Vec<usize> = (0..5)
         .map(|i| {
             rows.iter()
                 .chain([&header])
@@ -62,18 +63,12 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
         })
         .collect();
     for row in std::iter::once(&header).chain(&rows) {
-        say!(
-            "  {:<w0$}  {:<w1$}  {:<w2$}  {:<w3$}  {}",
-            row[0],
-            row[1],
-            row[2],
-            row[3],
-            row[4],
-            w0 = widths[0],
-            w1 = widths[1],
-            w2 = widths[2],
-            w3 = widths[3]
-        );
+        let padded: Vec<String> = row[..5]
+            .iter()
+            .zip(&widths)
+            .map(|(cell, w)| format!("{cell:<w$}"))
+            .collect();
+        say!("  {}  {}", padded.join("  "), row[5]);
     }
     ExitCode::SUCCESS
 }

@@ -13,6 +13,7 @@ use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
 use super::check::{check_all, check_team};
+use super::stop_guard::StopGuard;
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
@@ -60,7 +61,10 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    runtime.block_on(run_agents(registry, &args, files))
+    let code = runtime.block_on(run_agents(registry, &args, files));
+    // A killed module whose step never yields still holds its worker thread: do not wait for it.
+    runtime.shutdown_timeout(std::time::Duration::from_millis(100));
+    code
 }
 
 /// Checked before anything runs: a snapshot that cannot be written, or would replace a file
@@ -100,22 +104,26 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     // Listen before the agents start, so a SIGHUP sent as soon as the rules are loaded is a
     // reload, not the default "terminate".
     let hangups = Hangups::listen();
-    // Likewise Ctrl-C: from here on it stops the run cleanly (a tool that sends SIGINT as soon
-    // as the console answers must not kill the process before the wait below begins).
-    let mut interrupts = Interrupts::listen();
     let workers = tokio::runtime::Handle::current().metrics().num_workers();
     tracing::info!(workers, "modules run on {workers} worker thread(s)");
     let recording = match super::record::options(args.record.as_ref(), args.record_format, &files) {
         Ok(options) => options,
         Err(code) => return code,
     };
+    let guard = match StopGuard::start(stop_limit(args, &files)) {
+        Ok(guard) => guard,
+        Err(e) => {
+            eprintln!("error: cannot start the stop watchdog: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     let mut agents = Vec::new();
     let mut teams = Vec::new();
-    let started = start_all(registry, args, &files, &mut agents, &mut teams).await;
+    let started = start_all(registry, args, &files, &mut agents, &mut teams, &guard).await;
     let registration = match started {
         Ok(registration) => registration,
         Err(code) => {
-            stop_all(&agents, teams, args).await;
+            stop_all(&agents, teams, args, &guard).await;
             for agent in agents {
                 agent.shutdown().await;
             }
@@ -130,7 +138,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
                 Err(e) => {
                     eprintln!("error: {e}");
                     drop(registration);
-                    stop_all(&agents, teams, args).await;
+                    stop_all(&agents, teams, args, &guard).await;
                     for agent in agents {
                         agent.shutdown().await;
                     }
@@ -144,23 +152,19 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         Some(options) => match super::record::start(options, &agents).await {
             Ok(r) => Some(r),
             Err(code) => {
-                stop_all(&agents, Vec::new(), args).await;
+                stop_all(&agents, Vec::new(), args, &guard).await;
                 return code;
             }
         },
         None => None,
     };
-    let forever = std::future::pending::<()>();
+    if let Some(duration) = args.duration {
+        guard.run_for(duration);
+    }
     let (mut why, mut code) = tokio::select! {
         exit = first_exit(&agents) => (exit.reason, exit.code),
-        _ = interrupts.next() => ("interrupted".to_string(), 0),
+        asked = guard.requested() => (asked.reason, asked.code),
         _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
-        _ = async {
-            match args.duration {
-                Some(d) => tokio::time::sleep(d).await,
-                None => forever.await,
-            }
-        } => (format!("ran for {}", humantime::format_duration(args.duration.unwrap_or_default())), 0),
     };
     if args.duration.is_some() && code == 0 && why.starts_with("ran for") {
         let pending = pending_missions(&agents, &files).await;
@@ -177,7 +181,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     for agent in &agents {
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }
-    let summaries = stop_all(&agents, teams, args).await;
+    let summaries = stop_all(&agents, teams, args, &guard).await;
     if let Some(recorder) = recorder {
         if let Err(e) = super::record::finish(recorder).await {
             tracing::error!("{e}");
@@ -212,10 +216,10 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let failed = summaries
         .iter()
         .flat_map(|s| &s.modules)
-        .any(|m| m.status == status::FAILED);
+        .any(|m| m.status == status::FAILED || m.status == status::KILLED);
     if failed {
         // A log event, so `--log-format json` consumers see it too.
-        tracing::error!("some modules failed: see the summary and the log");
+        tracing::error!("some modules failed or were killed: see the summary and the log");
         // A more specific reason (the supervisor gave up, a mission failed) keeps its code.
         if code == 0 {
             code = EXIT_FAILED;
@@ -250,6 +254,27 @@ async fn pending_missions(agents: &[Agent], files: &[ConfigFile]) -> Vec<String>
     pending
 }
 
+/// The longest a module of these agents may take to stop: `--stop-timeout`, else the longest
+/// `shutdown_timeout_ms` their configs give.
+fn stop_limit(args: &RunArgs, files: &[ConfigFile]) -> std::time::Duration {
+    args.stop_timeout.unwrap_or_else(|| {
+        let ms = files
+            .iter()
+            .flat_map(|f| {
+                let agent = f.config.supervision.shutdown_timeout_ms;
+                std::iter::once(agent).chain(
+                    f.config
+                        .modules
+                        .iter()
+                        .filter_map(|m| m.shutdown_timeout_ms),
+                )
+            })
+            .max()
+            .unwrap_or(0);
+        std::time::Duration::from_millis(ms)
+    })
+}
+
 /// Starts every agent, then joins each to its team or makes it reachable by tools (unless
 /// `--no-remote`); the registration makes the run findable while it is held.
 async fn start_all(
@@ -258,11 +283,15 @@ async fn start_all(
     files: &[ConfigFile],
     agents: &mut Vec<Agent>,
     teams: &mut Vec<Team>,
+    guard: &StopGuard,
 ) -> Result<Option<Registration>, ExitCode> {
     let not_started = args.replay.as_ref().map_or(&[][..], |r| &r.replace[..]);
     for file in files {
         match Agent::start_without(file, registry, not_started).await {
-            Ok(agent) => agents.push(agent),
+            Ok(agent) => {
+                guard.watch(agent.name(), agent.step_probe());
+                agents.push(agent);
+            }
             Err(StartError::Config(errors)) => return Err(bad_input(&errors)),
             Err(e) => {
                 eprintln!("error: {e}");
@@ -276,17 +305,21 @@ async fn start_all(
     super::reach::join_all(agents, files, teams).await
 }
 
-/// Stops every agent's modules (last started first), then leaves the teams.
+/// Stops every agent's modules (last started first), then leaves the teams. The `guard`, once
+/// told, ends the process if the modules take longer than their stop timeout.
 async fn stop_all(
     agents: &[Agent],
     teams: Vec<Team>,
     args: &RunArgs,
+    guard: &StopGuard,
 ) -> Vec<petrel_actors::RunSummary> {
+    guard.stopping();
     let mut summaries = Vec::new();
     for agent in agents.iter().rev() {
         summaries.push(agent.stop_modules(args.stop_timeout).await);
     }
     summaries.reverse();
+    guard.modules_stopped();
     for team in teams {
         team.leave().await;
     }
@@ -306,35 +339,6 @@ async fn first_exit(agents: &[Agent]) -> AgentExit {
         Poll::Pending
     })
     .await
-}
-
-/// Ctrl-C (SIGINT on Unix), listened for from its creation on.
-struct Interrupts {
-    #[cfg(unix)]
-    signals: Option<tokio::signal::unix::Signal>,
-}
-
-impl Interrupts {
-    fn listen() -> Self {
-        #[cfg(unix)]
-        {
-            use tokio::signal::unix::{signal, SignalKind};
-            Interrupts {
-                signals: signal(SignalKind::interrupt()).ok(),
-            }
-        }
-        #[cfg(not(unix))]
-        Interrupts {}
-    }
-
-    async fn next(&mut self) {
-        #[cfg(unix)]
-        if let Some(signals) = &mut self.signals {
-            signals.recv().await;
-            return;
-        }
-        let _ = tokio::signal::ctrl_c().await;
-    }
 }
 
 /// SIGHUPs received (on Unix; elsewhere, none ever arrive).

@@ -500,3 +500,27 @@ async fn module_instances_can_be_added_and_removed_while_running() {
         ["producer"]
     );
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_fault_the_config_sets_fires_once_at_the_first_step_and_not_again_after_the_restart() {
+    let agent = start(&format!(
+        r#"Agent(name: "r1", {QUICK} modules: [
+            (name: "a", type: "demo.counter", values: {{"params/period_ms": 10, "control/fault": "error"}}),
+        ])"#
+    ))
+    .await;
+    advance(100).await;
+    assert_eq!(int(&agent, "a/stats/failures").await, 1);
+    assert_eq!(int(&agent, "a/stats/restarts").await, 1);
+    assert_eq!(
+        text(&agent, "a/control/fault").await,
+        "",
+        "a fault fires once"
+    );
+    assert_eq!(text(&agent, "a/stats/status").await, status::RUNNING);
+    assert!(
+        int(&agent, "a/state/count").await > 0,
+        "the restarted instance counts"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

@@ -75,6 +75,18 @@ pub enum BlackboardError {
         /// What the conversion said.
         reason: String,
     },
+    /// A numeric parameter set outside its declared range (or not a finite number).
+    #[error("`{key}` = {value}: expected {range} ({doc})")]
+    OutOfRange {
+        /// The property.
+        key: String,
+        /// The value refused, as shown to people.
+        value: String,
+        /// What it accepts, as shown to people (`a value in 0.1..=10`).
+        range: String,
+        /// What the parameter is, in its module's words.
+        doc: String,
+    },
     /// The property cannot be set (stats, queues).
     #[error(
         "`{key}` ({kind}) cannot be set: only inputs, parameters, outputs, state and `enabled` can"

@@ -213,6 +213,7 @@ impl ConfigFile {
     /// capacities and links. Returns every problem found.
     pub fn build(&self, types: &ModuleRegistry) -> Result<Registry, ConfigErrors> {
         let mut registry = Registry::new(&self.config.name);
+        registry.keep_settings(&self.config);
         let mut errors = self.check_supervision();
         let mut names = HashSet::new();
         for m in &self.config.modules {

@@ -1,10 +1,10 @@
 //! The `record:` section of an agent config: what a run records to MCAP. Pure data; the
 //! `petrel-record` crate checks the ranges and does the recording.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// `record: (file: "out/run.mcap", include: ["**"], max_bytes: 100000000)`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RecordSection {
     /// The file to write (relative to the working directory); `petrel run --record` overrides it.

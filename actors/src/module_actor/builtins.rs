@@ -18,6 +18,9 @@ pub mod status {
     pub const RESTARTING: &str = "restarting";
     /// Stopped on request.
     pub const STOPPED: &str = "stopped";
+    /// Did not stop within its stop timeout: killed (a step that never yields keeps its
+    /// thread until the process ends).
+    pub const KILLED: &str = "killed";
 }
 
 /// The runtime-owned properties every module has.
@@ -52,7 +55,7 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
             PropertyKind::Control,
             "control/fault",
             String::new(),
-            "write panic, error or hang to make the next step fail (fault injection)",
+            "write panic, error or hang to make the next step fail, spin or block to make it never return (fault injection)",
         ),
         status: ports.builtin(
             Stats,

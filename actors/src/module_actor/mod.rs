@@ -21,6 +21,7 @@ use crate::module::{Cause, Context, Module, Schedule, Unrecoverable, WatchTarget
 use crate::panic_report::catching;
 use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
+use crate::step_probe::StepMark;
 
 mod builtins;
 mod stats;
@@ -68,6 +69,8 @@ pub(crate) struct ModuleArgs {
     pub blackboard: Blackboard,
     pub control: AgentControl,
     pub stop: Arc<StopRequest>,
+    /// Odd while a step runs, for a watchdog outside the runtime.
+    pub step_mark: Arc<StepMark>,
 }
 
 pub(crate) struct ModuleActor<M>(PhantomData<fn() -> M>);
@@ -89,6 +92,7 @@ pub(crate) struct Running<M> {
     builtins: Builtins,
     signal: Arc<Signal>,
     stop: Arc<StopRequest>,
+    step_mark: Arc<StepMark>,
     span: tracing::Span,
     stats: StepStats,
 }
@@ -156,7 +160,12 @@ impl<M: Module> Actor for ModuleActor<M> {
             });
         }
         span.in_scope(|| tracing::info!("initialized"));
-        let fault_seen = builtins.fault.read().version;
+        // A fault the config sets fires at the first step; one written while the module was
+        // down fires at the restarted instance's first step.
+        let fault_seen = match builtins.fault.read() {
+            f if f.value.is_empty() => f.version,
+            _ => 0,
+        };
         Ok(Running {
             module,
             readers,
@@ -167,6 +176,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             builtins,
             signal: binding.signal,
             stop: args.stop,
+            step_mark: args.step_mark,
             span,
             stats: StepStats::default(),
         })
@@ -313,10 +323,13 @@ impl<M: Module> Running<M> {
             None => self.ctx.clock.begin(),
         }
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
+        let mark = self.step_mark.clone();
+        let in_step = mark.enter();
         let result = self
             .run_step()
             .instrument(tracing::trace_span!("step"))
             .await;
+        drop(in_step);
         if result.is_ok() {
             // The step is done with what it took from its queues.
             for reader in &self.readers {
@@ -344,6 +357,14 @@ impl<M: Module> Running<M> {
                 Some("panic") => panic!("fault injected through control/fault: panic"),
                 Some("error") => anyhow::bail!("fault injected through control/fault: error"),
                 Some("hang") => std::future::pending().await,
+                // What a runaway computation and a read that never returns do: hold the
+                // thread without ever yielding. Only a process exit ends them.
+                Some("spin") => loop {
+                    std::hint::spin_loop()
+                },
+                Some("block") => loop {
+                    std::thread::park()
+                },
                 _ => self.module.step(&mut self.ctx).await,
             }
         };
@@ -356,14 +377,27 @@ impl<M: Module> Running<M> {
         }
     }
 
-    /// A fault injected through `control/fault` since the last step, if any.
+    /// A fault injected through `control/fault` since the last step, if any. It fires once:
+    /// `control/fault` is emptied, so a restarted instance does not fail again.
     fn take_fault(&mut self) -> Option<String> {
         if self.builtins.fault.ep.version() == self.fault_seen {
             return None;
         }
-        let fault = self.builtins.fault.read();
-        self.fault_seen = fault.version;
-        Some(fault.value.to_string()).filter(|f| !f.is_empty())
+        let fault = self.builtins.fault.read().value.to_string();
+        if !fault.is_empty() {
+            self.builtins.fault.set(String::new());
+        }
+        self.fault_seen = self.builtins.fault.ep.version();
+        match fault.as_str() {
+            "" => None,
+            "panic" | "error" | "hang" | "spin" | "block" => Some(fault),
+            other => {
+                self.span.in_scope(|| {
+                    tracing::warn!(fault = other, "unknown fault ignored: control/fault takes panic, error, hang, spin or block")
+                });
+                None
+            }
+        }
     }
 
     fn publish(&mut self, status: &str) {

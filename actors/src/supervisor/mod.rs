@@ -16,8 +16,10 @@ use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::config::ModuleConfig;
 use crate::handle::QueueWriter;
+use crate::module_actor::status;
 use crate::module_actor::{ModuleArgs, StopRequest};
 use crate::module_types::{ModuleRegistry, ModuleType};
+use crate::step_probe::StepProbe;
 use crate::summary::ModuleReport;
 use crate::supervision::{
     Backoff, Intensity, RestartPolicy, Strategy, SupervisionConfig, SupervisorEvent,
@@ -69,6 +71,8 @@ struct Slot {
     failures: u64,
     restarts: u64,
     last_error: Option<String>,
+    /// Did not stop within its timeout when last stopped.
+    killed: bool,
 }
 
 impl Slot {
@@ -84,6 +88,7 @@ impl Slot {
             failures: 0,
             restarts: 0,
             last_error: None,
+            killed: false,
         }
     }
 }
@@ -97,6 +102,7 @@ pub(crate) struct SupervisorArgs {
     pub groups: Vec<GroupSpec>,
     pub modules: Vec<ModuleSpec>,
     pub events: QueueWriter<SupervisorEvent>,
+    pub probe: StepProbe,
 }
 
 pub(crate) struct SupervisorState {
@@ -113,6 +119,7 @@ pub(crate) struct SupervisorState {
     started: Instant,
     stopping: bool,
     rng: u64,
+    probe: StepProbe,
 }
 
 /// A runtime request about one module.
@@ -177,6 +184,7 @@ impl Actor for AgentSupervisor {
             started: Instant::now(),
             stopping: false,
             rng: seed | 1,
+            probe: args.probe,
         };
         for i in 0..state.slots.len() {
             state.spawn(i).await;
@@ -286,6 +294,7 @@ impl SupervisorState {
     async fn spawn(&mut self, i: usize) {
         let slot = &mut self.slots[i];
         slot.stop = Arc::default();
+        slot.killed = false;
         let args = ModuleArgs {
             modules: ModuleControl {
                 supervisor: self.me.clone(),
@@ -296,6 +305,7 @@ impl SupervisorState {
             blackboard: self.blackboard.clone(),
             control: self.control.clone(),
             stop: slot.stop.clone(),
+            step_mark: self.probe.mark(&slot.spec.name),
         };
         slot.backoff.started(Instant::now());
         match slot.spec.module_type.spawn(args, self.me.get_cell()).await {
@@ -324,6 +334,7 @@ impl SupervisorState {
         if let Some(join) = slot.join.take() {
             if tokio::time::timeout(timeout, join).await.is_err() {
                 tracing::warn!(agent = %self.agent, module = %slot.spec.name, ?timeout, "module did not stop in time: killed");
+                slot.killed = true;
                 if let Some(actor) = actor {
                     actor.kill();
                 }
@@ -352,6 +363,10 @@ impl SupervisorState {
                 .await
                 .map(|s| s.to_string())
                 .unwrap_or_default();
+            let status = match slot.killed {
+                true => status::KILLED.to_string(),
+                false => status,
+            };
             let steps = self
                 .blackboard
                 .get::<i64>(&get("stats/steps"))

@@ -15,7 +15,7 @@ use anyhow::anyhow;
 use petrel_actors::expr::{parse, properties, Clock, PropId};
 use petrel_actors::{
     AnyHandle, AnyValue, Context, FilePath, Input, Module, Output, Param, Ports, PropertyType,
-    QueueWriter, Registry, Schedule, TypeInfo,
+    QueueWriter, Range, Registry, Schedule, TypeInfo,
 };
 use serde::{Deserialize, Serialize};
 use tokio::time::Instant;
@@ -139,9 +139,10 @@ impl Module for ContextManager {
                 FilePath::default(),
                 "the context rules file (RON), relative to the config file",
             ),
-            tick_ms: ports.param(
+            tick_ms: ports.param_in(
                 "params/tick_ms",
                 50,
+                Range::new(1.0, 3.6e6),
                 "period for time-based conditions (held, age, min_dwell_ms), ms",
             ),
             reload: ports.param(

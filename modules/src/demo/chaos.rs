@@ -1,7 +1,7 @@
 use std::sync::Arc;
 
 use anyhow::{bail, Context as _};
-use petrel_actors::{AnyHandle, Context, Module, Output, Param, Ports, Schedule};
+use petrel_actors::{AnyHandle, Context, Module, Output, Param, Ports, Range, Schedule};
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 
@@ -49,9 +49,10 @@ impl Module for Chaos {
                 "panic, hang".to_string(),
                 "comma-separated: panic, hang, error",
             ),
-            mean_interval_ms: ports.param(
+            mean_interval_ms: ports.param_in(
                 "params/mean_interval_ms",
                 1000,
+                Range::new(1.0, 3.6e6),
                 "mean time between faults, ms",
             ),
             seed: ports.param("params/seed", 1, "random seed (same seed, same faults)"),

@@ -1,4 +1,4 @@
-use petrel_actors::{Context, Module, Output, Param, Ports, QueueReader, Schedule, State};
+use petrel_actors::{Context, Module, Output, Param, Ports, QueueReader, Range, Schedule, State};
 
 /// `demo.consumer`: reads numbered items and checks that none is missing or repeated.
 pub struct Consumer {
@@ -18,9 +18,10 @@ impl Module for Consumer {
     fn declare(ports: &mut Ports) -> Self {
         Consumer {
             items: ports.queue_in("in/items", "numbered items to check"),
-            report_every: ports.param(
+            report_every: ports.param_in(
                 "params/report_every",
                 0,
+                Range::new(0.0, 1e9),
                 "print a line every N items (0 = never)",
             ),
             last: ports.state(

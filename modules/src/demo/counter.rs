@@ -1,4 +1,4 @@
-use petrel_actors::{Context, Module, Output, Param, Ports, Schedule, State};
+use petrel_actors::{Context, Module, Output, Param, Ports, Range, Schedule, State};
 
 /// `demo.counter`: counts periodically and publishes `start + count * increment`.
 pub struct Counter {
@@ -16,7 +16,12 @@ impl Module for Counter {
 
     fn declare(ports: &mut Ports) -> Self {
         Counter {
-            period_ms: ports.param("params/period_ms", 100, "time between counts, ms"),
+            period_ms: ports.param_in(
+                "params/period_ms",
+                100,
+                Range::new(1.0, 3.6e6),
+                "time between counts, ms",
+            ),
             start: ports.param("params/start", 0.0, "first published value"),
             increment: ports.param("params/increment", 1.0, "added at each count"),
             count: ports.state("state/count", 0, "counts so far (kept across restarts)"),

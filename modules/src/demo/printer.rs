@@ -1,6 +1,6 @@
 use std::time::Duration;
 
-use petrel_actors::{Context, Input, Module, Param, Ports, Schedule};
+use petrel_actors::{Context, Input, Module, Param, Ports, Range, Schedule};
 use tokio::time::Instant;
 
 /// `demo.printer`: prints its input to standard output when it changes, at most every `params/every_ms`.
@@ -24,9 +24,10 @@ impl Module for Printer {
                 String::new(),
                 "text before the value (default: module name)",
             ),
-            every_ms: ports.param(
+            every_ms: ports.param_in(
                 "params/every_ms",
                 0,
+                Range::new(0.0, 3.6e6),
                 "print at most once per this many ms (0 = every change)",
             ),
             last_print: None,

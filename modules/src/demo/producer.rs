@@ -1,4 +1,4 @@
-use petrel_actors::{Context, Module, Param, Ports, QueueWriter, Schedule, State};
+use petrel_actors::{Context, Module, Param, Ports, QueueWriter, Range, Schedule, State};
 
 /// `demo.producer`: pushes consecutively numbered items into a queue.
 pub struct Producer {
@@ -15,8 +15,18 @@ impl Module for Producer {
 
     fn declare(ports: &mut Ports) -> Self {
         Producer {
-            period_ms: ports.param("params/period_ms", 50, "time between batches, ms"),
-            batch: ports.param("params/batch", 1, "items pushed per period"),
+            period_ms: ports.param_in(
+                "params/period_ms",
+                50,
+                Range::new(1.0, 3.6e6),
+                "time between batches, ms",
+            ),
+            batch: ports.param_in(
+                "params/batch",
+                1,
+                Range::new(0.0, 10000.0),
+                "items pushed per period",
+            ),
             next: ports.state(
                 "state/next",
                 0,

@@ -1,4 +1,4 @@
-use petrel_actors::{Context, Input, Module, Output, Param, Ports, Schedule};
+use petrel_actors::{Context, Input, Module, Output, Param, Ports, Range, Schedule};
 
 /// `demo.scale`: `out = factor * in + offset`, optionally low-pass filtered.
 pub struct Scale {
@@ -19,9 +19,10 @@ impl Module for Scale {
             input: ports.input("in/value", 0.0, "value to scale"),
             factor: ports.param("params/factor", 1.0, "multiplier"),
             offset: ports.param("params/offset", 0.0, "added after scaling"),
-            smoothing: ports.param(
+            smoothing: ports.param_in(
                 "params/smoothing",
                 0.0,
+                Range::new(0.0, 1.0),
                 "0 = no filter .. 1 = frozen: weight of the previous output",
             ),
             out: ports.output("out/value", 0.0, "the scaled (and smoothed) value"),

@@ -1,7 +1,7 @@
 use std::f64::consts::TAU;
 
 use anyhow::bail;
-use petrel_actors::{Context, Module, Output, Param, Ports, Schedule};
+use petrel_actors::{Context, Module, Output, Param, Ports, Range, Schedule};
 
 /// `demo.signal`: a periodic waveform generator (sine, square, triangle, sawtooth), to stand in
 /// for sensors such as speed or terrain roughness.
@@ -39,13 +39,23 @@ impl Module for Signal {
 
     fn declare(ports: &mut Ports) -> Self {
         Signal {
-            sample_ms: ports.param("params/sample_ms", 50, "time between samples, ms"),
+            sample_ms: ports.param_in(
+                "params/sample_ms",
+                50,
+                Range::new(1.0, 3.6e6),
+                "time between samples, ms",
+            ),
             waveform: ports.param(
                 "params/waveform",
                 "sine".to_string(),
                 "sine, square, triangle or sawtooth",
             ),
-            period_s: ports.param("params/period_s", 10.0, "waveform period, s"),
+            period_s: ports.param_in(
+                "params/period_s",
+                10.0,
+                Range::new(0.001, 1e6),
+                "waveform period, s",
+            ),
             amplitude: ports.param("params/amplitude", 1.0, "half the peak-to-peak swing"),
             offset: ports.param("params/offset", 0.0, "value around which the signal swings"),
             value: ports.output("out/value", 0.0, "the current sample"),

@@ -1,7 +1,7 @@
 //! `nav.obstacle_avoidance`: laser + local target → velocity command.
 
 use petrel_actors::{
-    Context, Input, LaserScan, Module, Output, Ports, Pose2, QueueReader, Schedule, Twist2,
+    Context, Input, LaserScan, Module, Output, Ports, Pose2, QueueReader, Range, Schedule, Twist2,
 };
 
 use super::param_error;
@@ -46,41 +46,58 @@ impl Module for ObstacleAvoidance {
                 Pose2::default(),
                 "where to go, robot frame (identity = stop)",
             ),
-            max_speed: ports.param(
+            max_speed: ports.param_in(
                 "params/maxSpeed",
                 0.5,
+                Range::new(0.01, 20.0),
                 "largest forward speed commanded, m/s",
             ),
-            max_turn: ports.param("params/maxTurn", 1.5, "largest turn rate commanded, rad/s"),
-            robot_radius: ports.param("params/robot_radius", 0.2, "robot radius, m"),
-            safety_margin: ports.param(
+            max_turn: ports.param_in(
+                "params/maxTurn",
+                1.5,
+                Range::new(0.01, 20.0),
+                "largest turn rate commanded, rad/s",
+            ),
+            robot_radius: ports.param_in(
+                "params/robot_radius",
+                0.2,
+                Range::new(0.01, 5.0),
+                "robot radius, m",
+            ),
+            safety_margin: ports.param_in(
                 "params/safety_margin",
                 0.05,
+                Range::new(0.0, 5.0),
                 "distance kept from laser points, m",
             ),
-            brake_time: ports.param(
+            brake_time: ports.param_in(
                 "params/brake_time",
                 1.0,
+                Range::new(0.01, 60.0),
                 "free distance required per m/s of speed, s",
             ),
-            lookahead_time: ports.param(
+            lookahead_time: ports.param_in(
                 "params/lookahead_time",
                 1.0,
+                Range::new(0.05, 60.0),
                 "how far ahead arcs are scored, s",
             ),
-            turn_in_place_bearing: ports.param(
+            turn_in_place_bearing: ports.param_in(
                 "params/turn_in_place_bearing",
                 0.8,
+                Range::new(0.01, std::f64::consts::PI),
                 "bearing beyond which the robot turns in place, rad",
             ),
-            stop_distance: ports.param(
+            stop_distance: ports.param_in(
                 "params/stop_distance",
                 0.05,
+                Range::new(0.0, 10.0),
                 "distance to the target under which the robot stops, m",
             ),
-            clearance_weight: ports.param(
+            clearance_weight: ports.param_in(
                 "params/clearance_weight",
                 0.3,
+                Range::new(0.0, 100.0),
                 "weight of free space in the score",
             ),
             laser_mount: ports.param(

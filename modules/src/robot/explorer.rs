@@ -1,7 +1,7 @@
 //! `nav.explorer`: frontier-based exploration; hands the path planner one frontier at a time.
 
 use petrel_actors::{
-    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Schedule,
+    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Range, Schedule,
 };
 
 use super::{count, param_error, MISSION_FAILED};
@@ -56,15 +56,15 @@ impl Module for ExplorerModule {
             arrived: ports.input("in/arrived", false, "the planner reached the target"),
             failed: ports.input("in/failed", false, "the planner finds no path to the target"),
             sim_time: ports.input("in/simTime", 0.0, "simulated time, s"),
-            clearance: ports.param("params/clearance", 0.3, "distance the robot's centre keeps from walls, m (frontiers closer are unreachable)"),
-            min_frontier_cells: ports.param("params/min_frontier_cells", 4, "smaller frontiers are ignored, cells"),
-            gain_weight: ports.param("params/gain_weight", 0.05, "metres of travel one frontier cell is worth"),
-            blacklist_radius: ports.param("params/blacklist_radius", 0.6, "frontiers this close to a target reached or failed before are skipped, m"),
-            replan_s: ports.param("params/replan_s", 2.0, "re-evaluate frontiers at least this often, simulated s"),
-            keep_radius: ports.param("params/keep_radius", 1.0, "keep the current target while a frontier stays this close to it, m"),
-            give_up_s: ports.param("params/give_up_s", 60.0, "a target not reached within this many simulated seconds is given up (and skipped from then on)"),
+            clearance: ports.param_in("params/clearance", 0.3, Range::new(0.0, 5.0), "distance the robot's centre keeps from walls, m (frontiers closer are unreachable)"),
+            min_frontier_cells: ports.param_in("params/min_frontier_cells", 4, Range::new(1.0, 1e6), "smaller frontiers are ignored, cells"),
+            gain_weight: ports.param_in("params/gain_weight", 0.05, Range::new(0.0, 100.0), "metres of travel one frontier cell is worth"),
+            blacklist_radius: ports.param_in("params/blacklist_radius", 0.6, Range::new(0.01, 100.0), "frontiers this close to a target reached or failed before are skipped, m"),
+            replan_s: ports.param_in("params/replan_s", 2.0, Range::new(0.05, 1e4), "re-evaluate frontiers at least this often, simulated s"),
+            keep_radius: ports.param_in("params/keep_radius", 1.0, Range::new(0.0, 100.0), "keep the current target while a frontier stays this close to it, m"),
+            give_up_s: ports.param_in("params/give_up_s", 60.0, Range::new(0.1, 1e7), "a target not reached within this many simulated seconds is given up (and skipped from then on)"),
             end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
-            timeout_s: ports.param("params/timeout_s", 0.0, "simulated time after which exploration fails, s (0 = none)"),
+            timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time after which exploration fails, s (0 = none)"),
             target: ports.output("out/targetPose", Pose2::default(), "the frontier to explore next"),
             done: ports.output("out/done", false, "no reachable frontier is left"),
             frontiers: ports.output("out/frontiers", 0, "reachable frontiers at the last evaluation"),
@@ -161,7 +161,7 @@ impl Module for ExplorerModule {
                 self.frontiers.set(0);
                 self.done.set(true);
                 state.over = true;
-                println!(
+                petrel_actors::outln!(
                     "[{}] t = {t:6.1} s  exploration done: {:.0} m² known",
                     ctx.module(),
                     self.explored.value()

@@ -5,8 +5,8 @@ use std::collections::VecDeque;
 
 use anyhow::bail;
 use petrel_actors::{
-    Context, Input, Item, LaserScan, Module, Output, Point2, Ports, Pose2, QueueReader,
-    QueueWriter, Schedule,
+    CheckProblem, Context, Input, Item, LaserScan, Module, Output, Point2, Ports, Pose2,
+    QueueReader, QueueWriter, Range, Schedule,
 };
 
 use super::param_error;
@@ -51,6 +51,61 @@ pub struct LocalizerModule {
     core: Option<Core>,
 }
 
+impl LocalizerModule {
+    /// The core the parameters ask for, or what is wrong with them.
+    fn build_core(&self) -> anyhow::Result<Core> {
+        let episodes = self.lost_episodes.get();
+        if episodes.len() % 2 != 0 {
+            bail!("invalid parameter `params/lost_episodes`: expected pairs `[start1, end1, ...]`, got {} numbers", episodes.len());
+        }
+        let recovery = self.recovery_time.value();
+        let params = LocalizerParams {
+            drift_per_meter: self.drift_per_meter.value(),
+            drift_direction: self.drift_direction.value(),
+            lost_episodes: episodes.chunks(2).map(|p| (p[0], p[1])).collect(),
+            lost_drift_speed: self.lost_drift_speed.value(),
+            lost_heading_rate: self.lost_heading_rate.value(),
+            recovery_time: (recovery != 0.0).then_some(recovery),
+            quality_scale: self.quality_scale.value(),
+            heading_quality_scale: self.heading_quality_scale.value(),
+        };
+        if !self.scan_matching.value() {
+            let core = Localizer::new(params).map_err(|e| param_error(e, &[]))?;
+            return Ok(Core::Simulated(core));
+        }
+        if params != LocalizerParams::default() {
+            bail!("`params/scan_matching` is true: the simulated error parameters (drift_per_meter, drift_direction, lost_episodes, lost_*, recovery_time, *quality_scale) do not apply; remove them");
+        }
+        let lost_below = self.lost_below.value();
+        if !(0.0..=1.0).contains(&lost_below) {
+            bail!("invalid parameter `params/lost_below`: expected a number in [0, 1], got {lost_below}");
+        }
+        let (res, size, origin) = (
+            self.resolution.value(),
+            self.size.value(),
+            self.origin.value(),
+        );
+        let cells = |m: f64| (m / res).ceil();
+        let (w, h) = (cells(size.0.x), cells(size.0.y));
+        if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
+            bail!(
+                "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {res} m per cell",
+                crate::sim::Grid::MAX_CELLS, size.0.x, size.0.y
+            );
+        }
+        let matcher = ScanMatcherParams {
+            width: w as u32,
+            height: h as u32,
+            resolution: res,
+            origin: (origin.0.x, origin.0.y),
+            laser_mount: self.laser_mount.value(),
+            ..ScanMatcherParams::default()
+        };
+        let core = ScanLocalizer::new(matcher).map_err(|e| param_error(e, &[]))?;
+        Ok(Core::ScanMatching(core))
+    }
+}
+
 impl Module for LocalizerModule {
     const TYPE: &'static str = "nav.localizer";
     const DESCRIPTION: &'static str =
@@ -68,9 +123,10 @@ impl Module for LocalizerModule {
                 false,
                 "correct odometry by matching laser scans (true) or simulate drift (false)",
             ),
-            resolution: ports.param(
+            resolution: ports.param_in(
                 "params/resolution",
                 0.05,
+                Range::new(0.01, 1.0),
                 "scan matching: cell size of the likelihood field, m",
             ),
             size: ports.param(
@@ -88,9 +144,10 @@ impl Module for LocalizerModule {
                 Pose2::default(),
                 "scan matching: laser pose in the robot frame",
             ),
-            lost_below: ports.param(
+            lost_below: ports.param_in(
                 "params/lost_below",
                 0.3,
+                Range::new(0.0, 1.0),
                 "scan matching: out/lost while the scan fit (out/quality) is below this, 0..1",
             ),
             sim_time: ports.input(
@@ -98,9 +155,10 @@ impl Module for LocalizerModule {
                 0.0,
                 "current (simulated) time, s: times the drift and lost episodes",
             ),
-            drift_per_meter: ports.param(
+            drift_per_meter: ports.param_in(
                 "params/drift_per_meter",
                 0.0,
+                Range::new(0.0, 1.0),
                 "position error added per metre travelled, m/m",
             ),
             drift_direction: ports.param(
@@ -113,29 +171,34 @@ impl Module for LocalizerModule {
                 Vec::new(),
                 "times when localization is lost, `[start1, end1, start2, end2, ...]` in s",
             ),
-            lost_drift_speed: ports.param(
+            lost_drift_speed: ports.param_in(
                 "params/lost_drift_speed",
                 0.3,
+                Range::new(0.0, 10.0),
                 "position error growth while lost, m/s",
             ),
-            lost_heading_rate: ports.param(
+            lost_heading_rate: ports.param_in(
                 "params/lost_heading_rate",
                 0.1,
+                Range::new(0.0, 10.0),
                 "heading error growth while lost, rad/s",
             ),
-            recovery_time: ports.param(
+            recovery_time: ports.param_in(
                 "params/recovery_time",
                 2.0,
+                Range::new(0.0, 1e6),
                 "time constant of error decay outside episodes, s (0 = never recovers)",
             ),
-            quality_scale: ports.param(
+            quality_scale: ports.param_in(
                 "params/quality_scale",
                 0.3,
+                Range::new(0.001, 100.0),
                 "position error at which quality is 1/e, m",
             ),
-            heading_quality_scale: ports.param(
+            heading_quality_scale: ports.param_in(
                 "params/heading_quality_scale",
                 0.3,
+                Range::new(0.001, 100.0),
                 "heading error at which quality is 1/e, rad",
             ),
             estimate: ports.output(
@@ -170,57 +233,16 @@ impl Module for LocalizerModule {
             .on_items(&self.scans)
     }
 
+    /// Parameters valid alone but not together: `petrel check` says so before anything runs.
+    fn check(&self) -> Vec<CheckProblem> {
+        match self.build_core() {
+            Ok(_) => Vec::new(),
+            Err(e) => vec![super::check_problem(&e)],
+        }
+    }
+
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let episodes = self.lost_episodes.get();
-        if episodes.len() % 2 != 0 {
-            bail!("invalid parameter `params/lost_episodes`: expected pairs `[start1, end1, ...]`, got {} numbers", episodes.len());
-        }
-        let recovery = self.recovery_time.value();
-        let params = LocalizerParams {
-            drift_per_meter: self.drift_per_meter.value(),
-            drift_direction: self.drift_direction.value(),
-            lost_episodes: episodes.chunks(2).map(|p| (p[0], p[1])).collect(),
-            lost_drift_speed: self.lost_drift_speed.value(),
-            lost_heading_rate: self.lost_heading_rate.value(),
-            recovery_time: (recovery != 0.0).then_some(recovery),
-            quality_scale: self.quality_scale.value(),
-            heading_quality_scale: self.heading_quality_scale.value(),
-        };
-        if !self.scan_matching.value() {
-            let core = Localizer::new(params).map_err(|e| param_error(e, &[]))?;
-            self.core = Some(Core::Simulated(core));
-            return Ok(());
-        }
-        if params != LocalizerParams::default() {
-            bail!("`params/scan_matching` is true: the simulated error parameters (drift_per_meter, drift_direction, lost_episodes, lost_*, recovery_time, *quality_scale) do not apply; remove them");
-        }
-        let lost_below = self.lost_below.value();
-        if !(0.0..=1.0).contains(&lost_below) {
-            bail!("invalid parameter `params/lost_below`: expected a number in [0, 1], got {lost_below}");
-        }
-        let (res, size, origin) = (
-            self.resolution.value(),
-            self.size.value(),
-            self.origin.value(),
-        );
-        let cells = |m: f64| (m / res).ceil();
-        let (w, h) = (cells(size.0.x), cells(size.0.y));
-        if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
-            bail!(
-                "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {res} m per cell",
-                crate::sim::Grid::MAX_CELLS, size.0.x, size.0.y
-            );
-        }
-        let matcher = ScanMatcherParams {
-            width: w as u32,
-            height: h as u32,
-            resolution: res,
-            origin: (origin.0.x, origin.0.y),
-            laser_mount: self.laser_mount.value(),
-            ..ScanMatcherParams::default()
-        };
-        let core = ScanLocalizer::new(matcher).map_err(|e| param_error(e, &[]))?;
-        self.core = Some(Core::ScanMatching(core));
+        self.core = Some(self.build_core()?);
         Ok(())
     }
 

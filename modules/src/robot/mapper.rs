@@ -4,7 +4,7 @@ use std::collections::VecDeque;
 
 use petrel_actors::{
     Context, Input, Item, LaserScan, Module, OccupancyGrid, Output, Point2, Ports, Pose2,
-    QueueReader, Schedule,
+    QueueReader, Range, Schedule,
 };
 
 use super::{check_params, param_error};
@@ -43,7 +43,7 @@ impl Module for MapperModule {
                 Pose2::default(),
                 "robot pose the scans were taken from",
             ),
-            resolution: ports.param("params/resolution", 0.1, "cell size, m"),
+            resolution: ports.param_in("params/resolution", 0.1, Range::new(0.01, 1.0), "cell size, m"),
             size: ports.param(
                 "params/size",
                 Point2::new(20.0, 20.0),
@@ -59,14 +59,16 @@ impl Module for MapperModule {
                 Pose2::default(),
                 "laser pose in the robot frame",
             ),
-            fov_deg: ports.param(
+            fov_deg: ports.param_in(
                 "params/fov_deg",
                 0.0,
+                Range::new(0.0, 360.0),
                 "map only rays within this field of view, degrees (0 = all): with a camera's view, the map holds what the camera saw",
             ),
-            max_range: ports.param(
+            max_range: ports.param_in(
                 "params/max_range",
                 0.0,
+                Range::new(0.0, 100.0),
                 "map returns only up to this range, m (0 = the laser's)",
             ),
             map: ports.output(

@@ -76,6 +76,17 @@ fn check_params(
     Ok(())
 }
 
+/// An init error as a problem `petrel check` reports, at the first `params/...` it names.
+fn check_problem(e: &anyhow::Error) -> petrel_actors::CheckProblem {
+    let message = e.to_string();
+    let path = message
+        .split('`')
+        .find(|part| part.starts_with("params/"))
+        .unwrap_or("params")
+        .to_string();
+    petrel_actors::CheckProblem::new(&path, message)
+}
+
 /// An `i64` parameter as a count, or an error naming it when it is negative.
 fn count(name: &str, value: i64) -> anyhow::Result<usize> {
     usize::try_from(value).map_err(|_| {

@@ -3,7 +3,9 @@
 use std::sync::Arc;
 
 use petrel_actors::types::Path2;
-use petrel_actors::{Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Schedule};
+use petrel_actors::{
+    CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule,
+};
 
 use super::param_error;
 use crate::nav::{CostParams, Planner, PlannerParams};
@@ -30,6 +32,25 @@ pub struct PathPlanner {
     core: Option<Planner>,
 }
 
+impl PathPlanner {
+    fn params(&self) -> PlannerParams {
+        PlannerParams {
+            cost: CostParams {
+                robot_radius: self.robot_radius.value(),
+                safety_margin: self.safety_margin.value(),
+                preferred_clearance: self.preferred_clearance.value(),
+                clearance_weight: self.clearance_weight.value(),
+                unknown_is_free: self.unknown_is_free.value(),
+                // Within i8: the parameter's range is 1..=100.
+                occupied_threshold: self.occupied_threshold.value() as i8,
+            },
+            goal_tolerance: self.goal_tolerance.value(),
+            lookahead: self.lookahead.value(),
+            max_deviation: self.max_deviation.value(),
+        }
+    }
+}
+
 impl Module for PathPlanner {
     const TYPE: &'static str = "nav.path_planner";
     const DESCRIPTION: &'static str =
@@ -52,20 +73,28 @@ impl Module for PathPlanner {
                 OccupancyGrid::default(),
                 "occupancy grid to plan on",
             ),
-            robot_radius: ports.param("params/robot_radius", 0.2, "robot radius, m"),
-            safety_margin: ports.param(
+            robot_radius: ports.param_in(
+                "params/robot_radius",
+                0.2,
+                Range::new(0.01, 5.0),
+                "robot radius, m",
+            ),
+            safety_margin: ports.param_in(
                 "params/safety_margin",
                 0.05,
+                Range::new(0.0, 5.0),
                 "clearance kept beyond the radius, m",
             ),
-            preferred_clearance: ports.param(
+            preferred_clearance: ports.param_in(
                 "params/preferred_clearance",
                 0.6,
+                Range::new(0.0, 20.0),
                 "clearance below which cells cost more, m",
             ),
-            clearance_weight: ports.param(
+            clearance_weight: ports.param_in(
                 "params/clearance_weight",
                 3.0,
+                Range::new(0.0, 1000.0),
                 "extra cost factor near obstacles",
             ),
             unknown_is_free: ports.param(
@@ -73,24 +102,28 @@ impl Module for PathPlanner {
                 true,
                 "plan through unknown cells",
             ),
-            occupied_threshold: ports.param(
+            occupied_threshold: ports.param_in(
                 "params/occupied_threshold",
                 50,
+                Range::new(1.0, 100.0),
                 "occupancy percent from which a cell is an obstacle",
             ),
-            goal_tolerance: ports.param(
+            goal_tolerance: ports.param_in(
                 "params/goal_tolerance",
                 0.25,
+                Range::new(0.01, 100.0),
                 "distance at which the target counts as reached, m",
             ),
-            lookahead: ports.param(
+            lookahead: ports.param_in(
                 "params/lookahead",
                 0.8,
+                Range::new(0.05, 100.0),
                 "distance along the path to the local target, m",
             ),
-            max_deviation: ports.param(
+            max_deviation: ports.param_in(
                 "params/max_deviation",
                 0.6,
+                Range::new(0.05, 100.0),
                 "distance from the path that triggers a replan, m",
             ),
             path: ports.output(
@@ -121,27 +154,17 @@ impl Module for PathPlanner {
             .on_change(&self.map)
     }
 
-    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let threshold = self.occupied_threshold.value();
-        let params = PlannerParams {
-            cost: CostParams {
-                robot_radius: self.robot_radius.value(),
-                safety_margin: self.safety_margin.value(),
-                preferred_clearance: self.preferred_clearance.value(),
-                clearance_weight: self.clearance_weight.value(),
-                unknown_is_free: self.unknown_is_free.value(),
-                occupied_threshold: i8::try_from(threshold).unwrap_or(i8::MIN),
-            },
-            goal_tolerance: self.goal_tolerance.value(),
-            lookahead: self.lookahead.value(),
-            max_deviation: self.max_deviation.value(),
-        };
-        if params.cost.occupied_threshold == i8::MIN {
-            anyhow::bail!(
-                "invalid parameter `params/occupied_threshold`: expected 1..=100, got {threshold}"
-            );
+    /// Parameters that are valid alone but not together (a preferred clearance inside the
+    /// robot's own margin): `petrel check` says so before anything runs.
+    fn check(&self) -> Vec<CheckProblem> {
+        match Planner::new(self.params()) {
+            Ok(_) => Vec::new(),
+            Err(e) => vec![CheckProblem::new(&format!("params/{}", e.param), e.message)],
         }
-        self.core = Some(Planner::new(params).map_err(|e| param_error(e, &[]))?);
+    }
+
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.core = Some(Planner::new(self.params()).map_err(|e| param_error(e, &[]))?);
         Ok(())
     }
 

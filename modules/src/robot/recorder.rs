@@ -4,7 +4,7 @@ use std::path::Path;
 
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Schedule,
+    Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Range, Schedule,
 };
 
 use crate::sim::context_log::ContextLog;
@@ -118,12 +118,18 @@ impl Module for Recorder {
                 String::new(),
                 "PNG file written at the end (empty = none)",
             ),
-            sample_m: ports.param(
+            sample_m: ports.param_in(
                 "params/sample_m",
                 0.05,
+                Range::new(0.001, 100.0),
                 "spacing of recorded trajectory points, m",
             ),
-            robot_radius: ports.param("params/robot_radius", 0.2, "robot radius drawn, m"),
+            robot_radius: ports.param_in(
+                "params/robot_radius",
+                0.2,
+                Range::new(0.01, 5.0),
+                "robot radius drawn, m",
+            ),
             distance: ports.output("out/distance", 0.0, "distance travelled, m"),
             pose_error: ports.output(
                 "out/poseError",
@@ -210,9 +216,9 @@ impl Module for Recorder {
             .iter()
             .map(|g| Pose2::new(g.0.x, g.0.y, 0.0))
             .collect();
-        println!("\n── mission summary ─────────────────────────");
+        petrel_actors::outln!("\n── mission summary ─────────────────────────");
         if !goals.is_empty() {
-            println!(
+            petrel_actors::outln!(
                 "goals reached    {} / {}",
                 self.reached.value(),
                 goals.len()
@@ -227,7 +233,7 @@ impl Module for Recorder {
                 .flatten()
                 .map(|e| format!("{e:.2}"))
                 .collect();
-            println!(
+            petrel_actors::outln!(
                 "victims found    {} / {} (position errors {} m; {} false)",
                 errors.len(),
                 truth.points().len(),
@@ -240,31 +246,31 @@ impl Module for Recorder {
             );
             for (v, e) in truth.points().iter().zip(&matched) {
                 if e.is_none() {
-                    println!("  missed victim  ({:.2}, {:.2})", v.0.x, v.0.y);
+                    petrel_actors::outln!("  missed victim  ({:.2}, {:.2})", v.0.x, v.0.y);
                 }
             }
         }
         let totals = self.context_log.totals(sim);
         if !totals.is_empty() {
-            println!("contexts         (switches on, time active)");
+            petrel_actors::outln!("contexts         (switches on, time active)");
             for (name, on, secs) in &totals {
-                println!("  {name:<14} {on:>3}x  {secs:6.1} s");
+                petrel_actors::outln!("  {name:<14} {on:>3}x  {secs:6.1} s");
             }
         }
         let explored = self.explored.value();
         if explored > 0.0 {
-            println!("explored area    {explored:.0} m²");
+            petrel_actors::outln!("explored area    {explored:.0} m²");
         }
-        println!("path length      {:.1} m", self.distance.value());
-        println!("collisions       {}", self.collisions.value());
+        petrel_actors::outln!("path length      {:.1} m", self.distance.value());
+        petrel_actors::outln!("collisions       {}", self.collisions.value());
         if let (sum, n @ 1.., max) = self.error_stats {
-            println!(
+            petrel_actors::outln!(
                 "pose error       mean {:.3} m, max {max:.3} m (estimate vs truth)",
                 sum / n as f64
             );
         }
-        println!("sim time         {sim:.1} s");
-        println!(
+        petrel_actors::outln!("sim time         {sim:.1} s");
+        petrel_actors::outln!(
             "wall time        {wall:.1} s ({:.1}x real time)",
             sim / wall.max(1e-9)
         );
@@ -290,7 +296,11 @@ impl Module for Recorder {
                 .collect();
             let layers = RenderLayers {
                 trajectory: &self.trajectory,
-                trajectory_colours: &self.colours,
+                // Without contexts, the trajectory shows time instead (blue to orange).
+                trajectory_colours: match totals.is_empty() {
+                    true => &[],
+                    false => &self.colours,
+                },
                 areas: &areas,
                 victims: &victims,
                 reported: found.points(),
@@ -307,14 +317,14 @@ impl Module for Recorder {
             };
             save_png(Path::new(png.as_str()), &self.map.get(), &layers)
                 .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;
-            println!("map + trajectory {png}");
+            petrel_actors::outln!("map + trajectory {png}");
             if !totals.is_empty() {
                 let legend: Vec<String> = totals
                     .iter()
                     .enumerate()
                     .map(|(i, (n, _, _))| format!("{n} {:?}", context_colour(n, i)))
                     .collect();
-                println!(
+                petrel_actors::outln!(
                     "  trajectory colour by context: none {NO_CONTEXT:?}, {}",
                     legend.join(", ")
                 );

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use anyhow::bail;
 use petrel_actors::types::Path2;
-use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Schedule};
+use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Range, Schedule};
 use tokio::time::Instant;
 
 use super::check_params;
@@ -49,10 +49,10 @@ impl Module for GoalSequencerModule {
     fn declare(ports: &mut Ports) -> Self {
         GoalSequencerModule {
             goals: ports.param("params/goals", Path2::default(), "goals in visiting order, `[(x: 1.0, y: 2.0), ...]` (world frame)"),
-            tolerance: ports.param("params/tolerance", 0.4, "distance within which an arrival at a goal counts, m (>= the planner's goal_tolerance)"),
-            timeout_s: ports.param("params/timeout_s", 600.0, "mission time after which the mission fails, s"),
-            give_up_s: ports.param("params/give_up_s", 10.0, "continuous planning failure after which the mission fails, s"),
-            report_every_s: ports.param("params/report_every_s", 10.0, "mission time between progress lines, s (0 = only at goals)"),
+            tolerance: ports.param_in("params/tolerance", 0.4, Range::new(0.01, 100.0), "distance within which an arrival at a goal counts, m (>= the planner's goal_tolerance)"),
+            timeout_s: ports.param_in("params/timeout_s", 600.0, Range::new(0.1, 1e7), "mission time after which the mission fails, s"),
+            give_up_s: ports.param_in("params/give_up_s", 10.0, Range::new(0.1, 1e7), "continuous planning failure after which the mission fails, s"),
+            report_every_s: ports.param_in("params/report_every_s", 10.0, Range::new(0.0, 1e7), "mission time between progress lines, s (0 = only at goals)"),
             robot: ports.input("in/robotPose", Pose2::default(), "robot pose, world frame"),
             arrived: ports.input("in/arrived", false, "the planner is at the current target"),
             failed: ports.input("in/failed", false, "the planner finds no path to the current target"),
@@ -128,7 +128,7 @@ impl Module for GoalSequencerModule {
             self.reached.set(now.reached as i64);
         }
         let line = |what: &str| {
-            println!(
+            petrel_actors::outln!(
                 "[{}] t = {t:6.1} s  pose ({:6.2}, {:6.2}, {:4.0}°)  goals {}/{total}  {what}",
                 ctx.module(),
                 pose.x(),
@@ -150,11 +150,15 @@ impl Module for GoalSequencerModule {
             }));
         }
         let every = self.report_every_s.value();
-        while every > 0.0 && run.next_report <= t {
-            run.next_report += every;
-        }
+        // The next multiple of `every` after `t`, computed (not counted up to: a tiny `every`
+        // would take forever, and below the precision of `t` would never get there).
         if every <= 0.0 {
             run.next_report = f64::INFINITY;
+        } else if run.next_report <= t {
+            run.next_report = ((t / every).floor() + 1.0) * every;
+            if run.next_report <= t {
+                run.next_report = f64::INFINITY;
+            }
         }
         if now.done {
             self.done.set(true);

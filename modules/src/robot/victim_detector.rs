@@ -1,7 +1,7 @@
 //! `vision.victim_detector`: camera images in, victim detections and image quality out.
 
 use anyhow::anyhow;
-use petrel_actors::{Context, Image, Input, Module, Output, Ports, QueueReader, Schedule};
+use petrel_actors::{Context, Image, Input, Module, Output, Ports, QueueReader, Range, Schedule};
 
 use crate::vision::{detect, Detections, DetectorParams};
 
@@ -27,10 +27,10 @@ impl Module for VictimDetector {
     fn declare(ports: &mut Ports) -> Self {
         VictimDetector {
             images: ports.queue_in("in/image", "camera frames (mono8)"),
-            threshold: ports.param("params/threshold", 12.0, "texture above the noise floor that marks a victim, grey levels (0, 255]; read every frame"),
-            deblur: ports.param("params/deblur", 0.0, "sharpening amount before detection, [0, 4], 0 = off (costs CPU); read every frame"),
+            threshold: ports.param_in("params/threshold", 12.0, Range::new(0.1, 255.0), "texture above the noise floor that marks a victim, grey levels (0, 255]; read every frame"),
+            deblur: ports.param_in("params/deblur", 0.0, Range::new(0.0, 4.0), "sharpening amount before detection, [0, 4], 0 = off (costs CPU); read every frame"),
             roi: ports.param("params/roi", vec![0.0, 0.5, 1.0, 1.0], "region searched, fractions `[x0, y0, x1, y1]` of the image, top-left origin"),
-            fov_deg: ports.param("params/fov_deg", 60.0, "the camera's horizontal field of view, degrees"),
+            fov_deg: ports.param_in("params/fov_deg", 60.0, Range::new(1.0, 179.0), "the camera's horizontal field of view, degrees"),
             detections: ports.output("out/detections", Detections::default(), "victims in the latest frame: bearing (rad, left positive), range (m), confidence"),
             seen: ports.output("out/victimSeen", false, "the latest frame holds a victim"),
             brightness: ports.output("out/brightness", 0.5, "mean grey level of the latest frame, 0..1"),

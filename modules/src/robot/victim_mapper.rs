@@ -2,7 +2,7 @@
 
 use anyhow::anyhow;
 use petrel_actors::types::Path2;
-use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Schedule};
+use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Range, Schedule};
 
 use super::count;
 use crate::vision::{Detections, VictimMap, VictimMapParams};
@@ -37,18 +37,30 @@ impl Module for VictimMapper {
                 Pose2::default(),
                 "estimated robot pose (camera at its centre, looking ahead)",
             ),
-            merge_radius: ports.param(
+            merge_radius: ports.param_in(
                 "params/merge_radius",
                 1.5,
+                Range::new(0.01, 100.0),
                 "sightings this close are one victim, m",
             ),
-            confirm_hits: ports.param("params/confirm_hits", 3, "sightings that confirm a victim"),
-            min_confidence: ports.param(
+            confirm_hits: ports.param_in(
+                "params/confirm_hits",
+                3,
+                Range::new(1.0, 1000.0),
+                "sightings that confirm a victim",
+            ),
+            min_confidence: ports.param_in(
                 "params/min_confidence",
                 0.1,
+                Range::new(0.0, 1.0),
                 "weaker detections are ignored, 0..1",
             ),
-            max_range: ports.param("params/max_range", 5.0, "farther detections are ignored, m"),
+            max_range: ports.param_in(
+                "params/max_range",
+                5.0,
+                Range::new(0.1, 100.0),
+                "farther detections are ignored, m",
+            ),
             victims: ports.output(
                 "out/victims",
                 Path2::default(),
@@ -87,7 +99,7 @@ impl Module for VictimMapper {
         for d in &self.detections.get().0 {
             if let Some(p) = core.add(pose, d) {
                 confirmed = true;
-                println!(
+                petrel_actors::outln!(
                     "[{}] victim {} confirmed at ({:.2}, {:.2})",
                     ctx.module(),
                     self.found.value() + 1,

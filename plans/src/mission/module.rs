@@ -4,7 +4,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use petrel_actors::expr::{Clock, ExprId};
-use petrel_actors::{Context, FilePath, Input, Module, Output, Param, Ports, Schedule, State};
+use petrel_actors::{
+    Context, FilePath, Input, Module, Output, Param, Ports, Range, Schedule, State,
+};
 use tokio::sync::watch;
 use tokio::time::Instant;
 
@@ -63,7 +65,7 @@ impl Module for Mission {
             plan_path: ports.param("params/plan", FilePath::default(), "plan file (.pnml or text plan), relative to the config file"),
             rules: ports.param("params/rules", FilePath::default(), "execution rules file for a text plan (empty = none), relative to the config file"),
             is_mission: ports.param("params/is_mission", false, "goal stops the agent with exit code 0, fail with 1"),
-            tick_ms: ports.param("params/tick_ms", 0, "also step every this many ms (0 = only on events)"),
+            tick_ms: ports.param_in("params/tick_ms", 0, Range::new(0.0, 3.6e6), "also step every this many ms (0 = only on events)"),
             allow_unbound: ports.param("params/allow_unbound", false, "let actions without a binding finish at once instead of refusing to start"),
             actions: ports.param("params/actions", ActionBindings::default(), "action name (or prefix of `name_p1_p2`) -> (enable, set, restore, finished, failed)"),
             conditions: ports.param("params/conditions", ConditionBindings::default(), "condition atom -> boolean expression over properties"),

@@ -77,6 +77,7 @@ impl Registry {
         let mut failed = self.apply_values(m, &|_| PathBuf::from("."));
         failed.extend(self.apply_links(m));
         if failed.is_empty() {
+            self.settings.add_module(m);
             return Ok(());
         }
         let errors: Vec<String> = failed
@@ -106,6 +107,7 @@ impl Registry {
         self.forget_outbox(module);
         self.order.retain(|m| m != module);
         self.modules.remove(module);
+        self.settings.remove_module(module);
         Ok(())
     }
 
@@ -121,6 +123,7 @@ impl Registry {
             default: None,
             doc: "failures, restarts and give-ups of this agent's modules".into(),
             capacity: Some(EVENTS_CAPACITY),
+            range: None,
         };
         let handle = Handle::QueueOut(QueueCore::new(&key, type_info, EVENTS_CAPACITY));
         self.entries.insert(

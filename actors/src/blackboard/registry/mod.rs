@@ -16,6 +16,7 @@ mod links;
 mod module_graph;
 pub use module_graph::{GraphLink, GraphNode, ModuleGraph};
 mod remote;
+mod settings;
 use crate::queue::{dropped_path, QueueCore};
 use crate::team::{LinkTarget, RemoteLinks};
 use crate::url::PropertyUrl;
@@ -60,6 +61,8 @@ pub struct Registry {
     remote: Arc<RemoteLinks>,
     /// The team the agent joins, for snapshots.
     team: Option<crate::team::TeamConfig>,
+    /// What the config says beyond properties, for snapshots.
+    settings: settings::Settings,
     /// Outboxes tapped but not yet handed to the team transport, and the modules whose
     /// outbox was tapped (each is tapped once).
     pending_outboxes: Vec<crate::team::Outbox>,
@@ -77,6 +80,7 @@ impl Registry {
             links: LinkGraph::default(),
             remote: Arc::default(),
             team: None,
+            settings: Default::default(),
             pending_outboxes: Vec::new(),
             tapped_outboxes: Default::default(),
         }
@@ -85,6 +89,22 @@ impl Registry {
     /// The agent name.
     pub fn agent(&self) -> &str {
         &self.agent
+    }
+
+    /// Keeps what `config` says beyond properties (supervision, groups, recording, module
+    /// settings), for snapshots.
+    pub fn keep_settings(&mut self, config: &crate::config::AgentConfig) {
+        self.settings = settings::Settings::of(config);
+    }
+
+    /// The agent's settings beyond properties, as `field: value` RON.
+    pub(crate) fn agent_settings(&self) -> Vec<String> {
+        self.settings.agent_fields()
+    }
+
+    /// `module`'s settings beyond properties, as `field: value` RON.
+    pub(crate) fn module_settings(&self, module: &str) -> Vec<String> {
+        self.settings.module_fields(module)
     }
 
     /// Module names in declaration order.
@@ -121,6 +141,7 @@ impl Registry {
                         default: Some(Arc::new(0_i64)),
                         doc: format!("items `{}` lost by lagging behind its queue", decl.path),
                         capacity: None,
+                        range: None,
                     };
                     let key = format!("{module}/{}", dropped.path);
                     let entry = Entry {
@@ -364,9 +385,20 @@ impl Registry {
         value: AnyValue,
     ) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
-        let kind = self.entries[&key].decl.kind;
+        let decl = &self.entries[&key].decl;
+        let kind = decl.kind;
         if !kind.settable() {
             return Err(BlackboardError::NotSettable { key, kind });
+        }
+        if let Some(check) = decl.range {
+            if let Some(refused) = check.refuses(&value) {
+                return Err(BlackboardError::OutOfRange {
+                    value: crate::range::short_number(refused),
+                    range: check.range.expected(),
+                    doc: decl.doc.clone(),
+                    key,
+                });
+            }
         }
         self.set_runtime(&key, type_info, value)
     }

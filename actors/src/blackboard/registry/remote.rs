@@ -57,6 +57,7 @@ impl Registry {
                     default: None,
                     doc: format!("how the remote link of `{path}` fares"),
                     capacity: None,
+                    range: None,
                 };
                 let ep =
                     Endpoint::new(&status_key, decl.type_info, Arc::new(LinkStatus::default()));
@@ -199,6 +200,7 @@ impl Registry {
                     default: None,
                     doc: "messages of out/outbox delivered, refused and dropped".into(),
                     capacity: None,
+                    range: None,
                 };
                 let ep = Endpoint::new(&key, decl.type_info, Arc::new(OutboxStatus::default()));
                 self.insert_runtime(key, decl, Handle::Value(ep.clone()));
@@ -258,6 +260,7 @@ impl Registry {
             default: Some(Arc::new(TeamMembers::default())),
             doc: "the alive agents of the team and their modules".into(),
             capacity: None,
+            range: None,
         };
         let key = format!("{TEAM_MODULE}/members");
         let ep = Endpoint::new(&key, members.type_info, Arc::new(TeamMembers::default()));
@@ -269,6 +272,7 @@ impl Registry {
             default: None,
             doc: "agents that joined, left or rejoined the team".into(),
             capacity: Some(TEAM_EVENTS_CAPACITY),
+            range: None,
         };
         let key = format!("{TEAM_MODULE}/events");
         let core = QueueCore::new(&key, events.type_info, TEAM_EVENTS_CAPACITY);

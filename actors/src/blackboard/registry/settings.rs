@@ -1,0 +1,97 @@
+//! What a config says beyond properties — supervision, groups, recording, and each module's
+//! group, restart policy, watchdog and stop timeout — kept with the registry so that a snapshot
+//! writes it back and a snapshot run behaves like the run it froze.
+
+use std::collections::HashMap;
+
+use crate::config::{AgentConfig, ModuleConfig, RecordSection};
+use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
+
+/// The agent's settings that live outside the blackboard.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Settings {
+    supervision: SupervisionConfig,
+    groups: Vec<GroupConfig>,
+    record: Option<RecordSection>,
+    modules: HashMap<String, ModuleSettings>,
+}
+
+/// One module's settings that live outside the blackboard.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct ModuleSettings {
+    group: Option<String>,
+    restart: RestartPolicy,
+    watchdog_ms: Option<u64>,
+    shutdown_timeout_ms: Option<u64>,
+}
+
+impl Settings {
+    pub fn of(config: &AgentConfig) -> Self {
+        Settings {
+            supervision: config.supervision.clone(),
+            groups: config.groups.clone(),
+            record: config.record.clone(),
+            modules: config
+                .modules
+                .iter()
+                .map(|m| (m.name.clone(), ModuleSettings::of(m)))
+                .collect(),
+        }
+    }
+
+    /// A module added while the agent runs.
+    pub fn add_module(&mut self, m: &ModuleConfig) {
+        self.modules.insert(m.name.clone(), ModuleSettings::of(m));
+    }
+
+    pub fn remove_module(&mut self, module: &str) {
+        self.modules.remove(module);
+    }
+
+    /// The agent-level fields, as `field: value` RON.
+    pub fn agent_fields(&self) -> Vec<String> {
+        let mut fields = vec![format!("supervision: {}", ron_text(&self.supervision))];
+        if !self.groups.is_empty() {
+            fields.push(format!("groups: {}", ron_text(&self.groups)));
+        }
+        if let Some(record) = &self.record {
+            fields.push(format!("record: {}", ron_text(record)));
+        }
+        fields
+    }
+
+    /// `module`'s fields, as `field: value` RON (its restart policy always, the rest when set).
+    pub fn module_fields(&self, module: &str) -> Vec<String> {
+        let Some(m) = self.modules.get(module) else {
+            return Vec::new();
+        };
+        let mut fields = Vec::new();
+        if let Some(group) = &m.group {
+            fields.push(format!("group: {group:?}"));
+        }
+        fields.push(format!("restart: {}", ron_text(&m.restart)));
+        if let Some(ms) = m.watchdog_ms {
+            fields.push(format!("watchdog_ms: {ms}"));
+        }
+        if let Some(ms) = m.shutdown_timeout_ms {
+            fields.push(format!("shutdown_timeout_ms: {ms}"));
+        }
+        fields
+    }
+}
+
+impl ModuleSettings {
+    fn of(m: &ModuleConfig) -> Self {
+        ModuleSettings {
+            group: m.group.clone(),
+            restart: m.restart,
+            watchdog_ms: m.watchdog_ms,
+            shutdown_timeout_ms: m.shutdown_timeout_ms,
+        }
+    }
+}
+
+/// Settings are plain data: writing them cannot fail.
+fn ron_text<T: serde::Serialize>(value: &T) -> String {
+    crate::value::spaced_ron(&ron::to_string(value).expect("settings serialize to RON"))
+}

@@ -1,0 +1,161 @@
+//! The values a numeric parameter accepts, declared with it ([`Ports::param_in`]) and checked
+//! wherever a value is set from outside the module: configs (so `petrel check` refuses what
+//! `run` would), overlays and snapshots, tools (`petrel set`) and context rules.
+//!
+//! Every `f64` parameter accepts only finite numbers, range declared or not: NaN and infinities
+//! pass every comparison a module makes, so they must not get in at all.
+//!
+//! [`Ports::param_in`]: crate::Ports::param_in
+
+use std::fmt;
+
+use crate::value::AnyValue;
+
+/// Inclusive bounds of a numeric parameter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    min: f64,
+    max: f64,
+}
+
+impl Range {
+    /// `min..=max`.
+    pub const fn new(min: f64, max: f64) -> Self {
+        Range { min, max }
+    }
+
+    /// `min` or more.
+    pub const fn at_least(min: f64) -> Self {
+        Range { min, max: f64::MAX }
+    }
+
+    /// Any finite number: what an `f64` parameter without a declared range accepts.
+    pub const FINITE: Range = Range {
+        min: f64::MIN,
+        max: f64::MAX,
+    };
+
+    /// What a message says the parameter expects: `a finite number`, `a value in 0.1..=10`.
+    pub fn expected(&self) -> String {
+        match *self == Range::FINITE {
+            true => "a finite number".into(),
+            false => format!("a value in {self}"),
+        }
+    }
+
+    /// Whether `value` is finite and within the bounds.
+    pub fn contains(&self, value: f64) -> bool {
+        value.is_finite() && self.min <= value && value <= self.max
+    }
+}
+
+/// A number as people read it: `0.25`, `1000`, `1e300`, `1e-12`, `NaN`, `inf`.
+pub(crate) fn short_number(x: f64) -> String {
+    let a = x.abs();
+    if x.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
+        format!("{x:e}")
+    } else {
+        let text = format!("{x:.6}");
+        match text.contains('.') {
+            true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
+            false => text,
+        }
+    }
+}
+
+impl fmt::Display for Range {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let num = short_number;
+        match (self.min == f64::MIN, self.max == f64::MAX) {
+            (true, true) => write!(f, "finite"),
+            (false, true) => write!(f, ">= {}", num(self.min)),
+            (true, false) => write!(f, "<= {}", num(self.max)),
+            (false, false) => write!(f, "{}..={}", num(self.min), num(self.max)),
+        }
+    }
+}
+
+/// A parameter's range with the way to read its values as numbers.
+#[derive(Clone, Copy)]
+pub(crate) struct RangeCheck {
+    pub range: Range,
+    value_of: fn(&AnyValue) -> Option<f64>,
+}
+
+impl RangeCheck {
+    pub fn new(range: Range) -> Self {
+        RangeCheck {
+            range,
+            value_of: number,
+        }
+    }
+
+    /// The value as a number if it is out of range.
+    pub fn refuses(&self, value: &AnyValue) -> Option<f64> {
+        (self.value_of)(value).filter(|x| !self.range.contains(*x))
+    }
+}
+
+fn number(value: &AnyValue) -> Option<f64> {
+    value
+        .downcast_ref::<f64>()
+        .copied()
+        .or_else(|| value.downcast_ref::<i64>().map(|i| *i as f64))
+}
+
+/// The numbers a parameter may have a [`Range`] on.
+pub trait Numeric: crate::PropertyType {}
+impl Numeric for f64 {}
+impl Numeric for i64 {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+
+    #[test]
+    fn refuses_what_is_out_of_bounds_or_not_finite() {
+        let check = RangeCheck::new(Range::new(0.1, 10.0));
+        for bad in [0.0, 10.5, f64::NAN, f64::INFINITY, -1e300] {
+            assert!(
+                check.refuses(&(Arc::new(bad) as AnyValue)).is_some(),
+                "{bad}"
+            );
+        }
+        assert_eq!(check.refuses(&(Arc::new(0.1) as AnyValue)), None);
+        assert_eq!(check.refuses(&(Arc::new(7_i64) as AnyValue)), None);
+        assert_eq!(check.refuses(&(Arc::new(70_i64) as AnyValue)), Some(70.0));
+        let finite = RangeCheck::new(Range::FINITE);
+        assert_eq!(finite.refuses(&(Arc::new(-1e300) as AnyValue)), None);
+        assert!(finite
+            .refuses(&(Arc::new(f64::NEG_INFINITY) as AnyValue))
+            .is_some());
+    }
+
+    #[test]
+    fn numbers_stay_short() {
+        let shown: Vec<String> = [
+            0.25,
+            1000.0,
+            1e300,
+            1e-12,
+            f64::NAN,
+            f64::NEG_INFINITY,
+            -3.0,
+            0.0,
+        ]
+        .map(short_number)
+        .into();
+        assert_eq!(
+            shown,
+            ["0.25", "1000", "1e300", "1e-12", "NaN", "-inf", "-3", "0"]
+        );
+    }
+
+    #[test]
+    fn shows_as_a_person_writes_it() {
+        assert_eq!(Range::new(0.1, 1000.0).to_string(), "0.1..=1000");
+        assert_eq!(Range::at_least(0.0).to_string(), ">= 0");
+        assert_eq!(Range::FINITE.to_string(), "finite");
+    }
+}

@@ -1,0 +1,179 @@
+//! Every documented exit code of every subcommand (the table in docs/missions.md#exit-codes),
+//! run as real processes. Ctrl-C twice (130) is in tests/stop.rs, a closed standard output (141)
+//! in tests/cli.rs.
+
+#[path = "common/bounded.rs"]
+mod bounded;
+
+use std::process::Command;
+
+/// The files every case may use, written into one temporary directory.
+const FILES: &[(&str, &str)] = &[
+    ("goal.plan", "log_hello"),
+    ("fail.plan", "log_hello; fail_plan"),
+    ("slow.plan", "wait_60"),
+    ("bad.plan", "a; ;; b("),
+    (
+        "nogoal.pnml",
+        r#"<?xml version="1.0"?><pnml><net id="n"><place id="p"/></net></pnml>"#,
+    ),
+    (
+        "goal.ron",
+        r#"Agent(name: "r1", modules: [(name: "m", type: "mission.pnp", values: {"params/plan": "goal.plan", "params/is_mission": true})])"#,
+    ),
+    (
+        "fail.ron",
+        r#"Agent(name: "r1", modules: [(name: "m", type: "mission.pnp", values: {"params/plan": "fail.plan", "params/is_mission": true})])"#,
+    ),
+    (
+        "slow.ron",
+        r#"Agent(name: "r1", modules: [(name: "m", type: "mission.pnp", values: {"params/plan": "slow.plan", "params/is_mission": true})])"#,
+    ),
+    (
+        "idle.ron",
+        r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter")])"#,
+    ),
+    (
+        "failed.ron",
+        r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter", restart: temporary, values: {"control/fault": "error"})])"#,
+    ),
+    (
+        "killed.ron",
+        r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter", values: {"control/fault": "hang"})])"#,
+    ),
+    (
+        "giveup.ron",
+        r#"Agent(name: "r1", supervision: (max_restarts: 2, within_s: 10.0, backoff: (min_ms: 5, max_ms: 5, jitter: 0.0)),
+            modules: [(name: "c", type: "demo.counter", values: {"params/period_ms": 5}),
+                      (name: "chaos", type: "demo.chaos", values: {"params/targets": "c", "params/faults": "error", "params/mean_interval_ms": 20, "params/seed": 7})])"#,
+    ),
+    (
+        "badtype.ron",
+        r#"Agent(name: "r1", modules: [(name: "c", type: "demo.nope")])"#,
+    ),
+    (
+        "badvalue.ron",
+        r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter", values: {"params/period_ms": "soon"})])"#,
+    ),
+    ("not.mcap", "not an MCAP file"),
+];
+
+/// (arguments, expected exit code, what the code means). Runs end by themselves or by `--for`.
+const CASES: &[(&[&str], i32, &str)] = &[
+    (
+        &["run", "idle.ron", "--for", "200ms", "--no-remote"],
+        0,
+        "--for with no mission",
+    ),
+    (
+        &["run", "goal.ron", "--no-remote"],
+        0,
+        "the mission reached its goal",
+    ),
+    (&["run", "fail.ron", "--no-remote"], 1, "the mission failed"),
+    (
+        &["run", "failed.ron", "--for", "300ms", "--no-remote"],
+        1,
+        "a module failed",
+    ),
+    (
+        &[
+            "run",
+            "killed.ron",
+            "--for",
+            "200ms",
+            "--stop-timeout",
+            "100ms",
+            "--no-remote",
+        ],
+        1,
+        "a module was killed at the stop",
+    ),
+    (&["run", "badtype.ron", "--no-remote"], 2, "bad config"),
+    (&["run", "badvalue.ron", "--no-remote"], 2, "bad value"),
+    (&["run", "missing.ron"], 2, "missing config"),
+    (&["run", "idle.ron", "--for", "soon"], 2, "bad argument"),
+    (
+        &["run", "giveup.ron", "--for", "20s", "--no-remote"],
+        3,
+        "the supervisor gave up",
+    ),
+    (
+        &["run", "slow.ron", "--for", "300ms", "--no-remote"],
+        4,
+        "--for ended with the mission running",
+    ),
+    (&["check", "goal.ron"], 0, "no errors"),
+    (&["check", "badtype.ron"], 2, "errors"),
+    (&["graph", "goal.ron"], 0, "drawn"),
+    (&["graph", "badvalue.ron"], 2, "bad config"),
+    (&["modules"], 0, "listed"),
+    (&["modules", "describe", "demo.counter"], 0, "described"),
+    (&["modules", "describe", "demo.nope"], 2, "unknown type"),
+    (&["plan", "check", "goal.plan"], 0, "no errors"),
+    (&["plan", "check", "nogoal.pnml"], 1, "errors found"),
+    (&["plan", "check", "bad.plan"], 2, "bad input"),
+    (&["plan", "dot", "goal.plan"], 0, "drawn"),
+    (&["plan", "dot", "bad.plan"], 2, "bad input"),
+    (
+        &["plan", "compile", "goal.plan", "-o", "goal.pnml"],
+        0,
+        "compiled",
+    ),
+    (
+        &["plan", "compile", "goal.plan", "-o", "goal.plan"],
+        2,
+        "would overwrite its input",
+    ),
+    (&["plan", "simulate", "goal.plan"], 0, "goal"),
+    (&["plan", "simulate", "fail.plan"], 1, "fail"),
+    (&["plan", "simulate", "bad.plan"], 2, "bad input"),
+    (
+        &["plan", "simulate", "slow.plan", "--steps", "2"],
+        4,
+        "steps ran out",
+    ),
+    (&["record", "info", "not.mcap"], 2, "not a recording"),
+    (&["record", "info", "missing.mcap"], 2, "missing recording"),
+    (&["replay", "not.mcap", "goal.ron"], 2, "not a recording"),
+    (&["ls"], 0, "nothing running is an empty listing"),
+    (&["top", "--once"], 0, "nothing running is an empty table"),
+    (&["get", "petrel://nobody/c/out/value"], 1, "no such agent"),
+    (
+        &["set", "petrel://nobody/c/params/x", "1"],
+        1,
+        "no such agent",
+    ),
+    (&["echo", "petrel://nobody/c/out/value"], 1, "no such agent"),
+    (&["events"], 1, "nothing to follow"),
+    (&["get", "no-address"], 2, "bad address"),
+    (&["no-such-command"], 2, "bad command"),
+];
+
+#[test]
+fn every_subcommand_exits_with_its_documented_code() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in FILES {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let mut wrong = Vec::new();
+    for (args, expected, meaning) in CASES {
+        let out = bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(*args)
+                .current_dir(dir.path())
+                // Tools find no run here: the directory is this test's own.
+                .env("PETREL_RUNTIME_DIR", dir.path())
+                .env("RUST_LOG", "warn"),
+        );
+        if out.status.code() != Some(*expected) {
+            wrong.push(format!(
+                "petrel {}: expected {expected} ({meaning}), got {:?}\n{}",
+                args.join(" "),
+                out.status.code(),
+                String::from_utf8_lossy(&out.stderr)
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+}

@@ -1,0 +1,160 @@
+//! A stop always stops: `--for`, Ctrl-C and SIGTERM end `petrel run` even when a module's step
+//! never yields its thread, and the summary or the last message names the modules killed.
+#![cfg(unix)]
+
+#[path = "common/bounded.rs"]
+mod bounded;
+#[path = "common/running.rs"]
+mod running;
+
+use std::process::Command;
+
+use running::Running;
+
+/// A config whose module `stuck` fails its first step with `fault` (`spin`: a CPU loop that
+/// never yields; `block`: a call that never returns), beside a periodic module that is fine.
+fn config(dir: &std::path::Path, fault: &str) -> std::path::PathBuf {
+    let path = dir.join("stuck.ron");
+    std::fs::write(
+        &path,
+        format!(
+            r#"Agent(name: "r", modules: [
+    (name: "fine", type: "demo.counter", values: {{"params/period_ms": 20}}),
+    (name: "stuck", type: "demo.counter", values: {{"params/period_ms": 20, "control/fault": "{fault}"}}),
+])"#
+        ),
+    )
+    .unwrap();
+    path
+}
+
+fn run(dir: &std::path::Path, args: &[&str]) -> (Option<i32>, String, String) {
+    let out = bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .env("RUST_LOG", "info")
+            .env("PETREL_RUNTIME_DIR", dir),
+    );
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn run_for_ends_the_process_when_a_spinning_step_holds_the_only_worker() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = config(dir.path(), "spin");
+    let (code, _, log) = run(
+        dir.path(),
+        &[
+            "run",
+            config.to_str().unwrap(),
+            "--for",
+            "1s",
+            "--workers",
+            "1",
+            "--stop-timeout",
+            "300ms",
+            "--no-remote",
+        ],
+    );
+    assert_eq!(code, Some(1), "{log}");
+    assert!(
+        log.contains(
+            "the modules did not stop within 800ms: ending the process, which kills r/stuck"
+        ),
+        "{log}"
+    );
+    assert!(
+        !log.contains("r/fine"),
+        "only the stuck module is named: {log}"
+    );
+}
+
+#[test]
+fn a_module_that_does_not_stop_in_time_is_killed_and_the_summary_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    // `hang`: a step that awaits forever, which the runtime can kill. (A step that blocks its
+    // thread may strand tasks tokio queued on that worker, so only the watchdog can end it.)
+    let config = config(dir.path(), "hang");
+    let (code, summary, log) = run(
+        dir.path(),
+        &[
+            "run",
+            config.to_str().unwrap(),
+            "--for",
+            "1s",
+            "--workers",
+            "2",
+            "--stop-timeout",
+            "300ms",
+            "--no-remote",
+        ],
+    );
+    assert_eq!(code, Some(1), "{log}");
+    let status = |module: &str| {
+        summary
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(module))
+            .and_then(|l| l.split_whitespace().nth(2))
+            .unwrap_or_else(|| panic!("no summary line for {module}: {summary}"))
+            .to_string()
+    };
+    assert_eq!(status("stuck"), "killed", "{summary}");
+    assert_eq!(status("fine"), "stopped", "{summary}");
+    assert!(log.contains("module did not stop in time: killed"), "{log}");
+}
+
+#[test]
+fn sigterm_ends_the_process_when_a_step_blocks_forever() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = config(dir.path(), "block");
+    let mut petrel = Running::start(
+        &[
+            "run",
+            config.to_str().unwrap(),
+            "--workers",
+            "1",
+            "--stop-timeout",
+            "300ms",
+            "--no-remote",
+        ],
+        dir.path(),
+    );
+    petrel.wait_for("agent started");
+    petrel.signal("TERM");
+    let (status, _, log) = petrel.finish();
+    assert_eq!(status.code(), Some(1), "{log}");
+    assert!(log.contains("which kills r/stuck"), "{log}");
+}
+
+#[test]
+fn a_second_ctrl_c_exits_at_once_without_waiting_for_the_stop_timeout() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = config(dir.path(), "block");
+    // Far longer than the test's deadline: only the second Ctrl-C can end this run in time.
+    let mut petrel = Running::start(
+        &[
+            "run",
+            config.to_str().unwrap(),
+            "--workers",
+            "1",
+            "--stop-timeout",
+            "1h",
+            "--no-remote",
+        ],
+        dir.path(),
+    );
+    petrel.wait_for("agent started");
+    petrel.signal("INT");
+    petrel.wait_for("Ctrl-C again to exit at once");
+    petrel.signal("INT");
+    let (status, _, log) = petrel.finish();
+    assert_eq!(status.code(), Some(130), "{log}");
+    assert!(
+        log.contains("interrupted again: exiting without waiting for the modules"),
+        "{log}"
+    );
+}
