@@ -30,6 +30,7 @@
 pub mod cli;
 
 pub use petrel_actors as actors;
+pub use petrel_console as console;
 pub use petrel_contexts as contexts;
 pub use petrel_modules as modules;
 pub use petrel_plans as plans;

@@ -57,6 +57,7 @@ pub(crate) fn init(
         .with(log.with_filter(filter))
         .with(trace)
         .with(super::record_log::RecordLayer)
+        .with(super::console_log::ConsoleLogLayer)
         .try_init();
     if let Some(problem) = problem {
         tracing::warn!("{problem}");

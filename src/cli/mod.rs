@@ -4,6 +4,8 @@
 mod check;
 pub(crate) use check::check_all;
 mod chrome;
+pub mod console;
+mod console_log;
 mod follow;
 mod graph;
 mod listing;
@@ -252,6 +254,14 @@ pub(crate) struct RunArgs {
     /// How the standard types are written: Foxglove schemas (JSON) or ROS 2 messages (CDR).
     #[arg(long, value_enum)]
     record_format: Option<record::RecordFormat>,
+    /// Serve the web console here (`127.0.0.1:8080`; port 0: any free port, printed): modules,
+    /// live properties and parameter editing, links, plan, contexts, events, log, map.
+    #[arg(long, value_name = "ADDR")]
+    console: Option<std::net::SocketAddr>,
+    /// The token every console request must carry (`?token=` or `Authorization: Bearer`);
+    /// required beyond loopback, where one is generated and printed if not given.
+    #[arg(long, value_name = "TOKEN", requires = "console")]
+    console_token: Option<String>,
     /// Set by `petrel replay`.
     #[arg(skip)]
     replay: Option<record::ReplaySpec>,

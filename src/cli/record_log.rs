@@ -22,8 +22,10 @@ pub(crate) fn install(sink: Option<LogSink>) {
 /// The layer; `logging::init` adds it.
 pub(crate) struct RecordLayer;
 
+/// An event's message followed by its fields (`message k=v ...`); the console's log tail
+/// uses it too.
 #[derive(Default)]
-struct Text(String);
+pub(crate) struct Text(pub(crate) String);
 
 impl Visit for Text {
     fn record_debug(&mut self, field: &Field, value: &dyn std::fmt::Debug) {

@@ -32,6 +32,14 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         eprintln!("error: --overlay and --snapshot-out take one agent; run each agent with its own `petrel run` to use them");
         return ExitCode::from(EXIT_BAD_INPUT);
     }
+    if let Some(addr) = args.console {
+        // The token rules are checked before anything starts (binding comes later).
+        let given = args.console_token.as_deref();
+        if let Err(e) = petrel_console::core::access::Access::for_bind(addr, given, String::new) {
+            eprintln!("error: --console {addr}: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
     if let Some(out) = &args.snapshot_out {
         if let Err(e) = check_destination(out, &args) {
             eprintln!("error: --snapshot-out {}: {e}", out.display());
@@ -122,6 +130,24 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             return code;
         }
     };
+    // Before the recorder, so a console that cannot listen leaves no recording behind.
+    let console = match args.console {
+        Some(addr) => {
+            match super::console::start(addr, args.console_token.clone(), &agents).await {
+                Ok(console) => Some(console),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    drop(registration);
+                    stop_all(&agents, teams, args, &guard).await;
+                    for agent in agents {
+                        agent.shutdown().await;
+                    }
+                    return ExitCode::from(EXIT_BAD_INPUT);
+                }
+            }
+        }
+        None => None,
+    };
     let recorder = match recording {
         Some(options) => match super::record::start(options, &agents).await {
             Ok(r) => Some(r),
@@ -149,6 +175,9 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     }
     // Tools stop finding the run before its agents stop answering.
     drop(registration);
+    if let Some(console) = console {
+        super::console::stop(console).await;
+    }
     for agent in &agents {
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }

@@ -1,0 +1,115 @@
+//! `petrel run --console ADDR`: serves the web console (petrel-console) for the run's agents,
+//! with the plans their missions run (read here with petrel-plans: the console crate reads
+//! no plan files) and the log tail. [`plan_graph`] is public for tests and embedders.
+
+use std::net::SocketAddr;
+use std::sync::RwLock;
+
+use petrel_actors::{outln, Agent, FilePath};
+use petrel_console::{
+    AgentSource, Console, ConsoleOptions, LogTail, PlaceView, PlanGraph, TransitionView,
+};
+use petrel_plans::Plan;
+
+static LOG_TAIL: RwLock<Option<LogTail>> = RwLock::new(None);
+
+/// The log tail the console shows, while one runs (fed by `console_log`'s layer).
+pub(crate) fn log_tail() -> Option<LogTail> {
+    LOG_TAIL.read().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
+/// Starts the console on `addr` for `agents`, printing where it is (and a generated token).
+pub(crate) async fn start(
+    addr: SocketAddr,
+    token: Option<String>,
+    agents: &[Agent],
+) -> Result<Console, String> {
+    let mut sources = Vec::new();
+    for agent in agents {
+        let mut source = AgentSource::new(agent.name(), agent.blackboard().clone());
+        source.plans = plans_of(agent).await;
+        sources.push(source);
+    }
+    let logs = LogTail::default();
+    *LOG_TAIL.write().unwrap_or_else(|e| e.into_inner()) = Some(logs.clone());
+    let console = Console::start(ConsoleOptions { addr, token }, sources, logs)
+        .await
+        .map_err(|e| e.to_string())?;
+    outln!("console: {}", console.url());
+    if console.token_generated() {
+        eprintln!(
+            "console: {} is not loopback, so requests need this token (generated; give your own with --console-token): {}",
+            console.local_addr().ip(),
+            console.token().unwrap_or_default()
+        );
+    }
+    Ok(console)
+}
+
+/// Stops the console and its log tail.
+pub(crate) async fn stop(console: Console) {
+    console.stop().await;
+    *LOG_TAIL.write().unwrap_or_else(|e| e.into_inner()) = None;
+}
+
+/// The plans of `agent`'s `mission.pnp` modules, from the files their parameters name (a plan
+/// that does not load is left out: the mission module reports why).
+async fn plans_of(agent: &Agent) -> Vec<PlanGraph> {
+    let Ok(listing) = agent.blackboard().listing().await else {
+        return Vec::new();
+    };
+    let mut plans = Vec::new();
+    for m in listing
+        .modules
+        .iter()
+        .filter(|m| m.type_name == "mission.pnp")
+    {
+        let bb = agent.blackboard();
+        let Ok(path) = bb.get::<FilePath>(&format!("{}/params/plan", m.name)).await else {
+            continue;
+        };
+        let rules = bb
+            .get::<FilePath>(&format!("{}/params/rules", m.name))
+            .await
+            .ok()
+            .filter(|r| !r.0.as_os_str().is_empty());
+        match petrel_plans::load_plan(&path.0, rules.as_ref().map(|r| r.0.as_path())) {
+            Ok(loaded) => plans.push(plan_graph(&m.name, &loaded.plan)),
+            Err(e) => {
+                tracing::warn!(module = %m.name, error = %e, "the console cannot draw this plan")
+            }
+        }
+    }
+    plans
+}
+
+/// A plan's structure as the console draws it.
+pub fn plan_graph(module: &str, plan: &Plan) -> PlanGraph {
+    PlanGraph {
+        module: module.to_string(),
+        places: plan
+            .places()
+            .iter()
+            .map(|p| PlaceView {
+                label: p.label.clone(),
+                role: match () {
+                    _ if p.goal > 0 => "goal",
+                    _ if p.fail > 0 => "fail",
+                    _ if p.initial > 0 => "init",
+                    _ if p.exec.is_some() => "exec",
+                    _ => "",
+                }
+                .to_string(),
+            })
+            .collect(),
+        transitions: plan
+            .transitions()
+            .iter()
+            .map(|t| TransitionView {
+                label: t.label.clone(),
+                inputs: t.inputs.iter().map(|e| e.place).collect(),
+                outputs: t.outputs.iter().map(|e| e.place).collect(),
+            })
+            .collect(),
+    }
+}

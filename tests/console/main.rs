@@ -1,0 +1,9 @@
+//! The web console (`petrel run --console`): its API and WebSocket, its access rules, the
+//! `petrel` binary's flags, and the page in a real headless browser.
+
+mod api;
+mod browser;
+mod cli;
+mod map;
+mod security;
+mod support;
