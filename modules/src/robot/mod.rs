@@ -14,6 +14,7 @@
 //! driver replaces `sim.world` by publishing the same properties.
 
 mod avoidance;
+mod body;
 mod explorer;
 mod localizer;
 mod mapper;
@@ -23,8 +24,10 @@ mod sequencer;
 mod victim_detector;
 mod victim_mapper;
 mod world;
+mod world_body;
 
 pub use avoidance::ObstacleAvoidance;
+pub use body::SimBody;
 pub use explorer::ExplorerModule;
 pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
@@ -34,6 +37,7 @@ pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
 pub use victim_detector::VictimDetector;
 pub use victim_mapper::VictimMapper;
 pub use world::SimWorld;
+pub use world_body::BodyNames;
 
 use petrel_actors::ModuleRegistry;
 
@@ -43,6 +47,7 @@ use crate::sim::ParamError;
 pub fn register(registry: &mut ModuleRegistry) {
     registry
         .register::<SimWorld>()
+        .register::<SimBody>()
         .register::<LocalizerModule>()
         .register::<MapperModule>()
         .register::<PathPlanner>()
@@ -83,5 +88,7 @@ fn count(name: &str, value: i64) -> anyhow::Result<usize> {
     })
 }
 
+#[cfg(test)]
+mod body_tests;
 #[cfg(test)]
 mod tests;
