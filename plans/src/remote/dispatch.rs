@@ -60,6 +60,8 @@ pub struct Dispatch {
     /// Full name → (robot, local name, last value received).
     conditions: BTreeMap<String, (String, String, Option<bool>)>,
     robots: BTreeMap<String, Robot>,
+    /// Robots that sent their conditions at least once.
+    answered: BTreeSet<String>,
     outgoing: Vec<Outgoing>,
 }
 
@@ -77,6 +79,7 @@ impl Dispatch {
             actions: BTreeMap::new(),
             conditions: BTreeMap::new(),
             robots: BTreeMap::new(),
+            answered: BTreeSet::new(),
             outgoing: Vec::new(),
         };
         for full in actions {
@@ -168,6 +171,23 @@ impl Dispatch {
             .is_some_and(|a| a.state == State::Failed)
     }
 
+    /// The robots whose conditions the plan reads and that have not sent them yet: a team
+    /// plan should not step before (an unknown condition counts as false, so `(not c)` would
+    /// be taken on a guess). A robot that answered once never makes the plan wait again; when
+    /// it leaves, its conditions read false.
+    pub fn waiting_for(&self) -> Vec<&str> {
+        let mut waiting: Vec<&str> = self
+            .conditions
+            .iter()
+            .filter(|(_, (robot, _, value))| {
+                value.is_none() && !self.answered.contains(robot.as_str())
+            })
+            .map(|(_, (robot, _, _))| robot.as_str())
+            .collect();
+        waiting.dedup();
+        waiting
+    }
+
     /// The last value robot sent for condition `full`; `None` before the first value and
     /// after the robot left.
     pub fn condition(&self, full: &str) -> Option<bool> {
@@ -198,6 +218,9 @@ impl Dispatch {
                 Ok(())
             }
             TeamMsg::Conditions { values } => {
+                if self.robots.contains_key(robot) {
+                    self.answered.insert(robot.to_string());
+                }
                 for (r, local, value) in self.conditions.values_mut() {
                     if r == robot {
                         if let Some(v) = values.get(local.as_str()) {

@@ -189,3 +189,182 @@ fn an_executor_drops_the_actions_of_a_coordinator_that_left() {
     assert_eq!(s.members(["r1", "boss2"]), ["go"]);
     assert_eq!(s.running().collect::<Vec<_>>(), [("look", "boss2/m")]);
 }
+
+/// A team plan stepped against a [`Dispatch`], with robots whose executors are [`Serve`]s
+/// and whose actions finish when the test says: the whole exchange, without a network.
+mod plan_over_a_team {
+    use std::collections::{BTreeMap, BTreeSet};
+
+    use super::*;
+    use crate::exec::{step, Environment, PlanState, PlanStatus};
+    use crate::model::Plan;
+
+    struct Env<'a>(&'a mut Dispatch);
+
+    impl Environment for Env<'_> {
+        fn condition(&mut self, name: &str) -> Option<bool> {
+            Some(self.0.condition(name).unwrap_or(false))
+        }
+        fn step_action(&mut self, _: &str) {}
+        fn action_finished(&mut self, name: &str) -> bool {
+            self.0.finished(name)
+        }
+        fn action_failed(&mut self, name: &str) -> bool {
+            self.0.failed(name)
+        }
+        fn call(&mut self, name: &str, kind: CallKind) {
+            self.0.call(name, kind)
+        }
+    }
+
+    #[derive(Default)]
+    struct Robot {
+        serve: Serve,
+        /// Calls received, as `action.call`.
+        log: Vec<String>,
+        finished: BTreeSet<String>,
+        conditions: BTreeMap<String, bool>,
+    }
+
+    struct Team {
+        plan: Plan,
+        state: PlanState,
+        dispatch: Dispatch,
+        robots: BTreeMap<String, Robot>,
+        present: Vec<String>,
+    }
+
+    impl Team {
+        fn new(text: &str) -> Team {
+            let plan = crate::compile_text(text, "team.plan", "team", None).unwrap();
+            let actions: Vec<String> = plan.executables().iter().map(|e| e.name.clone()).collect();
+            let dispatch = Dispatch::new(
+                "boss",
+                "ex",
+                actions.iter().map(String::as_str),
+                plan.conditions().iter().map(String::as_str),
+            );
+            let robots = dispatch
+                .robots()
+                .map(|r| (r.to_string(), Robot::default()))
+                .collect();
+            Team {
+                state: PlanState::new(&plan),
+                plan,
+                dispatch,
+                robots,
+                present: vec!["boss".into(), "r1".into(), "r2".into()],
+            }
+        }
+
+        /// Plan steps and message exchanges until nothing moves (bounded).
+        fn settle(&mut self) -> PlanStatus {
+            for _ in 0..50 {
+                self.dispatch
+                    .members(self.present.iter().map(String::as_str));
+                if self.dispatch.waiting_for().is_empty() {
+                    step(&self.plan, &mut self.state, &mut Env(&mut self.dispatch));
+                }
+                for o in self.dispatch.take_outgoing() {
+                    let (robot, _) = o.to.split_once('/').unwrap();
+                    let r = self.robots.get_mut(robot).unwrap();
+                    if let Some((action, kind)) = r.serve.receive("boss/m", &o.body).unwrap() {
+                        r.log.push(format!("{action}.{kind}"));
+                    }
+                }
+                for (name, r) in &mut self.robots {
+                    if !self.present.contains(name) {
+                        continue;
+                    }
+                    let (finished, conditions) = (&r.finished, &r.conditions);
+                    r.serve.poll(
+                        |a| (finished.contains(a), false),
+                        |c| conditions.get(c).copied(),
+                    );
+                    for o in r.serve.take_outgoing() {
+                        self.dispatch
+                            .receive(&format!("{name}/ex"), &o.body)
+                            .unwrap();
+                    }
+                }
+            }
+            self.state.status(&self.plan)
+        }
+    }
+
+    #[test]
+    fn each_robot_carries_out_its_own_actions_and_the_plan_reaches_its_goal() {
+        let mut t = Team::new("{ r1#search_west } || { r2#search_east }; r1#report");
+        assert_eq!(t.settle(), PlanStatus::Running);
+        assert_eq!(t.robots["r1"].log, ["search_west.start"]);
+        assert_eq!(t.robots["r2"].log, ["search_east.start"]);
+        t.robots
+            .get_mut("r1")
+            .unwrap()
+            .finished
+            .insert("search_west".into());
+        t.robots
+            .get_mut("r2")
+            .unwrap()
+            .finished
+            .insert("search_east".into());
+        t.robots
+            .get_mut("r1")
+            .unwrap()
+            .finished
+            .insert("report".into());
+        assert_eq!(t.settle(), PlanStatus::Goal);
+        assert_eq!(
+            t.robots["r1"].log,
+            [
+                "search_west.start",
+                "search_west.end",
+                "report.start",
+                "report.end"
+            ]
+        );
+        assert_eq!(t.robots["r2"].log, ["search_east.start", "search_east.end"]);
+    }
+
+    #[test]
+    fn a_condition_named_with_a_robot_is_read_from_that_robot() {
+        let mut t = Team::new("< r1#doorOpen ? r2#enter : (not r1#doorOpen) ? r2#knock >");
+        // Before r1 says anything the door is unknown: neither branch may be taken on a guess.
+        t.present = vec!["boss".into(), "r2".into()];
+        assert_eq!(t.settle(), PlanStatus::Running);
+        assert_eq!(t.dispatch.waiting_for(), ["r1"]);
+        assert!(t.robots["r2"].log.is_empty(), "{:?}", t.robots["r2"].log);
+        t.robots
+            .get_mut("r1")
+            .unwrap()
+            .conditions
+            .insert("doorOpen".into(), true);
+        t.present.push("r1".into());
+        t.settle();
+        assert_eq!(t.robots["r2"].log, ["enter.start"]);
+        // r1 leaving makes the door unknown, which never makes the plan wait again.
+        t.present.retain(|r| r != "r1");
+        t.settle();
+        assert!(
+            t.dispatch.waiting_for().is_empty() && t.dispatch.condition("r1#doorOpen").is_none()
+        );
+    }
+
+    #[test]
+    fn a_robot_leaving_fails_its_action_and_the_recovery_hands_its_area_to_another() {
+        let mut t = Team::new(
+            "{ r1#search_west ! *if* action_failed *do* r2#search_west; skip_action ! } || { r2#search_east }",
+        );
+        t.settle();
+        t.present.retain(|r| r != "r1");
+        t.settle();
+        assert_eq!(
+            t.robots["r2"].log,
+            ["search_east.start", "search_west.start"]
+        );
+        for a in ["search_east", "search_west"] {
+            t.robots.get_mut("r2").unwrap().finished.insert(a.into());
+        }
+        assert_eq!(t.settle(), PlanStatus::Goal);
+    }
+}
