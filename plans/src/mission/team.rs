@@ -1,0 +1,133 @@
+//! A mission in a team: the shell around [`crate::remote`].
+//!
+//! In `run` mode (the default) the mission runs its plan and sends other robots' actions
+//! (`robot#action`) to the executor module on their agents, reading their conditions
+//! (`robot#cond`) from them; in `serve` mode it runs no plan and carries out this agent's
+//! actions (`me#action`) for whoever runs the team plan. Messages go through the mission's
+//! `out/outbox` and `in/inbox` (delivered in order by the team transport); who is in the team
+//! comes from `_team/members`, so a robot whose agent dies is seen leaving and fails its
+//! running actions.
+
+use petrel_actors::team::{Message, TeamMembers};
+use petrel_actors::{AnyHandle, Context, QueueReader, QueueWriter};
+
+use crate::remote::{Dispatch, Outgoing, Serve};
+
+/// `params/mode` values.
+pub(crate) const RUN: &str = "run";
+pub(crate) const SERVE: &str = "serve";
+
+/// Whether `params/mode` says `serve`; an error naming the expected values otherwise.
+pub(crate) fn is_serve(mode: &str) -> Result<bool, String> {
+    match mode {
+        RUN => Ok(false),
+        SERVE => Ok(true),
+        other => Err(format!(
+            "expected `{RUN}` (run the plan) or `{SERVE}` (carry out this agent's `{{agent}}#` actions for a plan run elsewhere), got `{other}`"
+        )),
+    }
+}
+
+/// The mission's side of the team: dispatch (run mode) or serve state, and membership.
+pub(crate) struct TeamIo {
+    pub agent: String,
+    pub dispatch: Dispatch,
+    /// Serve mode.
+    pub serve: Option<Serve>,
+    /// `_team/members`, when the agent is in a team and the mission needs it.
+    pub members: Option<AnyHandle>,
+    members_seen: Option<u64>,
+    /// The plan waits for these robots' conditions (logged when it changes).
+    waiting: Vec<String>,
+}
+
+impl TeamIo {
+    /// Connects to the team when the plan names other robots (or in serve mode); an agent
+    /// without a `team:` section cannot.
+    pub async fn connect(ctx: &Context, dispatch: Dispatch, serve: bool) -> anyhow::Result<Self> {
+        let members = if dispatch.is_empty() && !serve {
+            None
+        } else {
+            let h = ctx.blackboard().any_handle("_team/members").await.ok();
+            if h.is_none() {
+                let robots: Vec<&str> = dispatch.robots().collect();
+                let why = match serve {
+                    true => "params/mode is `serve`".to_string(),
+                    false => format!("the plan names other robots ({})", robots.join(", ")),
+                };
+                anyhow::bail!(
+                    "{why}, which needs a team: agent `{}` has no `team:` section",
+                    ctx.agent()
+                );
+            }
+            h
+        };
+        Ok(TeamIo {
+            agent: ctx.agent().to_string(),
+            dispatch,
+            serve: serve.then(Serve::new),
+            members,
+            members_seen: None,
+            waiting: Vec::new(),
+        })
+    }
+
+    /// The agents in the team now, if that changed since the last call.
+    pub fn members_changed(&mut self) -> Option<Vec<String>> {
+        let h = self.members.as_ref()?;
+        let version = h.version();
+        if self.members_seen == Some(version) {
+            return None;
+        }
+        self.members_seen = Some(version);
+        let members = h.get::<TeamMembers>()?;
+        Some(members.0.iter().map(|m| m.agent.clone()).collect())
+    }
+
+    /// Run mode, before the plan steps: answers and conditions from robots, robots that
+    /// joined or left. Returns whether the plan may step (it waits for robots' conditions).
+    pub fn take_news(&mut self, inbox: &QueueReader<Message>) -> bool {
+        for item in inbox.drain() {
+            if let Err(e) = self.dispatch.receive(&item.from, &item.body) {
+                tracing::warn!(from = %item.from, "message ignored: {e}");
+            }
+        }
+        if let Some(present) = self.members_changed() {
+            for gone in self.dispatch.members(present.iter().map(String::as_str)) {
+                tracing::warn!(
+                    robot = %gone.robot,
+                    failed = ?gone.failed,
+                    "a robot left the team: its running actions fail"
+                );
+            }
+        }
+        let waiting: Vec<String> = self
+            .dispatch
+            .waiting_for()
+            .iter()
+            .map(|r| r.to_string())
+            .collect();
+        if waiting != self.waiting {
+            if !waiting.is_empty() {
+                tracing::info!(robots = ?waiting, "the plan waits for these robots' conditions");
+            }
+            self.waiting = waiting;
+        }
+        self.waiting.is_empty()
+    }
+
+    /// Pushes the messages the plan (or the executor) made.
+    pub fn send(&mut self, outbox: &QueueWriter<Message>) {
+        let out = match self.serve.as_mut() {
+            Some(s) => s.take_outgoing(),
+            None => self.dispatch.take_outgoing(),
+        };
+        for Outgoing { to, body } in out {
+            outbox.push(Message {
+                to,
+                from: String::new(),
+                body,
+            });
+        }
+    }
+}
