@@ -8,6 +8,7 @@ mod links;
 mod mail;
 mod membership;
 mod partition;
+mod plans;
 mod processes;
 mod python;
 mod rogue;

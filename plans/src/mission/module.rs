@@ -124,7 +124,9 @@ impl Module for Mission {
         let mut fired = 0;
         let (now, secs) = (run.clock.now(ctx.now()), run.clock.secs(ctx.now()));
         if run.team.serve.is_some() {
-            run.serve_round(now, secs, &self.flags.get(), &self.inbox);
+            if run.serve_round(now, secs, &self.flags.get(), &self.inbox) {
+                run.save(&self.memory);
+            }
             run.team.send(&self.outbox);
             if run.clock.is_wall() {
                 set_deadline(&run.timer, run.bound.exprs.next_deadline());
@@ -132,6 +134,8 @@ impl Module for Mission {
             return Ok(());
         }
         if !run.team.take_news(&self.inbox) {
+            // Waiting for robots' conditions: the watches must still go out.
+            run.team.send(&self.outbox);
             return Ok(());
         }
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next

@@ -173,19 +173,19 @@ pub(super) fn marking(plan: &Plan, state: &PlanState) -> String {
 impl Run {
     /// Serve mode, one round: calls from the inbox carried out on this agent's actions,
     /// coordinators that left have their actions stopped, then answers and watched conditions
-    /// go out.
+    /// go out. Returns whether any call was made.
     pub fn serve_round(
         &mut self,
         now: Instant,
         secs: f64,
         flags: &Flags,
         inbox: &petrel_actors::QueueReader<petrel_actors::team::Message>,
-    ) {
+    ) -> bool {
         self.refresh(now);
         let present = self.team.members_changed();
         let agent = self.team.agent.clone();
         let Some(serve) = self.team.serve.as_mut() else {
-            return;
+            return false;
         };
         let mut calls = Vec::new();
         for item in inbox.drain() {
@@ -211,6 +211,7 @@ impl Run {
             dispatch: &mut self.team.dispatch,
         };
         use crate::exec::Environment;
+        let called = !calls.is_empty();
         for (local, kind) in calls {
             let name = full(&local);
             if !env.bound.actions.contains_key(&name) {
@@ -235,5 +236,6 @@ impl Run {
             },
             |local| env.borrow_mut().condition(&full(local)),
         );
+        called
     }
 }
