@@ -176,12 +176,16 @@ pub fn explore(
             queue.push_back((nc, nr));
         }
     }
-    let in_area = |c: i64, r: i64| {
+    let inside = |c: i64, r: i64| {
         params.area.is_none_or(|[x0, y0, x1, y1]| {
             let (x, y) = (ox + (c as f64 + 0.5) * res, oy + (r as f64 + 0.5) * res);
             (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
         })
     };
+    // Until the robot can reach some of its area, every frontier counts (the nearest to the
+    // area first): the area is still unknown, and the way there is what must be explored.
+    let reached = (0..h).any(|r| (0..w).any(|c| dist[index(c, r)] != u32::MAX && inside(c, r)));
+    let in_area = |c: i64, r: i64| !reached || inside(c, r);
     let is_frontier = |c: i64, r: i64| {
         let i = index(c, r);
         in_area(c, r)
@@ -253,7 +257,16 @@ pub fn explore(
     if frontiers.is_empty() {
         return Exploration::Done;
     }
-    let score = |f: &Frontier| f.travel - params.gain_weight * f.size as f64;
+    let score = |f: &Frontier| match (reached, params.area) {
+        (false, Some([x0, y0, x1, y1])) => {
+            let (x, y) = (f.target.0.x, f.target.0.y);
+            (x0 - x)
+                .max(x - x1)
+                .max(0.0)
+                .hypot((y0 - y).max(y - y1).max(0.0))
+        }
+        _ => f.travel - params.gain_weight * f.size as f64,
+    };
     frontiers.sort_by(|a, b| score(a).total_cmp(&score(b)));
     Exploration::Frontiers(frontiers)
 }

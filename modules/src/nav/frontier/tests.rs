@@ -174,11 +174,22 @@ fn an_area_keeps_only_the_frontiers_inside_it() {
         top.len() == 1 && top[0].0.y > 0.3 && top[0].0.x < 1.0,
         "{top:?}"
     );
-    let nowhere = FrontierParams {
-        area: Some([5.0, 5.0, 6.0, 6.0]),
+    // An area the robot cannot reach yet: every frontier counts, the nearest to it first.
+    let far = FrontierParams {
+        area: Some([1.5, 0.0, 3.0, 0.5]),
+        min_frontier_cells: 1,
         ..params()
     };
-    assert_eq!(explore(&m, robot, &[], &nowhere), Exploration::Done);
+    let Exploration::Frontiers(f) = explore(&m, robot, &[], &far) else {
+        panic!("expected frontiers");
+    };
+    assert!(f.len() == 2 && f[0].target.0.x > 1.0, "{f:?}");
+    // Reached and fully known: done, whatever lies outside it.
+    let known = FrontierParams {
+        area: Some([0.0, 0.0, 0.4, 0.3]),
+        ..params()
+    };
+    assert_eq!(explore(&m, robot, &[], &known), Exploration::Done);
     let bad = FrontierParams {
         area: Some([1.0, 0.0, 0.0, 1.0]),
         ..params()
