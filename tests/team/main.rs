@@ -11,6 +11,7 @@ mod partition;
 mod plans;
 mod processes;
 mod python;
+mod rescue_team;
 mod rogue;
 mod router;
 mod scale;
