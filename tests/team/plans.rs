@@ -146,3 +146,71 @@ async fn a_robot_leaving_the_team_fails_its_action_and_the_plan_recovers() {
         m.stop().await;
     }
 }
+
+/// Bindings of a robot running its own plan: `goto_door` until the probe reads 1 or more,
+/// `enter` sets it to 42; `atDoor` (watched by the other robot) is probe >= 1.
+const OWN_PLAN_BINDINGS: &str = r#""params/actions": {
+        "goto_door": (finished: "probe/in/value >= 1"),
+        "enter": (set: {"probe/in/value": 42.0}, restore: false, finished: "probe/in/value == 42"),
+    },
+    "params/conditions": {"atDoor": "probe/in/value >= 1"}"#;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn robots_running_their_own_plans_wait_for_each_other_at_the_door() {
+    let dir = tempfile::tempdir().unwrap();
+    let team = team_name("plan-distributed");
+    let (p1, p2) = (free_port(), free_port());
+    let robot = |me: &str, other: &str| {
+        let path = dir.path().join(format!("{me}.plan"));
+        std::fs::write(&path, format!("goto_door; < {other}#atDoor ? enter >\n")).unwrap();
+        format!(
+            r#"(name: "probe", type: "test.probe"),
+               (name: "mission", type: "mission.pnp", values: {{"params/plan": "{}", {OWN_PLAN_BINDINGS}}}),"#,
+            path.display()
+        )
+    };
+    let r1 = start(&agent_config("r1", &team, p1, &[], "", &robot("r1", "r2"))).await;
+    let r2 = start(&agent_config(
+        "r2",
+        &team,
+        p2,
+        &[p1],
+        "",
+        &robot("r2", "r1"),
+    ))
+    .await;
+    let memory = r1.handle::<MissionMemory>("mission/state/memory").await;
+    // r1 reaches the door first: its plan goes on only when r2 says it is there too.
+    r1.agent
+        .blackboard()
+        .set("probe/in/value", 1.0)
+        .await
+        .unwrap();
+    wait_for(&memory, "r1 at the door", |m| {
+        m.actions.get("goto_door").is_some_and(|s| s.ends == 1)
+    })
+    .await;
+    let marking = r1.handle::<String>("mission/out/marking").await.get();
+    assert_eq!(
+        r1.handle::<f64>("probe/in/value").await.value(),
+        1.0,
+        "r1 waits: {marking}"
+    );
+    assert_eq!(
+        *r1.handle::<String>("mission/out/result").await.get(),
+        "running"
+    );
+    r2.agent
+        .blackboard()
+        .set("probe/in/value", 1.0)
+        .await
+        .unwrap();
+    for m in [&r1, &r2] {
+        let result = m.handle::<String>("mission/out/result").await;
+        wait_for(&result, "both through the door", |r| r == "goal").await;
+        assert_eq!(m.handle::<f64>("probe/in/value").await.value(), 42.0);
+    }
+    for m in [r2, r1] {
+        m.stop().await;
+    }
+}

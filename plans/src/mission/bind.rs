@@ -89,6 +89,9 @@ pub(crate) struct Scope<'a> {
     /// `serve` mode: only `agent#...` names (the rest belong to whoever runs the plan);
     /// otherwise every name but other robots' (`robot#...`, carried out by those robots).
     pub serve: bool,
+    /// The agent is in a team: every condition of `params/conditions` is bound, used by the
+    /// plan or not, since other agents' plans may watch it (`agent#cond`).
+    pub team: bool,
 }
 
 impl Scope<'_> {
@@ -305,6 +308,13 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
     let (mut action_names, mut cond_names) = plan_names(plan);
     action_names.retain(|n| p.scope.owns(n));
     cond_names.retain(|n| p.scope.owns(n));
+    if p.scope.team {
+        for key in p.conditions.0.keys().filter(|k| !k.contains('#')) {
+            if !cond_names.contains(&format!("{}#{key}", p.scope.agent)) {
+                cond_names.insert(key.clone());
+            }
+        }
+    }
     let mut b = Binder {
         bb,
         plan,

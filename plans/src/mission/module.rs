@@ -123,7 +123,7 @@ impl Module for Mission {
         }
         let mut fired = 0;
         let (now, secs) = (run.clock.now(ctx.now()), run.clock.secs(ctx.now()));
-        if run.team.serve.is_some() {
+        if run.team.serve_mode {
             if run.serve_round(now, secs, &self.flags.get(), &self.inbox) {
                 run.save(&self.memory);
             }
@@ -134,7 +134,8 @@ impl Module for Mission {
             return Ok(());
         }
         if !run.team.take_news(&self.inbox) {
-            // Waiting for robots' conditions: the watches must still go out.
+            // Waiting for robots' conditions: the watches must still go out (and be answered).
+            run.answer_watches(now, secs, &self.flags.get());
             run.team.send(&self.outbox);
             return Ok(());
         }
@@ -152,6 +153,7 @@ impl Module for Mission {
                 break;
             }
         }
+        run.answer_watches(now, secs, &self.flags.get());
         run.team.send(&self.outbox);
         if run.clock.is_wall() {
             set_deadline(&run.timer, run.bound.exprs.next_deadline());
@@ -228,6 +230,7 @@ impl Mission {
             allow_unbound: self.allow_unbound.value(),
             agent: ctx.agent().to_string(),
             serve,
+            team: ctx.blackboard().any_handle("_team/members").await.is_ok(),
         };
         let (plan, bound) = prepare(ctx.blackboard(), ctx.module(), &setup)
             .await

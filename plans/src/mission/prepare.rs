@@ -22,6 +22,8 @@ pub(crate) struct Setup {
     /// The agent the mission runs in, and whether it serves a team plan run elsewhere.
     pub(crate) agent: String,
     pub(crate) serve: bool,
+    /// The agent has a `team:` section.
+    pub(crate) team: bool,
 }
 
 /// Loads the plan and binds its actions and conditions; every problem at once (warnings are
@@ -69,6 +71,7 @@ async fn prepare_all(
         scope: Scope {
             agent: &setup.agent,
             serve: setup.serve,
+            team: setup.team,
         },
         actions: &setup.actions,
         conditions: &setup.conditions,
@@ -119,6 +122,7 @@ pub async fn check_mission(
             allow_unbound: *bb.get::<bool>(&param("allow_unbound")).await?,
             agent: bb.agent().to_string(),
             serve: false,
+            team: bb.any_handle("_team/members").await.is_ok(),
         })
     };
     let mut setup = read.await.map_err(|e| {

@@ -184,9 +184,7 @@ impl Run {
         self.refresh(now);
         let present = self.team.members_changed();
         let agent = self.team.agent.clone();
-        let Some(serve) = self.team.serve.as_mut() else {
-            return false;
-        };
+        let serve = &mut self.team.serve;
         let mut calls = Vec::new();
         for item in inbox.drain() {
             match serve.receive(&item.from, &item.body) {
@@ -234,8 +232,39 @@ impl Run {
                     false => (false, true),
                 }
             },
-            |local| env.borrow_mut().condition(&full(local)),
+            |local| condition_of(&mut env.borrow_mut(), &full(local), local),
         );
         called
+    }
+
+    /// Run mode: sends other agents the conditions of this one they watch, when they changed
+    /// (calls, which only serve mode carries out, are answered as failed).
+    pub fn answer_watches(&mut self, now: Instant, secs: f64, flags: &Flags) {
+        if !self.team.serve.has_watchers() {
+            return;
+        }
+        self.refresh(now);
+        let agent = self.team.agent.clone();
+        let mut env = MissionEnv {
+            bound: &mut self.bound,
+            flags,
+            now,
+            secs,
+            memory: &mut self.memory,
+            dispatch: &mut self.team.dispatch,
+        };
+        self.team.serve.poll(
+            |_| (false, true),
+            |local| condition_of(&mut env, &format!("{agent}#{local}"), local),
+        );
+    }
+}
+
+/// This agent's condition `local` (bound as `agent#local` or as `local`).
+fn condition_of(env: &mut MissionEnv<'_>, full: &str, local: &str) -> Option<bool> {
+    use crate::exec::Environment;
+    match env.bound.conditions.contains_key(full) {
+        true => env.condition(full),
+        false => env.condition(local),
     }
 }

@@ -11,7 +11,7 @@
 use petrel_actors::team::{Message, TeamMembers};
 use petrel_actors::{AnyHandle, Context, QueueReader, QueueWriter};
 
-use crate::remote::{Dispatch, Outgoing, Serve};
+use crate::remote::{Dispatch, Outgoing, Serve, TeamMsg};
 
 /// `params/mode` values.
 pub(crate) const RUN: &str = "run";
@@ -32,8 +32,10 @@ pub(crate) fn is_serve(mode: &str) -> Result<bool, String> {
 pub(crate) struct TeamIo {
     pub agent: String,
     pub dispatch: Dispatch,
-    /// Serve mode.
-    pub serve: Option<Serve>,
+    /// `params/mode` is `serve`: no plan runs here.
+    pub serve_mode: bool,
+    /// What other agents' plans ask of this one: actions (serve mode) and conditions.
+    pub serve: Serve,
     /// `_team/members`, when the agent is in a team and the mission needs it.
     pub members: Option<AnyHandle>,
     members_seen: Option<u64>,
@@ -65,7 +67,8 @@ impl TeamIo {
         Ok(TeamIo {
             agent: ctx.agent().to_string(),
             dispatch,
-            serve: serve.then(Serve::new),
+            serve_mode: serve,
+            serve: Serve::new(),
             members,
             members_seen: None,
             waiting: Vec::new(),
@@ -88,11 +91,25 @@ impl TeamIo {
     /// joined or left. Returns whether the plan may step (it waits for robots' conditions).
     pub fn take_news(&mut self, inbox: &QueueReader<Message>) -> bool {
         for item in inbox.drain() {
-            if let Err(e) = self.dispatch.receive(&item.from, &item.body) {
+            let result = match TeamMsg::decode(&item.body) {
+                // Another agent's plan watching this one's conditions (distributed plans).
+                Ok(TeamMsg::Watch { .. } | TeamMsg::Call { .. }) => {
+                    match self.serve.receive(&item.from, &item.body) {
+                        Ok(Some((action, call))) => Err(format!(
+                            "`{action}.{call}`: this mission runs its own plan; only a mission in serve mode carries out calls (answered as failed)"
+                        )),
+                        other => other.map(|_| ()),
+                    }
+                }
+                Ok(_) => self.dispatch.receive(&item.from, &item.body),
+                Err(e) => Err(e),
+            };
+            if let Err(e) = result {
                 tracing::warn!(from = %item.from, "message ignored: {e}");
             }
         }
         if let Some(present) = self.members_changed() {
+            self.serve.members(present.iter().map(String::as_str));
             for gone in self.dispatch.members(present.iter().map(String::as_str)) {
                 tracing::warn!(
                     robot = %gone.robot,
@@ -118,10 +135,8 @@ impl TeamIo {
 
     /// Pushes the messages the plan (or the executor) made.
     pub fn send(&mut self, outbox: &QueueWriter<Message>) {
-        let out = match self.serve.as_mut() {
-            Some(s) => s.take_outgoing(),
-            None => self.dispatch.take_outgoing(),
-        };
+        let mut out = self.dispatch.take_outgoing();
+        out.extend(self.serve.take_outgoing());
         for Outgoing { to, body } in out {
             outbox.push(Message {
                 to,

@@ -77,6 +77,11 @@ impl Serve {
         }
     }
 
+    /// Whether some agent watches conditions of this one.
+    pub fn has_watchers(&self) -> bool {
+        !self.watchers.is_empty()
+    }
+
     /// The actions running now, for whom.
     pub fn running(&self) -> impl Iterator<Item = (&str, &str)> {
         self.runs.iter().map(|(a, r)| (a.as_str(), r.from.as_str()))
