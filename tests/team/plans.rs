@@ -214,3 +214,70 @@ async fn robots_running_their_own_plans_wait_for_each_other_at_the_door() {
         m.stop().await;
     }
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_robot_given_two_actions_on_the_same_modules_runs_them_one_after_the_other() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("team.plan");
+    std::fs::write(&path, "{ r1#search_west } || { r1#search_east }\n").unwrap();
+    let team = team_name("plan-queue");
+    let (pb, p1) = (free_port(), free_port());
+    let boss = start(&agent_config(
+        "boss",
+        &team,
+        pb,
+        &[],
+        "",
+        &format!(
+            r#"(name: "mission", type: "mission.pnp", values: {{"params/plan": "{}"}}),"#,
+            path.display()
+        ),
+    ))
+    .await;
+    // Both searches drive the same module; each is done once the probe has been written
+    // since it started.
+    let r1 = start(&agent_config(
+        "r1",
+        &team,
+        p1,
+        &[pb],
+        "",
+        &format!(
+            r#"(name: "probe", type: "test.probe"),
+               (name: "mission", type: "mission.pnp", values: {{"params/plan": "{}", "params/mode": "serve",
+                  "params/actions": {{"search": (enable: ["probe"], finished: "probe/in/value >= 1 and age(probe/in/value) < elapsed()")}}}}),"#,
+            path.display()
+        ),
+    ))
+    .await;
+    let memory = r1.handle::<MissionMemory>("mission/state/memory").await;
+    let starts = |m: &MissionMemory, a: &str| m.actions.get(a).map_or(0, |s| s.starts);
+    let first = wait_for(&memory, "one search started", |m| {
+        starts(m, "r1#search_west") + starts(m, "r1#search_east") == 1
+    })
+    .await;
+    let running = first.running.keys().next().cloned().unwrap();
+    r1.agent
+        .blackboard()
+        .set("probe/in/value", 1.0)
+        .await
+        .unwrap();
+    wait_for(
+        &memory,
+        "the other search started after the first ended",
+        |m| starts(m, "r1#search_west") == 1 && starts(m, "r1#search_east") == 1,
+    )
+    .await;
+    let m = memory.get();
+    assert_eq!(m.actions[&running].ends, 1, "{m:?}");
+    r1.agent
+        .blackboard()
+        .set("probe/in/value", 2.0)
+        .await
+        .unwrap();
+    let result = boss.handle::<String>("mission/out/result").await;
+    wait_for(&result, "the plan's goal", |r| r == "goal").await;
+    for m in [r1, boss] {
+        m.stop().await;
+    }
+}

@@ -209,6 +209,8 @@ impl Run {
             dispatch: &mut self.team.dispatch,
         };
         use crate::exec::Environment;
+        use crate::label::CallKind;
+        let pending = &mut self.team.pending;
         let called = !calls.is_empty();
         for (local, kind) in calls {
             let name = full(&local);
@@ -216,7 +218,29 @@ impl Run {
                 tracing::warn!(action = %name, call = %kind, "not an action of this agent in the plan: it fails");
                 continue;
             }
+            if let Some(i) = pending.iter().position(|(p, _)| *p == name) {
+                // Stopped before it could start: nothing to undo.
+                pending.remove(i);
+                if !matches!(kind, CallKind::Start | CallKind::Resume) {
+                    continue;
+                }
+            }
+            let starts = matches!(kind, CallKind::Start | CallKind::Resume);
+            if let Some(busy) = starts.then(|| sharing(env.bound, &name)).flatten() {
+                tracing::info!(action = %name, waits_for = %busy, "called by the team plan; starts when the action using the same modules ends");
+                pending.push((name, kind));
+                continue;
+            }
             tracing::info!(action = %name, call = %kind, "called by the team plan");
+            env.call(&name, kind);
+        }
+        // Starts that waited for an action that has ended since.
+        while let Some(i) = pending
+            .iter()
+            .position(|(p, _)| sharing(env.bound, p).is_none())
+        {
+            let (name, kind) = pending.remove(i);
+            tracing::info!(action = %name, call = %kind, "starts now");
             env.call(&name, kind);
         }
         // Starts reset their expressions' time origins: evaluate before answering.
@@ -227,6 +251,9 @@ impl Run {
             |local| {
                 let name = full(local);
                 let mut env = env.borrow_mut();
+                if pending.iter().any(|(p, _)| *p == name) {
+                    return (false, false);
+                }
                 match env.bound.actions.contains_key(&name) {
                     true => (env.action_finished(&name), env.action_failed(&name)),
                     false => (false, true),
@@ -258,6 +285,24 @@ impl Run {
             |local| condition_of(&mut env, &format!("{agent}#{local}"), local),
         );
     }
+}
+
+/// Another running action that switches a module `name` switches too, if any.
+fn sharing(bound: &super::bind::Bound, name: &str) -> Option<String> {
+    let modules: Vec<&str> = bound
+        .actions
+        .get(name)?
+        .enable
+        .iter()
+        .map(|h| h.key())
+        .collect();
+    bound
+        .actions
+        .iter()
+        .find(|(other, a)| {
+            *other != name && a.active() && a.enable.iter().any(|h| modules.contains(&h.key()))
+        })
+        .map(|(other, _)| other.clone())
 }
 
 /// This agent's condition `local` (bound as `agent#local` or as `local`).

@@ -36,6 +36,9 @@ pub(crate) struct TeamIo {
     pub serve_mode: bool,
     /// What other agents' plans ask of this one: actions (serve mode) and conditions.
     pub serve: Serve,
+    /// Serve mode: starts (full name, call) waiting for a running action that switches the
+    /// same modules to end: a robot does one thing with its explorer at a time.
+    pub pending: Vec<(String, crate::label::CallKind)>,
     /// `_team/members`, when the agent is in a team and the mission needs it.
     pub members: Option<AnyHandle>,
     members_seen: Option<u64>,
@@ -69,6 +72,7 @@ impl TeamIo {
             dispatch,
             serve_mode: serve,
             serve: Serve::new(),
+            pending: Vec::new(),
             members,
             members_seen: None,
             waiting: Vec::new(),
