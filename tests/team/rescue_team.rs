@@ -10,8 +10,9 @@ use std::time::Duration;
 use crate::support::*;
 
 /// The team needs about 95 simulated seconds at 4x (25 s of wall time alone, more on a loaded
-/// machine): the run is given 100 s (`--for`), the test 150 s before it kills it and fails.
-const DEADLINE: Duration = Duration::from_secs(150);
+/// machine; the fault scenario about twice that): each run is given 200 s (`--for`), the test
+/// 240 s before it kills it and fails.
+const DEADLINE: Duration = Duration::from_secs(240);
 
 /// Waits for `child` on its own thread, an explicit deadline (no polling); kills it after.
 fn wait(child: Child) -> Output {
@@ -63,7 +64,7 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
     let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
         .arg("run")
         .args(&configs)
-        .args(["--for", "100s"])
+        .args(["--for", "200s"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -97,4 +98,58 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
         stdout.contains("victim 1 confirmed"),
         "victims seen:\n{stdout}"
     );
+}
+
+#[test]
+fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_goal() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let configs = team_configs(dir.path(), &team_name("rescue-fault"));
+    // robot_1 in its own process, the rest of the team in another.
+    let (robot_1, others): (Vec<_>, Vec<_>) =
+        configs.iter().partition(|c| c.ends_with("robot_1.ron"));
+    let run = |configs: &[&String], stderr: Stdio| {
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .arg("run")
+            .args(configs)
+            .args(["--for", "200s"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(stderr)
+            .spawn()
+            .expect("petrel starts")
+    };
+    let team = run(&others, Stdio::piped());
+    let mut victim = run(&robot_1, Stdio::piped());
+    // Killed (SIGKILL: no goodbye) as soon as its search has started; the log line is the
+    // signal, read as it comes (a dead or silent process ends the read: the test then fails).
+    let log = BufReader::new(victim.stderr.take().unwrap());
+    let mut seen = Vec::new();
+    let started = log.lines().map_while(Result::ok).any(|l| {
+        let hit = l.contains("robot_1#search_west call=start");
+        seen.push(l);
+        hit
+    });
+    victim.kill().unwrap();
+    victim.wait().unwrap();
+    let tail = seen[seen.len().saturating_sub(15)..].join("\n");
+    assert!(
+        started,
+        "robot_1 never started its search; its log ends:\n{tail}"
+    );
+    let out = wait(team);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.contains("plan `team`: goal"),
+        "{}\n{stdout}",
+        out.status
+    );
+    // robot_1's search failed when it left the team, and robot_3 searched the west after the east.
+    for line in [
+        "robot_1#search_west: 1 start, 0 ends, 1 failure,",
+        "robot_3#search_west: 1 start, 1 end, 0 failures",
+        "robot_3#search_east: 1 start, 1 end, 0 failures",
+    ] {
+        assert!(stdout.contains(line), "{line}:\n{stdout}");
+    }
 }
