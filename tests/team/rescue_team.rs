@@ -119,7 +119,7 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
             .spawn()
             .expect("petrel starts")
     };
-    let team = run(&others, Stdio::piped());
+    let mut team = run(&others, Stdio::piped());
     let mut victim = run(&robot_1, Stdio::piped());
     // Killed (SIGKILL: no goodbye) as soon as its search has started; the log line is the
     // signal, read as it comes (a dead or silent process ends the read: the test then fails).
@@ -132,11 +132,12 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
     });
     victim.kill().unwrap();
     victim.wait().unwrap();
-    let tail = seen[seen.len().saturating_sub(15)..].join("\n");
-    assert!(
-        started,
-        "robot_1 never started its search; its log ends:\n{tail}"
-    );
+    if !started {
+        let _ = team.kill();
+        let _ = team.wait();
+        let tail = seen[seen.len().saturating_sub(15)..].join("\n");
+        panic!("robot_1 never started its search; its log ends:\n{tail}");
+    }
     let out = wait(team);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
