@@ -94,9 +94,14 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
             "{search}:\n{stdout}"
         );
     }
+    // Victims found by any robot are merged into the coordinator's list, with who found them.
     assert!(
-        stdout.contains("victim 1 confirmed"),
-        "victims seen:\n{stdout}"
+        stdout.contains("[victims] victim 1 at ("),
+        "victims:\n{stdout}"
+    );
+    assert!(
+        stdout.contains("team victims: ") && stdout.contains(" found by robot_"),
+        "{stdout}"
     );
 }
 

@@ -21,6 +21,7 @@ mod mapper;
 mod path_planner;
 mod recorder;
 mod sequencer;
+mod team_victims;
 mod victim_detector;
 mod victim_mapper;
 mod world;
@@ -34,6 +35,7 @@ pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use team_victims::TeamVictimsModule;
 pub use victim_detector::VictimDetector;
 pub use victim_mapper::VictimMapper;
 pub use world::SimWorld;
@@ -56,6 +58,7 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<ExplorerModule>()
         .register::<VictimDetector>()
         .register::<VictimMapper>()
+        .register::<TeamVictimsModule>()
         .register::<Recorder>();
 }
 

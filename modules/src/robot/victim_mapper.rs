@@ -1,8 +1,9 @@
 //! `vision.victim_mapper`: detections + estimated pose in, victims in the map frame out.
 
 use anyhow::anyhow;
+use petrel_actors::team::Message;
 use petrel_actors::types::Path2;
-use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Schedule};
+use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, QueueWriter, Schedule};
 
 use super::count;
 use crate::vision::{Detections, VictimMap, VictimMapParams};
@@ -15,8 +16,10 @@ pub struct VictimMapper {
     confirm_hits: Input<i64>,
     min_confidence: Input<f64>,
     max_range: Input<f64>,
+    report_to: Input<String>,
     victims: Output<Path2>,
     found: Output<i64>,
+    outbox: QueueWriter<Message>,
     core: Option<VictimMap>,
 }
 
@@ -49,6 +52,16 @@ impl Module for VictimMapper {
                 "weaker detections are ignored, 0..1",
             ),
             max_range: ports.param("params/max_range", 5.0, "farther detections are ignored, m"),
+            report_to: ports.param(
+                "params/report_to",
+                String::new(),
+                "`agent/module` told of each victim confirmed (a team's vision.team_victims); empty = nobody",
+            ),
+            outbox: ports.queue_out(
+                "out/outbox",
+                64,
+                "victims confirmed, as messages to params/report_to",
+            ),
             victims: ports.output(
                 "out/victims",
                 Path2::default(),
@@ -95,6 +108,13 @@ impl Module for VictimMapper {
                     p.0.y
                 );
                 self.found.set(self.found.value() + 1);
+                let to = self.report_to.get();
+                if !to.is_empty() {
+                    // `x y` in metres: what vision.team_victims reads.
+                    let body = format!("{} {}", p.0.x, p.0.y);
+                    let (to, from) = ((*to).clone(), String::new());
+                    self.outbox.push(Message { to, from, body });
+                }
             }
         }
         // Positions keep improving with every sighting; publish them when a victim is added
