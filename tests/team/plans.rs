@@ -281,3 +281,37 @@ async fn a_robot_given_two_actions_on_the_same_modules_runs_them_one_after_the_o
         m.stop().await;
     }
 }
+
+#[test]
+fn petrel_check_refuses_a_team_plan_without_a_team_and_an_unknown_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("t.plan"), "r1#go; r2#go\n").unwrap();
+    let check = |values: &str| {
+        let config = dir.path().join("boss.ron");
+        let text = format!(
+            r#"Agent(name: "boss", modules: [
+  (name: "mission", type: "mission.pnp", values: {{"params/plan": "t.plan", {values}}}),
+])"#
+        );
+        std::fs::write(&config, text).unwrap();
+        let out = crate::bounded::output_within_deadline(
+            std::process::Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .arg("check")
+                .arg(&config),
+        );
+        assert_eq!(out.status.code(), Some(2), "{values}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = check(r#""params/is_mission": true"#);
+    assert!(
+        err.contains("boss.ron:2:")
+            && err.contains("the plan names other robots (r1, r2), which needs a team: agent `boss` has no `team:` section"),
+        "{err}"
+    );
+    let err = check(r#""params/mode": "boss""#);
+    assert!(
+        err.contains("params/mode: expected `run` (run the plan) or `serve`")
+            && err.contains("got `boss`"),
+        "{err}"
+    );
+}

@@ -139,5 +139,24 @@ pub async fn check_mission(
         }]
     })?;
     let (bound, warnings) = prepare_all(bb, module, &setup).await;
-    bound.map(|_| warnings)
+    let (plan, _) = bound?;
+    if !setup.team {
+        let (actions, conditions) = super::bind::plan_names(&plan);
+        let dispatch = crate::remote::Dispatch::new(
+            &setup.agent,
+            "",
+            actions.iter().map(String::as_str),
+            conditions.iter().map(String::as_str),
+        );
+        if setup.serve || !dispatch.is_empty() {
+            return Err(vec![BindingProblem {
+                needle: "params/plan".into(),
+                message: format!(
+                    "{module}: {}",
+                    super::team::needs_team(&dispatch, setup.serve, &setup.agent)
+                ),
+            }]);
+        }
+    }
+    Ok(warnings)
 }

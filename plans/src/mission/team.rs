@@ -23,9 +23,19 @@ pub(crate) fn is_serve(mode: &str) -> Result<bool, String> {
         RUN => Ok(false),
         SERVE => Ok(true),
         other => Err(format!(
-            "expected `{RUN}` (run the plan) or `{SERVE}` (carry out this agent's `{{agent}}#` actions for a plan run elsewhere), got `{other}`"
+            "expected `{RUN}` (run the plan) or `{SERVE}` (carry out this agent's own `agent#action`s for a plan run elsewhere), got `{other}`"
         )),
     }
+}
+
+/// Why a mission needs a team that agent `agent` does not have.
+pub(crate) fn needs_team(dispatch: &Dispatch, serve: bool, agent: &str) -> String {
+    let robots: Vec<&str> = dispatch.robots().collect();
+    let why = match serve {
+        true => "params/mode is `serve`".to_string(),
+        false => format!("the plan names other robots ({})", robots.join(", ")),
+    };
+    format!("{why}, which needs a team: agent `{agent}` has no `team:` section")
 }
 
 /// The mission's side of the team: dispatch (run mode) or serve state, and membership.
@@ -55,15 +65,9 @@ impl TeamIo {
         } else {
             let h = ctx.blackboard().any_handle("_team/members").await.ok();
             if h.is_none() {
-                let robots: Vec<&str> = dispatch.robots().collect();
-                let why = match serve {
-                    true => "params/mode is `serve`".to_string(),
-                    false => format!("the plan names other robots ({})", robots.join(", ")),
-                };
-                anyhow::bail!(
-                    "{why}, which needs a team: agent `{}` has no `team:` section",
-                    ctx.agent()
-                );
+                // No restart will give the agent a team.
+                let message = needs_team(&dispatch, serve, ctx.agent());
+                return Err(petrel_actors::Unrecoverable(message).into());
             }
             h
         };
