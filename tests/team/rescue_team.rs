@@ -62,6 +62,7 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-team"));
     let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .current_dir(dir.path())
         .arg("run")
         .args(&configs)
         .args(["--for", "200s"])
@@ -82,6 +83,12 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
             .filter(|l| l.contains("stopping") || l.contains("ERROR") || l.contains(" WARN petrel"))
             .collect::<Vec<_>>()
             .join("\n")
+    );
+    // The picture of the run: every robot's trajectory.
+    assert!(dir.path().join("out/rescue-team.png").is_file(), "{stdout}");
+    assert!(
+        stdout.contains("robots' trajectories") && stdout.contains("  robot_3: #"),
+        "{stdout}"
     );
     // Each robot carried out its own search, to the end, once.
     for search in [
@@ -115,6 +122,7 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
         configs.iter().partition(|c| c.ends_with("robot_1.ron"));
     let run = |configs: &[&String], stderr: Stdio| {
         Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .current_dir(dir.path())
             .arg("run")
             .args(configs)
             .args(["--for", "200s"])
@@ -149,6 +157,11 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
         out.status.success() && stdout.contains("plan `team`: goal"),
         "{}\n{stdout}",
         out.status
+    );
+    // The world saw robot_1's agent leave: its body is crossed out where it stopped.
+    assert!(
+        stdout.contains("robot_1: #1f77b4, left the team at t = "),
+        "{stdout}"
     );
     // robot_1's search failed when it left the team, and robot_3 searched the west after the east.
     for line in [

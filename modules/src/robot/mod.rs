@@ -26,6 +26,7 @@ mod victim_detector;
 mod victim_mapper;
 mod world;
 mod world_body;
+mod world_tracks;
 
 pub use avoidance::ObstacleAvoidance;
 pub use body::SimBody;

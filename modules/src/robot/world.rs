@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use petrel_actors::types::Path2;
 use petrel_actors::{
     CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2,
@@ -10,7 +10,8 @@ use petrel_actors::{
 };
 use tokio::time::Instant;
 
-use super::world_body::{check_bodies, BodyIo, BodyNames};
+use super::world_body::{check_bodies, start_pose, BodyIo, BodyNames};
+use super::world_tracks::Tracks;
 use super::{check_params, count, param_error};
 use crate::sim::camera::{self, CameraConfig, CameraMotion};
 use crate::sim::error::{non_negative, positive};
@@ -51,6 +52,7 @@ pub struct SimWorld {
     world_file: Input<FilePath>,
     start: Input<Vec<f64>>,
     bodies: Input<BodyNames>,
+    png: Input<String>,
     seed: Input<i64>,
     dt: Input<f64>,
     time_scale: Input<f64>,
@@ -105,6 +107,10 @@ struct Sim {
     last_wake: Instant,
     /// Victims and dark and rough areas, for the camera.
     features: WorldFeatures,
+    /// Trajectories and departures, for the picture.
+    tracks: Tracks,
+    /// `_team/members` (an agent in a team): a robot whose agent leaves stops for good.
+    members: Option<(petrel_actors::AnyHandle, u64)>,
 }
 
 impl SimWorld {
@@ -128,6 +134,7 @@ impl Module for SimWorld {
         SimWorld {
             world_file: ports.param("params/world", FilePath::default(), "world file: `.txt` ASCII grid or `.yaml` map_server map (relative to the config file)"),
             start: ports.param("params/start", Vec::new(), "start pose `[x, y, heading_deg]`; empty = the world file's `R` marker"),
+            png: ports.param("params/png", String::new(), "a picture (path relative to the working directory, as sim.recorder's) written when the run stops: the world, its victims, every robot's trajectory in its own colour, a cross where one whose agent left the team stopped (empty = none)"),
             bodies: ports.param("params/bodies", BodyNames::default(), "names of the sim.body modules (of this agent) whose robots this world hosts; empty = this module is the one robot"),
             seed: ports.param("params/seed", 1, "seed of every noise source"),
             dt: ports.param("params/dt", 0.01, "simulated seconds per step"),
@@ -256,7 +263,20 @@ impl Module for SimWorld {
             self.pose.set(world.pose(0).unwrap_or_default());
         }
         tracing::info!(module = ctx.module(), world = %file, robots = ios.len(), "world loaded");
+        let png = self.png.get();
+        let png_path = std::path::Path::new(png.as_str());
+        if let Some(dir) = png_path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| {
+                let dir = dir.display();
+                Unrecoverable(format!(
+                    "params/png is `{png}`, but its folder {dir} cannot be created: {e}"
+                ))
+            })?;
+        }
+        let members = ctx.blackboard().any_handle("_team/members").await.ok();
         self.sim = Some(Sim {
+            tracks: Tracks::new(names),
+            members: members.map(|h| (h, u64::MAX)),
             world,
             bodies: ios,
             dt,
@@ -265,6 +285,10 @@ impl Module for SimWorld {
             features: map.features,
         });
         Ok(())
+    }
+
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.picture()
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -286,6 +310,20 @@ impl Module for SimWorld {
             n
         };
         sim.last_wake = ctx.now();
+        if let Some((h, seen)) = sim
+            .members
+            .as_mut()
+            .filter(|(h, seen)| h.version() != *seen)
+        {
+            *seen = h.version();
+            let members = h
+                .get::<petrel_actors::team::TeamMembers>()
+                .unwrap_or_default();
+            let present: Vec<String> = members.0.iter().map(|m| m.agent.clone()).collect();
+            for robot in sim.tracks.members(&present, sim.world.time()) {
+                tracing::warn!(robot = %robot, t = sim.world.time(), "a robot's agent left the team: its body stops here");
+            }
+        }
         let timeout = self.command_timeout.value();
         let now = ctx.now();
         for body in &mut sim.bodies {
@@ -329,6 +367,8 @@ impl Module for SimWorld {
                 };
                 body.publish_image(image, now);
             }
+            let poses = outputs.iter().map(|o| o.ground_truth);
+            sim.tracks.sample(sim.world.time(), poses);
             if !self.bodies.get().0.is_empty() {
                 // The world's own clock, for tools and evaluators of a multi-robot world.
                 self.sim_time.set(sim.world.time());
@@ -338,33 +378,26 @@ impl Module for SimWorld {
     }
 }
 
-/// Where robot `rank` starts: `configured` (`[x, y, heading_deg]`) or, when empty, the world
-/// file's `R` marker of that rank. `body` names the `sim.body` module whose parameter it is.
-fn start_pose(
-    configured: &[f64],
-    markers: &[Pose2],
-    rank: usize,
-    file: &FilePath,
-    body: Option<&String>,
-) -> anyhow::Result<Pose2> {
-    let param = match body {
-        Some(name) => format!("{name}/params/start"),
-        None => "params/start".to_string(),
-    };
-    match configured {
-        [] => markers.get(rank).copied().with_context(|| {
-            format!(
-                "{file} has {} `R` start marker(s), none for robot {}; set `{param}` to `[x, y, heading_deg]`",
-                markers.len(),
-                rank + 1
-            )
-        }),
-        &[x, y, deg] => Ok(Pose2::new(x, y, deg.to_radians())),
-        other => bail!("invalid parameter `{param}`: expected `[x, y, heading_deg]` or `[]`, got {other:?}"),
-    }
-}
-
 impl SimWorld {
+    /// Writes `params/png` and says which colour is whose (the end of a run, or a restart).
+    fn picture(&self) -> anyhow::Result<()> {
+        let (Some(sim), png) = (self.sim.as_ref(), self.png.get()) else {
+            return Ok(());
+        };
+        if png.is_empty() {
+            return Ok(());
+        }
+        sim.tracks
+            .save(
+                std::path::Path::new(png.as_str()),
+                sim.world.grid(),
+                &sim.features,
+            )
+            .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;
+        petrel_actors::outln!("robots' trajectories {png}\n{}", sim.tracks.legend());
+        Ok(())
+    }
+
     /// The camera's parameters as they are now (contexts change exposure and gain).
     fn camera_config(&self) -> anyhow::Result<CameraConfig> {
         let cfg = CameraConfig {

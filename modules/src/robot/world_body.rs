@@ -12,6 +12,8 @@ use petrel_actors::{AnyValue, Blackboard, Image, PropertyHandle, PropertyType, T
 use rand::SeedableRng;
 use tokio::time::Instant;
 
+use petrel_actors::{FilePath, Pose2};
+
 use crate::sim::{RobotId, RobotOutput};
 
 /// `params/bodies` of `sim.world`: the names of the `sim.body` modules it hosts, in order.
@@ -149,5 +151,31 @@ async fn value(bb: &Blackboard, address: &str) -> anyhow::Result<RemoteValue> {
     match bb.feed(address).await? {
         RemoteFeed::Value(v) => Ok(v),
         RemoteFeed::Queue(_) => bail!("`{address}` is a queue, expected an output value"),
+    }
+}
+
+/// Where robot `rank` starts: `configured` (`[x, y, heading_deg]`) or, when empty, the world
+/// file's `R` marker of that rank. `body` names the `sim.body` module whose parameter it is.
+pub(super) fn start_pose(
+    configured: &[f64],
+    markers: &[Pose2],
+    rank: usize,
+    file: &FilePath,
+    body: Option<&String>,
+) -> anyhow::Result<Pose2> {
+    let param = match body {
+        Some(name) => format!("{name}/params/start"),
+        None => "params/start".to_string(),
+    };
+    match configured {
+        [] => markers.get(rank).copied().with_context(|| {
+            format!(
+                "{file} has {} `R` start marker(s), none for robot {}; set `{param}` to `[x, y, heading_deg]`",
+                markers.len(),
+                rank + 1
+            )
+        }),
+        &[x, y, deg] => Ok(Pose2::new(x, y, deg.to_radians())),
+        other => bail!("invalid parameter `{param}`: expected `[x, y, heading_deg]` or `[]`, got {other:?}"),
     }
 }
