@@ -2,7 +2,6 @@
 
 use std::time::Duration;
 
-use anyhow::bail;
 use petrel_actors::types::Path2;
 use petrel_actors::{
     CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2,
@@ -10,15 +9,14 @@ use petrel_actors::{
 };
 use tokio::time::Instant;
 
+mod config;
+
 use super::world_body::{check_bodies, start_pose, BodyIo, BodyNames};
 use super::world_tracks::Tracks;
-use super::{check_params, count, param_error};
-use crate::sim::camera::{self, CameraConfig, CameraMotion};
+use super::{check_params, param_error};
+use crate::sim::camera::{self, CameraMotion};
 use crate::sim::error::{non_negative, positive};
-use crate::sim::{
-    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, World, WorldFeatures,
-    WorldMap,
-};
+use crate::sim::{load_world, World, WorldFeatures, WorldMap};
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
 /// `World::add_robot` checks the config and names the core parameter.
@@ -396,59 +394,5 @@ impl SimWorld {
             .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;
         petrel_actors::outln!("robots' trajectories {png}\n{}", sim.tracks.legend());
         Ok(())
-    }
-
-    /// The camera's parameters as they are now (contexts change exposure and gain).
-    fn camera_config(&self) -> anyhow::Result<CameraConfig> {
-        let cfg = CameraConfig {
-            fov: self.camera_fov_deg.value().to_radians(),
-            exposure_ms: self.camera_exposure.value(),
-            gain: self.camera_gain.value(),
-            ..CameraConfig::default()
-        };
-        cfg.validate().map_err(|e| param_error(e, &[]))?;
-        Ok(cfg)
-    }
-
-    fn robot_config(&self) -> anyhow::Result<RobotConfig> {
-        let drive = match self.drive.get().as_str() {
-            "differential" => DriveKind::Differential,
-            "holonomic" => DriveKind::Holonomic,
-            other => bail!("invalid parameter `params/drive`: expected differential or holonomic, got `{other}`"),
-        };
-        let odom_noise = match self.odom_noise.get().as_slice() {
-            [] => None,
-            &[trans_std, rot_std, rot_per_trans_std] => Some(OdomNoise { trans_std, rot_std, rot_per_trans_std }),
-            other => bail!("invalid parameter `params/odom_noise`: expected `[trans_std, rot_std, rot_per_trans_std]` or `[]`, got {other:?}"),
-        };
-        let rate = self.laser_rate.value();
-        let fov_deg = self.laser_fov_deg.value();
-        if !(fov_deg > 0.0 && fov_deg <= 360.0) {
-            bail!("invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {fov_deg}");
-        }
-        let laser = match self.laser_enabled.value() {
-            true => Some(LaserConfig {
-                mount: self.laser_mount.value(),
-                rays: count("laser/rays", self.laser_rays.value())?,
-                fov: fov_deg.to_radians(),
-                range_max: self.laser_range_max.value(),
-                range_noise_std: self.laser_noise.value(),
-                rate_hz: (rate != 0.0).then_some(rate),
-            }),
-            false => None,
-        };
-        Ok(RobotConfig {
-            radius: self.radius.value(),
-            drive,
-            limits: Limits {
-                max_speed: self.max_speed.value(),
-                max_lateral_speed: self.max_lateral_speed.value(),
-                max_turn: self.max_turn.value(),
-                max_accel: self.max_accel.value(),
-                max_turn_accel: self.max_turn_accel.value(),
-            },
-            odom_noise,
-            laser,
-        })
     }
 }
