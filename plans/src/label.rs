@@ -39,7 +39,7 @@ impl CallKind {
         }
     }
 
-    fn parse(f: &str) -> Option<CallKind> {
+    pub(crate) fn parse(f: &str) -> Option<CallKind> {
         Some(match f {
             "start" => CallKind::Start,
             "end" => CallKind::End,

@@ -62,6 +62,7 @@ mod load;
 pub mod mission;
 mod model;
 mod pnml;
+pub mod remote;
 mod simulate;
 mod text;
 

@@ -207,6 +207,11 @@ impl Blackboard {
         }
     }
 
+    /// The name of the agent whose blackboard this is.
+    pub fn agent(&self) -> &str {
+        &self.agent
+    }
+
     pub(crate) async fn bind(&self, module: &str) -> Result<Binding, BlackboardError> {
         self.call(|r| BlackboardMsg::Bind(module.to_string(), r))
             .await

@@ -30,6 +30,9 @@ pub struct FrontierParams {
     pub gain_weight: f64,
     /// Targets within this distance of a blacklisted point are skipped, metres (default 0.6).
     pub blacklist_radius: f64,
+    /// Only frontier cells in this rectangle `[x0, y0, x1, y1]` count (a robot's share of a
+    /// team's search); the way there may cross anything. `None` (default): everywhere.
+    pub area: Option<[f64; 4]>,
 }
 
 impl Default for FrontierParams {
@@ -40,6 +43,7 @@ impl Default for FrontierParams {
             min_frontier_cells: 4,
             gain_weight: 0.05,
             blacklist_radius: 0.6,
+            area: None,
         }
     }
 }
@@ -55,6 +59,18 @@ impl FrontierParams {
                 param: "occupied_threshold".into(),
                 message: format!("expected 1..=100, got {}", self.occupied_threshold),
             });
+        }
+        if let Some([x0, y0, x1, y1]) = self.area {
+            let finite = [x0, y0, x1, y1].iter().all(|v| v.is_finite());
+            if !finite || x0 >= x1 || y0 >= y1 {
+                return Err(ParamError {
+                    param: "area".into(),
+                    message: format!(
+                        "expected `[x0, y0, x1, y1]` with x0 < x1 and y0 < y1, got {:?}",
+                        [x0, y0, x1, y1]
+                    ),
+                });
+            }
         }
         if self.min_frontier_cells == 0 {
             return Err(ParamError {
@@ -160,9 +176,20 @@ pub fn explore(
             queue.push_back((nc, nr));
         }
     }
+    let inside = |c: i64, r: i64| {
+        params.area.is_none_or(|[x0, y0, x1, y1]| {
+            let (x, y) = (ox + (c as f64 + 0.5) * res, oy + (r as f64 + 0.5) * res);
+            (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
+        })
+    };
+    // Until the robot can reach some of its area, every frontier counts (the nearest to the
+    // area first): the area is still unknown, and the way there is what must be explored.
+    let reached = (0..h).any(|r| (0..w).any(|c| dist[index(c, r)] != u32::MAX && inside(c, r)));
+    let in_area = |c: i64, r: i64| !reached || inside(c, r);
     let is_frontier = |c: i64, r: i64| {
         let i = index(c, r);
-        dist[i] != u32::MAX
+        in_area(c, r)
+            && dist[i] != u32::MAX
             && !blocked[i]
             && [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|(dc, dr)| {
                 let (nc, nr) = (c + dc, r + dr);
@@ -230,7 +257,16 @@ pub fn explore(
     if frontiers.is_empty() {
         return Exploration::Done;
     }
-    let score = |f: &Frontier| f.travel - params.gain_weight * f.size as f64;
+    let score = |f: &Frontier| match (reached, params.area) {
+        (false, Some([x0, y0, x1, y1])) => {
+            let (x, y) = (f.target.0.x, f.target.0.y);
+            (x0 - x)
+                .max(x - x1)
+                .max(0.0)
+                .hypot((y0 - y).max(y - y1).max(0.0))
+        }
+        _ => f.travel - params.gain_weight * f.size as f64,
+    };
     frontiers.sort_by(|a, b| score(a).total_cmp(&score(b)));
     Exploration::Frontiers(frontiers)
 }

@@ -31,6 +31,7 @@ pub struct ExplorerModule {
     give_up_s: Input<f64>,
     end_run: Input<bool>,
     timeout_s: Input<f64>,
+    area: Input<Vec<f64>>,
     target: Output<Pose2>,
     done: Output<bool>,
     frontiers: Output<i64>,
@@ -71,6 +72,7 @@ impl Module for ExplorerModule {
             give_up_s: ports.param_in("params/give_up_s", 60.0, Range::new(0.1, 1e7), "a target not reached within this many simulated seconds is given up (and skipped from then on)"),
             end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
             timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time after which exploration fails, s (0 = none)"),
+            area: ports.param("params/area", Vec::new(), "explore only frontiers in `[x0, y0, x1, y1]` (a robot's share of a team's search); empty = everywhere. Read at every step: a new area starts exploring again"),
             target: ports.output("out/targetPose", Pose2::default(), "the frontier to explore next"),
             done: ports.output("out/done", false, "no reachable frontier is left"),
             frontiers: ports.output("out/frontiers", 0, "reachable frontiers at the last evaluation"),
@@ -87,10 +89,12 @@ impl Module for ExplorerModule {
             .on_change(&self.arrived)
             .on_change(&self.failed)
             .on_change(&self.sim_time)
+            .on_change(&self.area)
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let params = FrontierParams {
+            area: self.area()?,
             clearance: self.clearance.value(),
             min_frontier_cells: count("min_frontier_cells", self.min_frontier_cells.value())?,
             gain_weight: self.gain_weight.value(),
@@ -119,10 +123,19 @@ impl Module for ExplorerModule {
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let t = self.sim_time.value();
+        let area = self.area()?;
         let state = self
             .state
             .as_mut()
             .expect("stepping only after a successful init");
+        if area != state.params.area {
+            // A new share of the search (a team reassigning areas): explore again.
+            state.params.area = area;
+            state.over = false;
+            state.current = None;
+            state.last_plan = f64::NEG_INFINITY;
+            self.done.set(false);
+        }
         if state.over {
             return Ok(());
         }
@@ -197,5 +210,24 @@ impl Module for ExplorerModule {
             }
         }
         Ok(())
+    }
+}
+
+impl ExplorerModule {
+    /// `params/area` as the core takes it.
+    fn area(&self) -> anyhow::Result<Option<[f64; 4]>> {
+        let area = match self.area.get().as_slice() {
+            [] => None,
+            &[x0, y0, x1, y1] => Some([x0, y0, x1, y1]),
+            other => anyhow::bail!(
+                "invalid parameter `params/area`: expected `[x0, y0, x1, y1]` or `[]`, got {other:?}"
+            ),
+        };
+        let check = FrontierParams {
+            area,
+            ..FrontierParams::default()
+        };
+        check.validate().map_err(|e| param_error(e, &[]))?;
+        Ok(area)
     }
 }

@@ -14,26 +14,33 @@
 //! driver replaces `sim.world` by publishing the same properties.
 
 mod avoidance;
+mod body;
 mod explorer;
 mod localizer;
 mod mapper;
 mod path_planner;
 mod recorder;
 mod sequencer;
+mod team_victims;
 mod victim_detector;
 mod victim_mapper;
 mod world;
+mod world_body;
+mod world_tracks;
 
 pub use avoidance::ObstacleAvoidance;
+pub use body::SimBody;
 pub use explorer::ExplorerModule;
 pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use team_victims::TeamVictimsModule;
 pub use victim_detector::VictimDetector;
 pub use victim_mapper::VictimMapper;
 pub use world::SimWorld;
+pub use world_body::BodyNames;
 
 use petrel_actors::ModuleRegistry;
 
@@ -43,6 +50,7 @@ use crate::sim::ParamError;
 pub fn register(registry: &mut ModuleRegistry) {
     registry
         .register::<SimWorld>()
+        .register::<SimBody>()
         .register::<LocalizerModule>()
         .register::<MapperModule>()
         .register::<PathPlanner>()
@@ -51,6 +59,7 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<ExplorerModule>()
         .register::<VictimDetector>()
         .register::<VictimMapper>()
+        .register::<TeamVictimsModule>()
         .register::<Recorder>();
 }
 
@@ -94,5 +103,7 @@ fn count(name: &str, value: i64) -> anyhow::Result<usize> {
     })
 }
 
+#[cfg(test)]
+mod body_tests;
 #[cfg(test)]
 mod tests;

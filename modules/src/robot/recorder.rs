@@ -336,6 +336,7 @@ impl Module for Recorder {
                     )
                 }),
                 scale: None,
+                tracks: &[],
             };
             save_png(Path::new(png.as_str()), &self.map.get(), &layers)
                 .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;

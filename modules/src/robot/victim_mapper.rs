@@ -2,8 +2,9 @@
 //! the one a mission handles now (its target, report and dismiss).
 
 use anyhow::anyhow;
+use petrel_actors::team::Message;
 use petrel_actors::types::Path2;
-use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, Range, Schedule};
+use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, QueueWriter, Range, Schedule};
 
 use super::count;
 use crate::vision::{Detections, VictimMap, VictimMapParams};
@@ -33,6 +34,8 @@ pub struct VictimMapper {
     report_done: Output<bool>,
     dismiss_done: Output<bool>,
     dismissed: Output<i64>,
+    report_to: Input<String>,
+    outbox: QueueWriter<Message>,
     /// The detections version last added (a step may be for a command only).
     frame_version: Option<u64>,
     core: Option<VictimMap>,
@@ -65,6 +68,8 @@ impl Module for VictimMapper {
             report_done: ports.output("out/reportDone", false, "in/report was carried out (false again when in/report is)"),
             dismiss_done: ports.output("out/dismissDone", false, "in/dismiss was carried out (false again when in/dismiss is)"),
             dismissed: ports.output("out/dismissed", 0, "candidates dismissed so far"),
+            report_to: ports.param("params/report_to", String::new(), "`agent/module` told of each victim seen (a team's vision.team_victims); empty = nobody"),
+            outbox: ports.queue_out("out/outbox", 64, "victims seen, as messages to params/report_to"),
             frame_version: None,
             core: None,
         }
@@ -111,6 +116,13 @@ impl Module for VictimMapper {
                         p.0.x,
                         p.0.y
                     );
+                    let to = self.report_to.get();
+                    if !to.is_empty() {
+                        // `x y` in metres: what vision.team_victims reads.
+                        let body = format!("{} {}", p.0.x, p.0.y);
+                        let (to, from) = ((*to).clone(), String::new());
+                        self.outbox.push(Message { to, from, body });
+                    }
                 }
             }
         }

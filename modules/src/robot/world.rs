@@ -2,7 +2,6 @@
 
 use std::time::Duration;
 
-use anyhow::{bail, Context as _};
 use petrel_actors::types::Path2;
 use petrel_actors::{
     CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2,
@@ -10,13 +9,14 @@ use petrel_actors::{
 };
 use tokio::time::Instant;
 
-use super::{check_params, count, param_error};
-use crate::sim::camera::{self, CameraConfig, CameraMotion};
+mod config;
+
+use super::world_body::{check_bodies, start_pose, BodyIo, BodyNames};
+use super::world_tracks::Tracks;
+use super::{check_params, param_error};
+use crate::sim::camera::{self, CameraMotion};
 use crate::sim::error::{non_negative, positive};
-use crate::sim::{
-    load_world, DriveKind, LaserConfig, Limits, OdomNoise, RobotConfig, RobotId, World,
-    WorldFeatures, WorldMap,
-};
+use crate::sim::{load_world, World, WorldFeatures, WorldMap};
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
 /// `World::add_robot` checks the config and names the core parameter.
@@ -38,13 +38,19 @@ const VICTIM_BODY: f64 = 0.3;
 /// behind slows simulated time down instead of freezing in a catch-up burst.
 const MAX_CATCH_UP_STEPS: u32 = 10;
 
-/// `sim.world`: loads a world file and simulates one robot in it.
+/// `sim.world`: loads a world file and simulates robots in it.
 ///
-/// One robot per instance: a second robot is a second `sim.world` instance (they do not see
-/// each other; the pure [`World`] supports that, the module does not yet).
+/// With `params/bodies` empty the module is the one robot (its own `in/controlSpeed`,
+/// `out/odometry`, ...). Otherwise it hosts one robot per `sim.body` module named there, on
+/// those modules' ports, all of the same make (this module's robot parameters): they see
+/// each other in lasers and cameras and collide with each other. A body per module keeps
+/// every robot's ports at the paths a single robot has, so another agent links to
+/// `sim/robot_2/out/laserScan` as it would to its own simulator or driver.
 pub struct SimWorld {
     world_file: Input<FilePath>,
     start: Input<Vec<f64>>,
+    bodies: Input<BodyNames>,
+    png: Input<String>,
     seed: Input<i64>,
     dt: Input<f64>,
     time_scale: Input<f64>,
@@ -70,17 +76,19 @@ pub struct SimWorld {
     camera_gain: Input<f64>,
     camera_rate: Input<f64>,
     camera_fov_deg: Input<f64>,
-    command: Input<Twist2>,
-    odometry: QueueWriter<Pose2>,
-    scans: QueueWriter<LaserScan>,
-    images: QueueWriter<Image>,
+    // The robot's own ports: declared here, written through the same feeds as a sim.body's
+    // (world_body.rs), so one step serves one robot or many.
+    _command: Input<Twist2>,
+    _odometry: QueueWriter<Pose2>,
+    _scans: QueueWriter<LaserScan>,
+    _images: QueueWriter<Image>,
     pose: Output<Pose2>,
-    speed: Output<Twist2>,
-    collisions: Output<i64>,
+    _speed: Output<Twist2>,
+    _collisions: Output<i64>,
     sim_time: Output<f64>,
     world_goals: Output<Path2>,
     world_victims: Output<Path2>,
-    vibration: Output<f64>,
+    _vibration: Output<f64>,
     dark_areas: Output<Vec<f64>>,
     rough_areas: Output<Vec<f64>>,
     sim: Option<Sim>,
@@ -89,18 +97,18 @@ pub struct SimWorld {
 /// What exists only after a successful init.
 struct Sim {
     world: World,
-    id: RobotId,
+    /// The robots, by id.
+    bodies: Vec<BodyIo>,
     dt: f64,
     /// Real-time mode: simulated seconds owed to the wall clock since the last step.
     owed: f64,
     last_wake: Instant,
-    /// Version of `in/controlSpeed` last seen, and the simulated time it was first seen.
-    command_seen: (u64, f64),
     /// Victims and dark and rough areas, for the camera.
     features: WorldFeatures,
-    /// The camera's own noise stream and the simulated time of its next frame.
-    camera_rng: crate::seeded::SeededRng,
-    next_frame: f64,
+    /// Trajectories and departures, for the picture.
+    tracks: Tracks,
+    /// `_team/members` (an agent in a team): a robot whose agent leaves stops for good.
+    members: Option<(petrel_actors::AnyHandle, u64)>,
 }
 
 impl SimWorld {
@@ -118,12 +126,14 @@ impl SimWorld {
 impl Module for SimWorld {
     const TYPE: &'static str = "sim.world";
     const DESCRIPTION: &'static str =
-        "Simulates one robot (kinematics, odometry, laser, collisions) in a world file.";
+        "Simulates robots (kinematics, odometry, laser, camera, collisions) in a world file: itself, or the sim.body modules it names.";
 
     fn declare(ports: &mut Ports) -> Self {
         SimWorld {
             world_file: ports.param("params/world", FilePath::default(), "world file: `.txt` ASCII grid or `.yaml` map_server map (relative to the config file)"),
             start: ports.param("params/start", Vec::new(), "start pose `[x, y, heading_deg]`; empty = the world file's `R` marker"),
+            png: ports.param("params/png", String::new(), "a picture (path relative to the working directory, as sim.recorder's) written when the run stops: the world, its victims, every robot's trajectory in its own colour, a cross where one whose agent left the team stopped (empty = none)"),
+            bodies: ports.param("params/bodies", BodyNames::default(), "names of the sim.body modules (of this agent) whose robots this world hosts; empty = this module is the one robot"),
             seed: ports.param("params/seed", 1, "seed of every noise source"),
             dt: ports.param_in("params/dt", 0.01, Range::new(1e-4, 1.0), "simulated seconds per step"),
             time_scale: ports.param_in("params/time_scale", 1.0, Range::new(0.01, 1000.0), "simulated seconds per wall second: steps run every dt / time_scale"),
@@ -149,17 +159,17 @@ impl Module for SimWorld {
             camera_gain: ports.param_in("params/camera/gain", 1.0, Range::new(1.0, 16.0), "sensor gain [1, 16]: brighter, noise amplified alike; read at every frame"),
             camera_rate: ports.param_in("params/camera/rate_hz", 10.0, Range::new(0.1, 100.0), "frames per simulated second"),
             camera_fov_deg: ports.param_in("params/camera/fov_deg", 60.0, Range::new(1.0, 179.0), "horizontal field of view, degrees (0, 180)"),
-            command: ports.input("in/controlSpeed", Twist2::default(), "velocity command (clamped to the limits)"),
-            odometry: ports.queue_out("out/odometry", 256, "odometric pose at every step (item stamp = push time; simulated time is out/simTime)"),
-            scans: ports.queue_out("out/laserScan", 16, "laser scans, in the laser frame"),
-            images: ports.queue_out("out/image", 4, "camera frames, 160 x 120 mono8 (shared, never copied)"),
+            _command: ports.input("in/controlSpeed", Twist2::default(), "velocity command (clamped to the limits)"),
+            _odometry: ports.queue_out("out/odometry", 256, "odometric pose at every step (item stamp = push time; simulated time is out/simTime)"),
+            _scans: ports.queue_out("out/laserScan", 16, "laser scans, in the laser frame"),
+            _images: ports.queue_out("out/image", 4, "camera frames, 160 x 120 mono8 (shared, never copied)"),
             pose: ports.output("out/pose", Pose2::default(), "ground-truth pose (for evaluation: a real robot has none)"),
-            speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
-            collisions: ports.output("out/collisions", 0, "collision events so far"),
+            _speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
+            _collisions: ports.output("out/collisions", 0, "collision events so far"),
             sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             world_goals: ports.output("out/worldGoals", Path2::default(), "goal markers `1`..`9` of an ASCII world file, in order"),
             world_victims: ports.output("out/worldVictims", Path2::default(), "victims of the world file (ground truth, for evaluation)"),
-            vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1 (an IMU would measure it): high on rough floor even when slow"),
+            _vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1 (an IMU would measure it): high on rough floor even when slow"),
             dark_areas: ports.output("out/darkAreas", Vec::new(), "dark areas of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
             rough_areas: ports.output("out/roughAreas", Vec::new(), "rough floor of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
             sim: None,
@@ -183,13 +193,13 @@ impl Module for SimWorld {
         let file = self.world_file.get();
         // A file that does not parse will not parse after a restart either.
         let map = self.load_map()?;
-        let start = match self.start.get().as_slice() {
-            [] => *map.starts.first().with_context(|| {
-                format!("{file} has no `R` start marker; set params/start to `[x, y, heading_deg]`")
-            })?,
-            &[x, y, deg] => Pose2::new(x, y, deg.to_radians()),
-            other => bail!("invalid parameter `params/start`: expected `[x, y, heading_deg]` or `[]`, got {other:?}"),
-        };
+        let bodies = self.bodies.get().0.clone();
+        // A config naming the wrong modules will not name better ones after a restart.
+        check_bodies(ctx.blackboard(), &bodies)
+            .await
+            .map_err(|e| Unrecoverable(format!("{e:#}")))?;
+        let own = [ctx.module().to_string()];
+        let names: &[String] = if bodies.is_empty() { &own } else { &bodies };
         let dt = self.dt.value();
         let scale = self.time_scale.value();
         check_params(positive, &[("dt", dt), ("time_scale", scale)])?;
@@ -208,9 +218,29 @@ impl Module for SimWorld {
             grid.fill_rect(v.0.x - r, v.0.y - r, v.0.x + r, v.0.y + r);
         }
         let mut world = World::new(grid, seed);
-        let id = world
-            .add_robot(config, start)
-            .map_err(|e| param_error(e, ROBOT_PARAMS))?;
+        let mut ios = Vec::with_capacity(names.len());
+        for (rank, name) in names.iter().enumerate() {
+            let is_own = bodies.is_empty();
+            let start = match is_own {
+                true => self.start.get(),
+                false => {
+                    ctx.blackboard()
+                        .get(&format!("{name}/params/start"))
+                        .await?
+                }
+            };
+            let start = start_pose(&start, &map.starts, rank, &file, (!is_own).then_some(name))?;
+            // A start pose that overlaps will overlap again after a restart.
+            let id = world.add_robot(config.clone(), start).map_err(|e| {
+                let e = param_error(e, ROBOT_PARAMS);
+                Unrecoverable(match is_own {
+                    true => e.to_string(),
+                    false => format!("placing body `{name}`: {e}"),
+                })
+            })?;
+            ios.push(BodyIo::bind(ctx.blackboard(), name, id, seed).await?);
+            tracing::info!(module = ctx.module(), body = %name, ?start, "robot placed");
+        }
         self.world_goals.set(
             map.goals
                 .iter()
@@ -227,20 +257,36 @@ impl Module for SimWorld {
         };
         self.dark_areas.set(flat(&map.features.dark));
         self.rough_areas.set(flat(&map.features.rough));
-        self.pose.set(start);
-        tracing::info!(module = ctx.module(), world = %file, ?start, "world loaded");
+        if bodies.is_empty() {
+            self.pose.set(world.pose(0).unwrap_or_default());
+        }
+        tracing::info!(module = ctx.module(), world = %file, robots = ios.len(), "world loaded");
+        let png = self.png.get();
+        let png_path = std::path::Path::new(png.as_str());
+        if let Some(dir) = png_path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| {
+                let dir = dir.display();
+                Unrecoverable(format!(
+                    "params/png is `{png}`, but its folder {dir} cannot be created: {e}"
+                ))
+            })?;
+        }
+        let members = ctx.blackboard().any_handle("_team/members").await.ok();
         self.sim = Some(Sim {
+            tracks: Tracks::new(names),
+            members: members.map(|h| (h, u64::MAX)),
             world,
-            id,
+            bodies: ios,
             dt,
             owed: 0.0,
             last_wake: ctx.now(),
-            command_seen: (0, 0.0),
             features: map.features,
-            camera_rng: crate::seeded::seeded(seed ^ 0xCA3E_7A00),
-            next_frame: 0.0,
         });
         Ok(())
+    }
+
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.picture()
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -262,61 +308,68 @@ impl Module for SimWorld {
             n
         };
         sim.last_wake = ctx.now();
-        // A silent controller must not leave the robot driving: stop it, as real bases do.
-        let command = self.command.read();
-        if command.version != sim.command_seen.0 {
-            sim.command_seen = (command.version, sim.world.time());
+        if let Some((h, seen)) = sim
+            .members
+            .as_mut()
+            .filter(|(h, seen)| h.version() != *seen)
+        {
+            *seen = h.version();
+            let members = h
+                .get::<petrel_actors::team::TeamMembers>()
+                .unwrap_or_default();
+            let present: Vec<String> = members.0.iter().map(|m| m.agent.clone()).collect();
+            for robot in sim.tracks.members(&present, sim.world.time()) {
+                tracing::warn!(robot = %robot, t = sim.world.time(), "a robot's agent left the team: its body stops here");
+            }
         }
         let timeout = self.command_timeout.value();
-        let stale = timeout > 0.0 && sim.world.time() - sim.command_seen.1 > timeout;
-        let cmd = if stale { Twist2::default() } else { *command };
-        sim.world.set_command(sim.id, cmd)?;
+        let now = ctx.now();
+        for body in &mut sim.bodies {
+            let cmd = body.command(sim.world.time(), timeout);
+            sim.world.set_command(body.id, cmd)?;
+        }
         for _ in 0..steps {
-            let out = sim.world.step(sim.dt)?[sim.id].clone();
-            // The scan goes first: a consumer pairing a scan with the pose estimated from the
-            // odometry of the same step then sees the scan before that pose exists.
-            if let Some(scan) = &out.scan {
-                self.scans.push(scan.clone());
-            }
-            self.odometry.push(out.odometry.pose);
-            self.pose.set(out.ground_truth);
-            self.speed.set(out.speed);
-            self.collisions.set(out.collisions as i64);
-            self.sim_time.set(out.odometry.stamp);
-            let rough = sim
-                .features
-                .is_rough(out.ground_truth.x(), out.ground_truth.y());
-            let vibration = match rough {
-                true => 0.3 + 0.5 * out.speed.v.abs(),
-                false => 0.05 * out.speed.v.abs(),
-            };
-            if vibration != self.vibration.value() {
-                self.vibration.set(vibration);
-            }
-            let due = out.odometry.stamp + 1e-9 >= sim.next_frame;
-            if let Some(cfg) = camera_config.as_ref().filter(|_| due) {
-                sim.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();
+            let outputs = sim.world.step(sim.dt)?.to_vec();
+            for (body, out) in sim.bodies.iter_mut().zip(&outputs) {
+                let (x, y) = (out.ground_truth.x(), out.ground_truth.y());
+                let rough = sim.features.is_rough(x, y);
+                let vibration = match rough {
+                    true => 0.3 + 0.5 * out.speed.v.abs(),
+                    false => 0.05 * out.speed.v.abs(),
+                };
+                body.publish(out, vibration, now);
+                let due = out.odometry.stamp + 1e-9 >= body.next_frame;
+                let Some(cfg) = camera_config.as_ref().filter(|_| due) else {
+                    continue;
+                };
+                body.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();
                 let motion = CameraMotion {
                     speed: out.speed,
-                    rough: sim
-                        .features
-                        .is_rough(out.ground_truth.x(), out.ground_truth.y()),
+                    rough,
                 };
-                let grid = sim.world.grid();
-                let pixels = camera::render(
-                    grid,
+                let others = sim.world.footprints_except(body.id);
+                let pixels = camera::render_among(
+                    sim.world.grid(),
                     &sim.features,
+                    &others,
                     out.ground_truth,
                     motion,
                     cfg,
-                    &mut sim.camera_rng,
+                    &mut body.camera_rng,
                 );
-                self.images.push(Image {
+                let image = Image {
                     width: cfg.width,
                     height: cfg.height,
                     encoding: "mono8".into(),
                     data: pixels.into(),
-                });
+                };
+                body.publish_image(image, now);
+            }
+            let poses = outputs.iter().map(|o| o.ground_truth);
+            sim.tracks.sample(sim.world.time(), poses);
+            if !self.bodies.get().0.is_empty() {
+                // The world's own clock, for tools and evaluators of a multi-robot world.
+                self.sim_time.set(sim.world.time());
             }
         }
         Ok(())
@@ -324,57 +377,22 @@ impl Module for SimWorld {
 }
 
 impl SimWorld {
-    /// The camera's parameters as they are now (contexts change exposure and gain).
-    fn camera_config(&self) -> anyhow::Result<CameraConfig> {
-        let cfg = CameraConfig {
-            fov: self.camera_fov_deg.value().to_radians(),
-            exposure_ms: self.camera_exposure.value(),
-            gain: self.camera_gain.value(),
-            ..CameraConfig::default()
+    /// Writes `params/png` and says which colour is whose (the end of a run, or a restart).
+    fn picture(&self) -> anyhow::Result<()> {
+        let (Some(sim), png) = (self.sim.as_ref(), self.png.get()) else {
+            return Ok(());
         };
-        cfg.validate().map_err(|e| param_error(e, &[]))?;
-        Ok(cfg)
-    }
-
-    fn robot_config(&self) -> anyhow::Result<RobotConfig> {
-        let drive = match self.drive.get().as_str() {
-            "differential" => DriveKind::Differential,
-            "holonomic" => DriveKind::Holonomic,
-            other => bail!("invalid parameter `params/drive`: expected differential or holonomic, got `{other}`"),
-        };
-        let odom_noise = match self.odom_noise.get().as_slice() {
-            [] => None,
-            &[trans_std, rot_std, rot_per_trans_std] => Some(OdomNoise { trans_std, rot_std, rot_per_trans_std }),
-            other => bail!("invalid parameter `params/odom_noise`: expected `[trans_std, rot_std, rot_per_trans_std]` or `[]`, got {other:?}"),
-        };
-        let rate = self.laser_rate.value();
-        let fov_deg = self.laser_fov_deg.value();
-        if !(fov_deg > 0.0 && fov_deg <= 360.0) {
-            bail!("invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {fov_deg}");
+        if png.is_empty() {
+            return Ok(());
         }
-        let laser = match self.laser_enabled.value() {
-            true => Some(LaserConfig {
-                mount: self.laser_mount.value(),
-                rays: count("laser/rays", self.laser_rays.value())?,
-                fov: fov_deg.to_radians(),
-                range_max: self.laser_range_max.value(),
-                range_noise_std: self.laser_noise.value(),
-                rate_hz: (rate != 0.0).then_some(rate),
-            }),
-            false => None,
-        };
-        Ok(RobotConfig {
-            radius: self.radius.value(),
-            drive,
-            limits: Limits {
-                max_speed: self.max_speed.value(),
-                max_lateral_speed: self.max_lateral_speed.value(),
-                max_turn: self.max_turn.value(),
-                max_accel: self.max_accel.value(),
-                max_turn_accel: self.max_turn_accel.value(),
-            },
-            odom_noise,
-            laser,
-        })
+        sim.tracks
+            .save(
+                std::path::Path::new(png.as_str()),
+                sim.world.grid(),
+                &sim.features,
+            )
+            .map_err(|e| anyhow::anyhow!("cannot write params/png `{png}`: {e}"))?;
+        petrel_actors::outln!("robots' trajectories {png}\n{}", sim.tracks.legend());
+        Ok(())
     }
 }

@@ -34,6 +34,11 @@ pub const VICTIM_RADIUS: f64 = 0.25;
 pub const VICTIM_HEIGHT: f64 = 0.3;
 /// Edge of the victims' checkerboard squares, metres.
 pub const CHECKER: f64 = 0.06;
+/// Height of another robot's body as the camera sees it, metres (taller than the camera, so
+/// a robot in view fills the lower half of the image over its width).
+pub const ROBOT_HEIGHT: f64 = 0.4;
+/// Another robot's uniform grey albedo: no checkerboard, so it is never taken for a victim.
+const ROBOT_ALBEDO: f64 = 0.45;
 const WALL_HEIGHT: f64 = 1.0;
 /// Photons per millisecond of exposure for a white surface in full light.
 const PHOTONS_PER_MS: f64 = 60.0;
@@ -144,6 +149,28 @@ pub fn render(
     cfg: &CameraConfig,
     rng: &mut impl Rng,
 ) -> Vec<u8> {
+    render_among(grid, features, &[], pose, motion, cfg, rng)
+}
+
+/// What a column's ray meets before the wall: a victim (with the lateral coordinate on its
+/// surface, for the checkerboard) or another robot.
+#[derive(Clone, Copy)]
+enum Body {
+    Victim(f64),
+    Robot,
+}
+
+/// [`render`] in a world shared with other robots: `robots` are their footprints
+/// `(x, y, radius)` (not the camera's own), seen as plain grey cylinders [`ROBOT_HEIGHT`] high.
+pub fn render_among(
+    grid: &Grid,
+    features: &WorldFeatures,
+    robots: &[(f64, f64, f64)],
+    pose: Pose2,
+    motion: CameraMotion,
+    cfg: &CameraConfig,
+    rng: &mut impl Rng,
+) -> Vec<u8> {
     let (w, h) = (cfg.width as usize, cfg.height as usize);
     let f = cfg.focal();
     let exposure_s = cfg.exposure_ms / 1000.0;
@@ -173,36 +200,45 @@ pub fn render(
         };
         let wall_depth = (wall * axial).max(1e-3);
         let wall_shade = (0.55 / (1.0 + 0.12 * wall)) as f32;
-        // The nearest victim this column's ray meets before the wall.
-        let mut victim: Option<(f64, f64)> = None; // (distance, lateral coordinate on the victim)
-        for v in &features.victims {
-            let (dx, dy) = (v.0.x - pose.x(), v.0.y - pose.y());
+        // The nearest victim or robot this column's ray meets before the wall.
+        let mut body: Option<(f64, Body)> = None; // (distance, what)
+        let cylinders = features
+            .victims
+            .iter()
+            .map(|v| (v.0.x, v.0.y, VICTIM_RADIUS, true))
+            .chain(robots.iter().map(|&(x, y, r)| (x, y, r, false)));
+        for (bx, by, radius, is_victim) in cylinders {
+            let (dx, dy) = (bx - pose.x(), by - pose.y());
             let along = dx * c + dy * s;
             let across = -dx * s + dy * c;
-            if along <= 0.0 || across.abs() >= VICTIM_RADIUS {
+            if along <= 0.0 || across.abs() >= radius {
                 continue;
             }
-            let d = along - (VICTIM_RADIUS * VICTIM_RADIUS - across * across).sqrt();
-            if d > 0.05 && d < wall && victim.is_none_or(|(best, _)| d < best) {
+            let d = along - (radius * radius - across * across).sqrt();
+            if d > 0.05 && d < wall && body.is_none_or(|(best, _)| d < best) {
                 // Arc length around the victim, so squares keep their size across it.
-                victim = Some((d, VICTIM_RADIUS * (across / VICTIM_RADIUS).asin()));
+                let what = match is_victim {
+                    true => Body::Victim(radius * (across / radius).asin()),
+                    false => Body::Robot,
+                };
+                body = Some((d, what));
             }
         }
         for row in 0..h {
             let y = row as f64 + 0.5 - horizon; // pixels below the horizon
-            let value = if let Some((d, lateral)) = victim {
-                let depth = d * axial;
-                let z = CAMERA_HEIGHT - y * depth / f; // height of the point seen
-                if (0.0..=VICTIM_HEIGHT).contains(&z) {
-                    let square = (z / CHECKER).floor() as i64 + (lateral / CHECKER).floor() as i64;
-                    Some(if square.rem_euclid(2) == 0 { 0.95 } else { 0.1 })
-                } else {
-                    None
+            let value = body.and_then(|(d, what)| {
+                let z = CAMERA_HEIGHT - y * d * axial / f; // height of the point seen
+                match what {
+                    Body::Victim(lateral) if (0.0..=VICTIM_HEIGHT).contains(&z) => {
+                        let square =
+                            (z / CHECKER).floor() as i64 + (lateral / CHECKER).floor() as i64;
+                        Some(if square.rem_euclid(2) == 0 { 0.95 } else { 0.1 })
+                    }
+                    Body::Robot if (0.0..=ROBOT_HEIGHT).contains(&z) => Some(ROBOT_ALBEDO),
+                    _ => None,
                 }
-            } else {
-                None
-            };
-            let lit = match (value, victim) {
+            });
+            let lit = match (value, body) {
                 (Some(_), Some((d, _))) => light_at(d),
                 _ => light_at(wall),
             };

@@ -202,6 +202,11 @@ impl World {
     pub fn pose(&self, id: RobotId) -> Option<Pose2> {
         self.robots.get(id).map(|r| r.pose)
     }
+    /// Footprints `(x, y, radius)` of every robot but `id`: what `id`'s camera can see.
+    pub fn footprints_except(&self, id: RobotId) -> Vec<(f64, f64, f64)> {
+        let others = self.robots.iter().enumerate().filter(|(i, _)| *i != id);
+        others.map(|(_, r)| r.disc()).collect()
+    }
     /// Configuration of robot `id`.
     pub fn config(&self, id: RobotId) -> Option<&RobotConfig> {
         self.robots.get(id).map(|r| &r.config)

@@ -28,8 +28,22 @@ pub struct RenderLayers<'a> {
     pub reached: usize,
     /// The robot: pose and radius.
     pub robot: Option<(Pose2, f64)>,
+    /// More robots' trajectories (a team), each in its own colour, with a disc where it ends
+    /// and a black cross over it when the robot stopped there for good (its agent died).
+    pub tracks: &'a [Track<'a>],
     /// Pixels per cell; `None` picks the largest of 1..=8 that keeps the image <= 1000 px.
     pub scale: Option<u32>,
+}
+
+/// One robot's trajectory in a team picture (see [`RenderLayers::tracks`]).
+#[derive(Clone, Debug)]
+pub struct Track<'a> {
+    /// Positions, oldest first.
+    pub points: &'a [Point2],
+    /// Its colour.
+    pub colour: [u8; 3],
+    /// The robot stopped for good where the track ends.
+    pub stopped: bool,
 }
 
 const FREE: [f64; 3] = [246.0, 244.0, 238.0];
@@ -120,6 +134,37 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
             thick,
             c,
         );
+    }
+    for track in layers.tracks {
+        for pair in track.points.windows(2) {
+            let (a, b) = (
+                to_px(pair[0].0.x, pair[0].0.y),
+                to_px(pair[1].0.x, pair[1].0.y),
+            );
+            line(&mut img, a, b, thick, Rgb(track.colour));
+        }
+        if let Some(end) = track.points.last() {
+            let c = to_px(end.0.x, end.0.y);
+            let r = (0.25 * px_per_m).max(4.0);
+            disc(&mut img, c, r, Rgb(track.colour));
+            if track.stopped {
+                let black = Rgb([0, 0, 0]);
+                line(
+                    &mut img,
+                    (c.0 - r, c.1 - r),
+                    (c.0 + r, c.1 + r),
+                    thick,
+                    black,
+                );
+                line(
+                    &mut img,
+                    (c.0 - r, c.1 + r),
+                    (c.0 + r, c.1 - r),
+                    thick,
+                    black,
+                );
+            }
+        }
     }
     let ring = (0.3 * px_per_m).max(4.0);
     for (i, g) in layers.goals.iter().enumerate() {

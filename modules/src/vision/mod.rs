@@ -6,7 +6,9 @@
 #![warn(missing_docs)]
 
 pub mod detector;
+pub mod team_victims;
 pub mod victim_map;
 
 pub use detector::{detect, Detection, Detections, DetectorOutput, DetectorParams};
+pub use team_victims::{Report, TeamVictim, TeamVictims};
 pub use victim_map::{VictimMap, VictimMapParams};

@@ -17,7 +17,6 @@ use crate::model::Plan;
 
 /// One plan action bound to modules and properties.
 pub(crate) struct BoundAction {
-    pub name: ActionName,
     /// `enabled` of each module to switch on while the action runs.
     pub enable: Vec<AnyHandle>,
     /// Property and value written at start.
@@ -95,9 +94,33 @@ pub struct BindingProblem {
     pub message: String,
 }
 
+/// Which of a team plan's names a mission binds: its own agent's.
+#[derive(Clone, Copy)]
+pub(crate) struct Scope<'a> {
+    /// The agent the mission runs in.
+    pub agent: &'a str,
+    /// `serve` mode: only `agent#...` names (the rest belong to whoever runs the plan);
+    /// otherwise every name but other robots' (`robot#...`, carried out by those robots).
+    pub serve: bool,
+    /// The agent is in a team: every condition of `params/conditions` is bound, used by the
+    /// plan or not, since other agents' plans may watch it (`agent#cond`).
+    pub team: bool,
+}
+
+impl Scope<'_> {
+    /// Whether name `full` (an action or condition) is bound here.
+    pub fn owns(&self, full: &str) -> bool {
+        match crate::remote::robot_of(full) {
+            Some((robot, _)) => robot == self.agent,
+            None => !self.serve,
+        }
+    }
+}
+
 /// What `bind` reads from the mission's parameters.
 pub(crate) struct Params<'a> {
     pub module: &'a str,
+    pub scope: Scope<'a>,
     pub actions: &'a ActionBindings,
     pub conditions: &'a ConditionBindings,
     pub places: &'a Places,
@@ -201,7 +224,6 @@ impl Binder<'_> {
     async fn action(&mut self, full: &str, p: &Params<'_>) -> Option<BoundAction> {
         let name = ActionName::parse(full);
         let mut a = BoundAction {
-            name: name.clone(),
             enable: Vec::new(),
             set: Vec::new(),
             saved: None,
@@ -323,7 +345,16 @@ impl Binder<'_> {
 
 /// Binds every action and condition of `plan`; all problems at once in the error.
 pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding {
-    let (action_names, cond_names) = plan_names(plan);
+    let (mut action_names, mut cond_names) = plan_names(plan);
+    action_names.retain(|n| p.scope.owns(n));
+    cond_names.retain(|n| p.scope.owns(n));
+    if p.scope.team {
+        for key in p.conditions.0.keys().filter(|k| !k.contains('#')) {
+            if !cond_names.contains(&format!("{}#{key}", p.scope.agent)) {
+                cond_names.insert(key.clone());
+            }
+        }
+    }
     let mut b = Binder {
         bb,
         plan,
@@ -361,7 +392,15 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
     let mut conditions = HashMap::new();
     let mut defaults = Vec::new();
     for atom in &cond_names {
-        match p.conditions.0.get(atom) {
+        // This agent's own `me#cond` may be bound as `cond`, so robot configs need not name
+        // their agent.
+        let local = crate::remote::robot_of(atom).map_or(atom.as_str(), |(_, l)| l);
+        match p
+            .conditions
+            .0
+            .get(atom)
+            .or_else(|| p.conditions.0.get(local))
+        {
             Some(src) => {
                 let what = format!("{}/params/conditions[\"{atom}\"]", p.module);
                 if let Some(id) = b.expr(src, &what, atom).await {
@@ -372,7 +411,10 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
         }
     }
     let mut warnings = warnings;
-    for extra in p.conditions.0.keys().filter(|k| !cond_names.contains(*k)) {
+    let used = |k: &String| {
+        cond_names.contains(k) || cond_names.contains(&format!("{}#{k}", p.scope.agent))
+    };
+    for extra in p.conditions.0.keys().filter(|k| !used(k)) {
         warnings.push(BindingProblem {
             needle: extra.clone(),
             message: format!(

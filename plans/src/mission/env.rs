@@ -9,6 +9,7 @@ use super::config::Flags;
 use super::memory::{MissionMemory, RunningAction};
 use crate::exec::Environment;
 use crate::label::CallKind;
+use crate::remote::Dispatch;
 
 /// One step's view of the world; expression values were brought up to date before the step.
 pub(crate) struct MissionEnv<'a> {
@@ -18,6 +19,8 @@ pub(crate) struct MissionEnv<'a> {
     pub now: Instant,
     pub secs: f64,
     pub memory: &'a mut MissionMemory,
+    /// Other robots' actions and conditions (`robot#...`): carried out over the team.
+    pub dispatch: &'a mut Dispatch,
 }
 
 impl BoundAction {
@@ -107,6 +110,9 @@ impl Environment for MissionEnv<'_> {
     fn condition(&mut self, name: &str) -> Option<bool> {
         match self.bound.conditions.get(name) {
             Some(&id) => Some(self.bound.exprs.bool(id).unwrap_or(false)),
+            None if self.dispatch.has_condition(name) => {
+                Some(self.dispatch.condition(name).unwrap_or(false))
+            }
             None => Some(self.flags.0.get(name).copied().unwrap_or(false)),
         }
     }
@@ -119,20 +125,25 @@ impl Environment for MissionEnv<'_> {
         match self.bound.actions.get(name) {
             Some(a) if a.unbound => true,
             Some(a) => self.expr(a.finished),
-            None => false,
+            None => self.dispatch.finished(name),
         }
     }
 
     fn action_failed(&mut self, name: &str) -> bool {
         match self.bound.actions.get(name) {
             Some(a) => self.expr(a.failed),
-            None => false,
+            None => self.dispatch.failed(name),
         }
     }
 
     fn call(&mut self, name: &str, kind: CallKind) {
         self.remember(name, kind);
         let now = self.now;
+        if self.dispatch.has_action(name) {
+            tracing::info!(action = name, call = %kind, "sent to its robot");
+            self.dispatch.call(name, kind);
+            return;
+        }
         let Some(a) = self.bound.actions.get_mut(name) else {
             return;
         };
@@ -140,8 +151,7 @@ impl Environment for MissionEnv<'_> {
             tracing::warn!(action = name, call = %kind, "unbound action: nothing to do");
             return;
         }
-        // The robot prefix (`robot#action`) is kept for multi-robot plans; all actions run here.
-        tracing::debug!(action = name, robot = a.name.robot.as_deref().unwrap_or("-"), call = %kind, "action call");
+        tracing::debug!(action = name, call = %kind, "action call");
         match kind {
             CallKind::Start | CallKind::Resume => {
                 // Time in the action's conditions counts from here: a `held` window opened

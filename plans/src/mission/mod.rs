@@ -57,6 +57,8 @@ mod hints;
 mod memory;
 mod module;
 mod prepare;
+mod run;
+mod team;
 
 pub use bind::BindingProblem;
 pub use config::{

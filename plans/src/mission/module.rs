@@ -3,20 +3,23 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use petrel_actors::expr::{Clock, ExprId};
+use petrel_actors::expr::Clock;
+use petrel_actors::team::Message;
 use petrel_actors::{
-    Context, FilePath, Input, Module, Output, Param, Ports, Range, Schedule, State,
+    Context, FilePath, Input, Module, Output, Param, Ports, QueueReader, QueueWriter, Range,
+    Schedule, State,
 };
 use tokio::sync::watch;
 use tokio::time::Instant;
 
-use super::bind::{Bound, Relink};
+use super::bind::{plan_names, Relink};
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
-use super::env::MissionEnv;
 use super::memory::MissionMemory;
 use super::prepare::{prepare, Problems, Setup};
-use crate::exec::{step, PlanState, PlanStatus};
-use crate::model::Plan;
+use super::run::{marking, Run, MAX_ROUNDS};
+use super::team::{is_serve, TeamIo, RUN};
+use crate::exec::{PlanState, PlanStatus};
+use crate::remote::Dispatch;
 
 /// `mission.pnp`: see the [module docs](super).
 pub struct Mission {
@@ -28,7 +31,11 @@ pub struct Mission {
     actions: Param<ActionBindings>,
     conditions: Param<ConditionBindings>,
     places: Param<Places>,
+    mode: Param<String>,
+    executor: Param<String>,
     flags: Input<Flags>,
+    outbox: QueueWriter<Message>,
+    inbox: QueueReader<Message>,
     /// Declared so configs can link it; read through a handle once linked (see `Clock`).
     _clock: Input<f64>,
     marking: Output<String>,
@@ -38,21 +45,6 @@ pub struct Mission {
     wake: State<i64>,
     memory: State<MissionMemory>,
     run: Option<Run>,
-}
-
-/// What init builds.
-struct Run {
-    plan: Arc<Plan>,
-    state: PlanState,
-    bound: Bound,
-    /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
-    timer: watch::Sender<Option<Instant>>,
-    done: bool,
-    /// Scratch for the expressions a round changed, kept to avoid allocating per round.
-    changed: Vec<ExprId>,
-    clock: Clock,
-    /// What is kept in `state/memory`, updated as the plan runs.
-    memory: MissionMemory,
 }
 
 impl Module for Mission {
@@ -70,6 +62,10 @@ impl Module for Mission {
             actions: ports.param("params/actions", ActionBindings::default(), "action name (or prefix of `name_p1_p2`) -> (enable, set, restore, finished, failed)"),
             conditions: ports.param("params/conditions", ConditionBindings::default(), "condition atom -> boolean expression over properties"),
             places: ports.param("params/places", Places::default(), "named values action parameters may name: `goto_kitchen` with {\"kitchen\": (x: 2.0, y: 1.0)}"),
+            mode: ports.param("params/mode", RUN.to_string(), "run: run the plan, sending other robots' `robot#` actions to their agents; serve: run no plan, carry out this agent's `agent#` actions for the plan a coordinator runs"),
+            executor: ports.param("params/executor", "mission".to_string(), "the module (a mission.pnp in serve mode) that carries out `robot#` actions on each robot's agent"),
+            outbox: ports.queue_out("out/outbox", 256, "team plan messages to robots or to the coordinator"),
+            inbox: ports.queue_in("in/inbox", "team plan messages from the coordinator or from robots"),
             flags: ports.input("in/conditions", Flags::default(), "values of condition atoms that params/conditions does not bind"),
             _clock: ports.input("in/clock", 0.0, "the agent's clock in seconds (link it to a simulator's out/simTime); unlinked: wall time"),
             marking: ports.output("out/marking", String::new(), "marked places, `label` or `label*n`, comma-separated"),
@@ -83,8 +79,14 @@ impl Module for Mission {
     }
 
     fn schedule(&self) -> Schedule {
-        let mut s = Schedule::new().on_change(&self.flags).on_change(&self.wake);
+        let mut s = Schedule::new()
+            .on_change(&self.flags)
+            .on_change(&self.wake)
+            .on_items(&self.inbox);
         if let Some(run) = &self.run {
+            if let Some(members) = &run.team.members {
+                s = s.on_change(members);
+            }
             for (_, h, _) in &run.bound.watched {
                 s = s.on_change(h);
             }
@@ -121,6 +123,22 @@ impl Module for Mission {
         }
         let mut fired = 0;
         let (now, secs) = (run.clock.now(ctx.now()), run.clock.secs(ctx.now()));
+        if run.team.serve_mode {
+            if run.serve_round(now, secs, &self.flags.get(), &self.inbox) {
+                run.save(&self.memory);
+            }
+            run.team.send(&self.outbox);
+            if run.clock.is_wall() {
+                set_deadline(&run.timer, run.bound.exprs.next_deadline());
+            }
+            return Ok(());
+        }
+        if !run.team.take_news(&self.inbox) {
+            // Waiting for robots' conditions: the watches must still go out (and be answered).
+            run.answer_watches(now, secs, &self.flags.get());
+            run.team.send(&self.outbox);
+            return Ok(());
+        }
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
@@ -136,6 +154,8 @@ impl Module for Mission {
                 break;
             }
         }
+        run.answer_watches(now, secs, &self.flags.get());
+        run.team.send(&self.outbox);
         if run.clock.is_wall() {
             set_deadline(&run.timer, run.bound.exprs.next_deadline());
         }
@@ -197,121 +217,12 @@ impl Module for Mission {
     }
 }
 
-/// Plan steps run back to back in one module step at most (see [`Mission::step`]).
-const MAX_ROUNDS: usize = 64;
-
-impl Run {
-    /// One plan step at clock time `secs`: bring expressions up to date with changed
-    /// properties, then step.
-    fn round(&mut self, now: Instant, secs: f64, flags: &Flags) -> crate::exec::StepReport {
-        let wall = self.clock.is_wall();
-        for (id, h, seen) in &mut self.bound.watched {
-            // A lock-free version check first: most rounds change few properties.
-            if *seen == Some(h.version()) {
-                continue;
-            }
-            let s = h.read();
-            *seen = Some(s.version);
-            // On another clock than wall time, a write counts from when the mission saw it.
-            let written = if wall { s.written } else { now };
-            self.bound
-                .exprs
-                .update(*id, h.type_info(), &s.value, written);
-        }
-        self.bound.exprs.evaluate_into(now, &mut self.changed);
-        for &id in &self.changed {
-            if let Some(Err(e)) = self.bound.exprs.value(id) {
-                // Types were checked at init, so this is a value of unexpected shape: say so.
-                tracing::warn!(error = %e, "a binding expression could not be evaluated; it counts as false");
-            }
-        }
-        let mut env = MissionEnv {
-            bound: &mut self.bound,
-            flags,
-            now,
-            secs,
-            memory: &mut self.memory,
-        };
-        // Every condition is known here (unbound atoms read `in/conditions`), so the report's
-        // `unknown_conditions` stays empty.
-        let report = step(&self.plan, &mut self.state, &mut env);
-        if !report.fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
-            let fired: Vec<&str> = report
-                .fired
-                .iter()
-                .map(|&t| self.plan.transitions()[t].label.as_str())
-                .collect();
-            let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
-            tracing::info!(?fired, ?calls, "plan step");
-        }
-        report
-    }
-
-    /// Writes the memory (marking, running actions with what they replaced and their `held`
-    /// windows) to `state/memory`.
-    fn save(&mut self, out: &State<MissionMemory>) {
-        self.memory.plan = self.plan.name().to_string();
-        self.memory.marking = self.state.save();
-        for (name, ra) in self.memory.running.iter_mut() {
-            let Some(a) = self.bound.actions.get(name) else {
-                continue;
-            };
-            ra.saved = a.saved.as_ref().map(|vs| {
-                a.set
-                    .iter()
-                    .zip(vs)
-                    .map(|((h, _), v)| h.type_info().to_dynamic(v).unwrap_or(ron::Value::Unit))
-                    .collect()
-            });
-            ra.held = a
-                .exprs()
-                .map(|id| {
-                    let held = self.bound.exprs.held_states(id);
-                    held.into_iter().map(|t| t.map(Clock::secs_of)).collect()
-                })
-                .collect();
-        }
-        out.set(self.memory.clone());
-    }
-
-    /// Goes on from `memory` (a restart, or a snapshot being resumed): the marking, the
-    /// running actions' start times, what they replaced and their `held` windows.
-    fn resume(&mut self, memory: &MissionMemory) -> Result<(), String> {
-        self.state.restore(&self.plan, &memory.marking)?;
-        for (name, ra) in &memory.running {
-            let Some(a) = self.bound.actions.get_mut(name) else {
-                continue;
-            };
-            a.saved = ra.saved.as_ref().map(|vs| {
-                a.set
-                    .iter()
-                    .zip(vs)
-                    .map(|((h, old), v)| {
-                        h.type_info()
-                            .from_ron(v.clone())
-                            .unwrap_or_else(|_| old.clone())
-                    })
-                    .collect()
-            });
-            let origin = Clock::instant(ra.started_s);
-            let ids: Vec<ExprId> = a.exprs().collect();
-            for (k, id) in ids.into_iter().enumerate() {
-                self.bound.exprs.set_origin(id, Some(origin));
-                if let Some(held) = ra.held.get(k) {
-                    let held: Vec<Option<Instant>> =
-                        held.iter().map(|t| t.map(Clock::instant)).collect();
-                    self.bound.exprs.restore_held_states(id, &held);
-                }
-            }
-        }
-        self.memory = memory.clone();
-        Ok(())
-    }
-}
-
 impl Mission {
     /// Loads the plan and binds it (the body of `init`).
     async fn start(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let serve = is_serve(&self.mode.get()).map_err(|e| {
+            petrel_actors::Unrecoverable(format!("invalid parameter `params/mode`: {e}"))
+        })?;
         let setup = Setup {
             plan: self.plan_path.get(),
             rules: self.rules.get(),
@@ -319,6 +230,9 @@ impl Mission {
             conditions: self.conditions.get(),
             places: self.places.get(),
             allow_unbound: self.allow_unbound.value(),
+            agent: ctx.agent().to_string(),
+            serve,
+            team: ctx.blackboard().any_handle("_team/members").await.is_ok(),
         };
         let (plan, bound) = prepare(ctx.blackboard(), ctx.module(), &setup)
             .await
@@ -339,8 +253,23 @@ impl Mission {
             conditions = bound.conditions.len(),
             "mission bound"
         );
+        let dispatch = match serve {
+            true => Dispatch::new(ctx.agent(), "", [], []),
+            false => {
+                let (actions, conditions) = plan_names(&plan);
+                let executor = self.executor.get();
+                Dispatch::new(
+                    ctx.agent(),
+                    &executor,
+                    actions.iter().map(String::as_str),
+                    conditions.iter().map(String::as_str),
+                )
+            }
+        };
+        let team = TeamIo::connect(ctx, dispatch, serve).await?;
         let state = PlanState::new(&plan);
         let mut run = Run {
+            team,
             state,
             plan,
             bound,
@@ -387,26 +316,6 @@ fn publish(out: &Output<String>, v: String) {
     if *out.get() != v {
         out.set(v);
     }
-}
-
-fn marking(plan: &Plan, state: &PlanState) -> String {
-    let places = plan.places();
-    let shown: Vec<String> = state
-        .marked()
-        .map(|(p, n)| {
-            let l = if places[p].label.is_empty() {
-                &places[p].id
-            } else {
-                &places[p].label
-            };
-            if n == 1 {
-                l.clone()
-            } else {
-                format!("{l}*{n}")
-            }
-        })
-        .collect();
-    shown.join(", ")
 }
 
 /// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.

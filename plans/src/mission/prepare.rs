@@ -6,7 +6,7 @@ use std::sync::Arc;
 use anyhow::Context as _;
 use petrel_actors::{Blackboard, BlackboardError, FilePath};
 
-use super::bind::{bind, BindingProblem, Bound, Params};
+use super::bind::{bind, BindingProblem, Bound, Params, Scope};
 use super::config::{ActionBindings, ConditionBindings, Places};
 use crate::load::load_plan;
 use crate::model::Plan;
@@ -19,6 +19,11 @@ pub(crate) struct Setup {
     pub(crate) conditions: Arc<ConditionBindings>,
     pub(crate) places: Arc<Places>,
     pub(crate) allow_unbound: bool,
+    /// The agent the mission runs in, and whether it serves a team plan run elsewhere.
+    pub(crate) agent: String,
+    pub(crate) serve: bool,
+    /// The agent has a `team:` section.
+    pub(crate) team: bool,
 }
 
 /// Loads the plan and binds its actions and conditions; every problem at once (warnings are
@@ -63,6 +68,11 @@ async fn prepare_all(
     };
     let params = Params {
         module,
+        scope: Scope {
+            agent: &setup.agent,
+            serve: setup.serve,
+            team: setup.team,
+        },
         actions: &setup.actions,
         conditions: &setup.conditions,
         places: &setup.places,
@@ -110,14 +120,43 @@ pub async fn check_mission(
             conditions: bb.get::<ConditionBindings>(&param("conditions")).await?,
             places: bb.get::<Places>(&param("places")).await?,
             allow_unbound: *bb.get::<bool>(&param("allow_unbound")).await?,
+            agent: bb.agent().to_string(),
+            serve: false,
+            team: bb.any_handle("_team/members").await.is_ok(),
         })
     };
-    let setup = read.await.map_err(|e| {
+    let mut setup = read.await.map_err(|e| {
         vec![BindingProblem {
             needle: module.to_string(),
             message: format!("module `{module}` is not a mission.pnp: {e}"),
         }]
     })?;
+    let mode = bb.get::<String>(&param("mode")).await.unwrap_or_default();
+    setup.serve = super::team::is_serve(&mode).map_err(|message| {
+        vec![BindingProblem {
+            needle: "params/mode".into(),
+            message: format!("{}: {message}", param("mode")),
+        }]
+    })?;
     let (bound, warnings) = prepare_all(bb, module, &setup).await;
-    bound.map(|_| warnings)
+    let (plan, _) = bound?;
+    if !setup.team {
+        let (actions, conditions) = super::bind::plan_names(&plan);
+        let dispatch = crate::remote::Dispatch::new(
+            &setup.agent,
+            "",
+            actions.iter().map(String::as_str),
+            conditions.iter().map(String::as_str),
+        );
+        if setup.serve || !dispatch.is_empty() {
+            return Err(vec![BindingProblem {
+                needle: "params/plan".into(),
+                message: format!(
+                    "{module}: {}",
+                    super::team::needs_team(&dispatch, setup.serve, &setup.agent)
+                ),
+            }]);
+        }
+    }
+    Ok(warnings)
 }

@@ -143,3 +143,56 @@ fn near_large_frontiers_come_first_and_known_area_counts_cells() {
     );
     assert!((known_area(&m) - 0.83).abs() < 1e-9, "{}", known_area(&m));
 }
+
+#[test]
+fn an_area_keeps_only_the_frontiers_inside_it() {
+    // Two openings: right (x 0.9 .. 1.0) and top (y 0.9 .. 1.0).
+    let m = map(&[
+        "#####????###",
+        "#..........?",
+        "#..........?",
+        "#..........?",
+        "############",
+    ]);
+    let robot = Pose2::new(0.25, 0.15, 0.0);
+    let only = |area| {
+        let p = FrontierParams {
+            area,
+            min_frontier_cells: 1,
+            ..params()
+        };
+        match explore(&m, robot, &[], &p) {
+            Exploration::Frontiers(f) => f.iter().map(|f| f.target).collect::<Vec<_>>(),
+            other => panic!("expected frontiers, got {other:?}"),
+        }
+    };
+    assert_eq!(only(None).len(), 2);
+    let right = only(Some([1.0, 0.0, 1.2, 0.5]));
+    assert!(right.len() == 1 && right[0].0.x > 1.0, "{right:?}");
+    let top = only(Some([0.0, 0.3, 1.0, 0.5]));
+    assert!(
+        top.len() == 1 && top[0].0.y > 0.3 && top[0].0.x < 1.0,
+        "{top:?}"
+    );
+    // An area the robot cannot reach yet: every frontier counts, the nearest to it first.
+    let far = FrontierParams {
+        area: Some([1.5, 0.0, 3.0, 0.5]),
+        min_frontier_cells: 1,
+        ..params()
+    };
+    let Exploration::Frontiers(f) = explore(&m, robot, &[], &far) else {
+        panic!("expected frontiers");
+    };
+    assert!(f.len() == 2 && f[0].target.0.x > 1.0, "{f:?}");
+    // Reached and fully known: done, whatever lies outside it.
+    let known = FrontierParams {
+        area: Some([0.0, 0.0, 0.4, 0.3]),
+        ..params()
+    };
+    assert_eq!(explore(&m, robot, &[], &known), Exploration::Done);
+    let bad = FrontierParams {
+        area: Some([1.0, 0.0, 0.0, 1.0]),
+        ..params()
+    };
+    assert_eq!(bad.validate().unwrap_err().param, "area");
+}

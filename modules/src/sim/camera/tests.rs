@@ -156,3 +156,58 @@ fn darkness_makes_images_dim_and_noisy_exposure_and_gain_bring_them_back() {
     let bad = CameraConfig { gain: 0.5, ..cfg };
     assert_eq!(bad.validate().unwrap_err().param, "camera/gain");
 }
+
+/// Mean grey level in a window.
+fn mean(
+    img: &[u8],
+    cfg: &CameraConfig,
+    cols: std::ops::Range<usize>,
+    rows: std::ops::Range<usize>,
+) -> f64 {
+    let w = cfg.width as usize;
+    let (mut sum, mut n) = (0.0, 0.0);
+    for r in rows {
+        for c in cols.clone() {
+            sum += img[r * w + c] as f64;
+            n += 1.0;
+        }
+    }
+    sum / n
+}
+
+#[test]
+fn another_robot_in_view_is_a_plain_grey_body_hiding_what_is_behind_it() {
+    let cfg = CameraConfig::default();
+    let (grid, features) = scene(false);
+    let shot = |robots: &[(f64, f64, f64)]| {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let pose = Pose2::new(1.0, 2.5, 0.0);
+        render_among(
+            &grid,
+            &features,
+            robots,
+            pose,
+            CameraMotion::default(),
+            &cfg,
+            &mut rng,
+        )
+    };
+    let alone = shot(&[]);
+    // A robot 1 m ahead, in front of the victim: its near side is 0.8 m away.
+    let blocked = shot(&[(2.0, 2.5, 0.2)]);
+    // The victim's checkerboard is gone behind it; the robot itself is smooth and brighter
+    // than the wall (albedo 0.45 against a far wall's 0.28).
+    let victim_alone = contrast(&alone, &cfg, 75..85, 62..82);
+    let victim_hidden = contrast(&blocked, &cfg, 75..85, 62..82);
+    assert!(
+        victim_alone > 40.0 && victim_hidden < 10.0,
+        "{victim_alone} vs {victim_hidden}"
+    );
+    let body = mean(&blocked, &cfg, 75..85, 62..90);
+    let wall = mean(&alone, &cfg, 5..15, 62..70);
+    assert!(body > wall + 20.0, "robot {body}, wall {wall}");
+    // It rises above the horizon (0.4 m tall against a camera at 0.3 m) and stands on the floor.
+    assert!(mean(&blocked, &cfg, 75..85, 52..58) > mean(&alone, &cfg, 75..85, 52..58) + 20.0);
+    // Out of view (behind the camera) it changes nothing.
+    assert_eq!(shot(&[(0.5, 2.5, 0.2)]), alone);
+}

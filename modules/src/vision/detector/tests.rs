@@ -217,3 +217,24 @@ fn no_false_victims_in_the_dark_room_of_the_rescue_world() {
     assert!(frames > 100);
     assert_eq!(false_victims, 0, "in {frames} frames");
 }
+
+#[test]
+fn another_robot_in_view_is_not_a_victim() {
+    let cfg = CameraConfig::default();
+    let mut grid = Grid::new(100, 50, 0.1, 0.0, 0.0).unwrap();
+    for c in 0..100 {
+        grid.set(c, 0, true);
+        grid.set(c, 49, true);
+    }
+    let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+    let img = crate::sim::camera::render_among(
+        &grid,
+        &WorldFeatures::default(),
+        &[(2.5, 2.5, 0.2)],
+        Pose2::new(1.0, 2.5, 0.0),
+        CameraMotion::default(),
+        &cfg,
+        &mut rng,
+    );
+    assert!(run(&img, &DetectorParams::default()).detections.is_empty());
+}

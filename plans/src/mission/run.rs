@@ -1,0 +1,315 @@
+//! A mission's run: the plan, its state and bindings, and one plan step (a round).
+
+use std::sync::Arc;
+
+use petrel_actors::expr::{Clock, ExprId};
+use petrel_actors::State;
+use tokio::sync::watch;
+use tokio::time::Instant;
+
+use super::bind::Bound;
+use super::config::Flags;
+use super::env::MissionEnv;
+use super::memory::MissionMemory;
+use super::team::TeamIo;
+use crate::exec::{step, PlanState};
+use crate::model::Plan;
+
+/// What init builds.
+pub(super) struct Run {
+    pub plan: Arc<Plan>,
+    pub state: PlanState,
+    pub bound: Bound,
+    /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
+    pub timer: watch::Sender<Option<Instant>>,
+    pub done: bool,
+    /// Scratch for the expressions a round changed, kept to avoid allocating per round.
+    pub changed: Vec<ExprId>,
+    pub clock: Clock,
+    /// What is kept in `state/memory`, updated as the plan runs.
+    pub memory: MissionMemory,
+    /// Other robots' actions and conditions, or this robot's executor (see `team.rs`).
+    pub team: TeamIo,
+}
+
+/// Plan steps run back to back in one module step at most (see [`Mission::step`]).
+pub(super) const MAX_ROUNDS: usize = 64;
+
+impl Run {
+    /// One plan step at clock time `secs`: bring expressions up to date with changed
+    /// properties, then step.
+    pub fn round(&mut self, now: Instant, secs: f64, flags: &Flags) -> crate::exec::StepReport {
+        self.refresh(now);
+        let mut env = MissionEnv {
+            bound: &mut self.bound,
+            flags,
+            now,
+            secs,
+            memory: &mut self.memory,
+            dispatch: &mut self.team.dispatch,
+        };
+        // Every condition is known here (unbound atoms read `in/conditions`), so the report's
+        // `unknown_conditions` stays empty.
+        let report = step(&self.plan, &mut self.state, &mut env);
+        if !report.fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
+            let fired: Vec<&str> = report
+                .fired
+                .iter()
+                .map(|&t| self.plan.transitions()[t].label.as_str())
+                .collect();
+            let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
+            tracing::info!(?fired, ?calls, "plan step");
+        }
+        report
+    }
+
+    /// Brings the expressions up to date with the properties they read, at `now`.
+    fn refresh(&mut self, now: Instant) {
+        let wall = self.clock.is_wall();
+        for (id, h, seen) in &mut self.bound.watched {
+            // A lock-free version check first: most rounds change few properties.
+            if *seen == Some(h.version()) {
+                continue;
+            }
+            let s = h.read();
+            *seen = Some(s.version);
+            // On another clock than wall time, a write counts from when the mission saw it.
+            let written = if wall { s.written } else { now };
+            self.bound
+                .exprs
+                .update(*id, h.type_info(), &s.value, written);
+        }
+        self.bound.exprs.evaluate_into(now, &mut self.changed);
+        for &id in &self.changed {
+            if let Some(Err(e)) = self.bound.exprs.value(id) {
+                // Types were checked at init, so this is a value of unexpected shape: say so.
+                tracing::warn!(error = %e, "a binding expression could not be evaluated; it counts as false");
+            }
+        }
+    }
+
+    /// Writes the memory (marking, running actions with what they replaced and their `held`
+    /// windows) to `state/memory`.
+    pub fn save(&mut self, out: &State<MissionMemory>) {
+        self.memory.plan = self.plan.name().to_string();
+        self.memory.marking = self.state.save();
+        for (name, ra) in self.memory.running.iter_mut() {
+            let Some(a) = self.bound.actions.get(name) else {
+                continue;
+            };
+            ra.saved = a.saved.as_ref().map(|vs| {
+                a.set
+                    .iter()
+                    .zip(vs)
+                    .map(|((h, _), v)| h.type_info().to_dynamic(v).unwrap_or(ron::Value::Unit))
+                    .collect()
+            });
+            ra.held = a
+                .exprs()
+                .map(|id| {
+                    let held = self.bound.exprs.held_states(id);
+                    held.into_iter().map(|t| t.map(Clock::secs_of)).collect()
+                })
+                .collect();
+        }
+        out.set(self.memory.clone());
+    }
+
+    /// Goes on from `memory` (a restart, or a snapshot being resumed): the marking, the
+    /// running actions' start times, what they replaced and their `held` windows.
+    pub fn resume(&mut self, memory: &MissionMemory) -> Result<(), String> {
+        self.state.restore(&self.plan, &memory.marking)?;
+        for (name, ra) in &memory.running {
+            let Some(a) = self.bound.actions.get_mut(name) else {
+                continue;
+            };
+            a.saved = ra.saved.as_ref().map(|vs| {
+                a.set
+                    .iter()
+                    .zip(vs)
+                    .map(|((h, old), v)| {
+                        h.type_info()
+                            .from_ron(v.clone())
+                            .unwrap_or_else(|_| old.clone())
+                    })
+                    .collect()
+            });
+            let origin = Clock::instant(ra.started_s);
+            let ids: Vec<ExprId> = a.exprs().collect();
+            for (k, id) in ids.into_iter().enumerate() {
+                self.bound.exprs.set_origin(id, Some(origin));
+                if let Some(held) = ra.held.get(k) {
+                    let held: Vec<Option<Instant>> =
+                        held.iter().map(|t| t.map(Clock::instant)).collect();
+                    self.bound.exprs.restore_held_states(id, &held);
+                }
+            }
+        }
+        self.memory = memory.clone();
+        Ok(())
+    }
+}
+
+pub(super) fn marking(plan: &Plan, state: &PlanState) -> String {
+    let places = plan.places();
+    let shown: Vec<String> = state
+        .marked()
+        .map(|(p, n)| {
+            let l = if places[p].label.is_empty() {
+                &places[p].id
+            } else {
+                &places[p].label
+            };
+            if n == 1 {
+                l.clone()
+            } else {
+                format!("{l}*{n}")
+            }
+        })
+        .collect();
+    shown.join(", ")
+}
+
+impl Run {
+    /// Serve mode, one round: calls from the inbox carried out on this agent's actions,
+    /// coordinators that left have their actions stopped, then answers and watched conditions
+    /// go out. Returns whether any call was made.
+    pub fn serve_round(
+        &mut self,
+        now: Instant,
+        secs: f64,
+        flags: &Flags,
+        inbox: &petrel_actors::QueueReader<petrel_actors::team::Message>,
+    ) -> bool {
+        self.refresh(now);
+        let present = self.team.members_changed();
+        let agent = self.team.agent.clone();
+        let serve = &mut self.team.serve;
+        let mut calls = Vec::new();
+        for item in inbox.drain() {
+            match serve.receive(&item.from, &item.body) {
+                Ok(Some(call)) => calls.push(call),
+                Ok(None) => {}
+                Err(e) => tracing::warn!(from = %item.from, "message ignored: {e}"),
+            }
+        }
+        if let Some(present) = present {
+            for local in serve.members(present.iter().map(String::as_str)) {
+                tracing::warn!(action = %local, "its coordinator left the team: action stopped");
+                calls.push((local, crate::label::CallKind::Interrupt));
+            }
+        }
+        let full = |local: &str| format!("{agent}#{local}");
+        let mut env = MissionEnv {
+            bound: &mut self.bound,
+            flags,
+            now,
+            secs,
+            memory: &mut self.memory,
+            dispatch: &mut self.team.dispatch,
+        };
+        use crate::exec::Environment;
+        use crate::label::CallKind;
+        let pending = &mut self.team.pending;
+        let called = !calls.is_empty();
+        for (local, kind) in calls {
+            let name = full(&local);
+            if !env.bound.actions.contains_key(&name) {
+                tracing::warn!(action = %name, call = %kind, "not an action of this agent in the plan: it fails");
+                continue;
+            }
+            if let Some(i) = pending.iter().position(|(p, _)| *p == name) {
+                // Stopped before it could start: nothing to undo.
+                pending.remove(i);
+                if !matches!(kind, CallKind::Start | CallKind::Resume) {
+                    continue;
+                }
+            }
+            let starts = matches!(kind, CallKind::Start | CallKind::Resume);
+            if let Some(busy) = starts.then(|| sharing(env.bound, &name)).flatten() {
+                tracing::info!(action = %name, waits_for = %busy, "called by the team plan; starts when the action using the same modules ends");
+                pending.push((name, kind));
+                continue;
+            }
+            tracing::info!(action = %name, call = %kind, "called by the team plan");
+            env.call(&name, kind);
+        }
+        // Starts that waited for an action that has ended since.
+        while let Some(i) = pending
+            .iter()
+            .position(|(p, _)| sharing(env.bound, p).is_none())
+        {
+            let (name, kind) = pending.remove(i);
+            tracing::info!(action = %name, call = %kind, "starts now");
+            env.call(&name, kind);
+        }
+        // Starts reset their expressions' time origins: evaluate before answering.
+        env.bound.exprs.evaluate_into(now, &mut self.changed);
+        // Both questions read the same environment, one at a time.
+        let env = std::cell::RefCell::new(env);
+        serve.poll(
+            |local| {
+                let name = full(local);
+                let mut env = env.borrow_mut();
+                if pending.iter().any(|(p, _)| *p == name) {
+                    return (false, false);
+                }
+                match env.bound.actions.contains_key(&name) {
+                    true => (env.action_finished(&name), env.action_failed(&name)),
+                    false => (false, true),
+                }
+            },
+            |local| condition_of(&mut env.borrow_mut(), &full(local), local),
+        );
+        called
+    }
+
+    /// Run mode: sends other agents the conditions of this one they watch, when they changed
+    /// (calls, which only serve mode carries out, are answered as failed).
+    pub fn answer_watches(&mut self, now: Instant, secs: f64, flags: &Flags) {
+        if !self.team.serve.has_watchers() {
+            return;
+        }
+        self.refresh(now);
+        let agent = self.team.agent.clone();
+        let mut env = MissionEnv {
+            bound: &mut self.bound,
+            flags,
+            now,
+            secs,
+            memory: &mut self.memory,
+            dispatch: &mut self.team.dispatch,
+        };
+        self.team.serve.poll(
+            |_| (false, true),
+            |local| condition_of(&mut env, &format!("{agent}#{local}"), local),
+        );
+    }
+}
+
+/// Another running action that switches a module `name` switches too, if any.
+fn sharing(bound: &super::bind::Bound, name: &str) -> Option<String> {
+    let modules: Vec<&str> = bound
+        .actions
+        .get(name)?
+        .enable
+        .iter()
+        .map(|h| h.key())
+        .collect();
+    bound
+        .actions
+        .iter()
+        .find(|(other, a)| {
+            *other != name && a.active() && a.enable.iter().any(|h| modules.contains(&h.key()))
+        })
+        .map(|(other, _)| other.clone())
+}
+
+/// This agent's condition `local` (bound as `agent#local` or as `local`).
+fn condition_of(env: &mut MissionEnv<'_>, full: &str, local: &str) -> Option<bool> {
+    use crate::exec::Environment;
+    match env.bound.conditions.contains_key(full) {
+        true => env.condition(full),
+        false => env.condition(local),
+    }
+}

@@ -1,0 +1,153 @@
+//! A robot's side of a team plan: carrying out the calls a coordinator sends.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use super::protocol::{parse_call, Outgoing, TeamMsg};
+use crate::label::CallKind;
+
+/// An action started by a coordinator and not yet ended by it.
+#[derive(Debug, Clone)]
+struct Run {
+    /// Who started it (`agent/module`): the answer goes there.
+    from: String,
+    run: u64,
+    /// The answer was sent: an action answers once per run.
+    answered: bool,
+}
+
+/// Who watches which conditions, and what they were last sent.
+#[derive(Debug, Clone, Default)]
+struct Watcher {
+    conditions: Vec<String>,
+    sent: BTreeMap<String, bool>,
+}
+
+/// A robot's executor core (see the module docs): which actions run for whom, and what to
+/// send back.
+#[derive(Debug, Clone, Default)]
+pub struct Serve {
+    runs: BTreeMap<String, Run>,
+    watchers: BTreeMap<String, Watcher>,
+    outgoing: Vec<Outgoing>,
+}
+
+impl Serve {
+    /// An executor with nothing running.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A message from `from` (`agent/module`): the call to carry out on a local action, if it
+    /// is one (`Ok(None)` for a `Watch`, whose values go out at the next [`Serve::poll`]).
+    pub fn receive(
+        &mut self,
+        from: &str,
+        body: &str,
+    ) -> Result<Option<(String, CallKind)>, String> {
+        match TeamMsg::decode(body)? {
+            TeamMsg::Call { action, call, run } => {
+                let kind = parse_call(&call)?;
+                match kind {
+                    CallKind::Start | CallKind::Resume => {
+                        let r = Run {
+                            from: from.to_string(),
+                            run,
+                            answered: false,
+                        };
+                        self.runs.insert(action.clone(), r);
+                    }
+                    CallKind::End | CallKind::Interrupt | CallKind::Fail => {
+                        self.runs.remove(&action);
+                    }
+                }
+                Ok(Some((action, kind)))
+            }
+            TeamMsg::Watch { conditions } => {
+                let w = Watcher {
+                    conditions,
+                    sent: BTreeMap::new(),
+                };
+                self.watchers.insert(from.to_string(), w);
+                Ok(None)
+            }
+            other => Err(format!(
+                "`{from}` sent {}, which only a robot's executor sends",
+                other.encode()
+            )),
+        }
+    }
+
+    /// Whether some agent watches conditions of this one.
+    pub fn has_watchers(&self) -> bool {
+        !self.watchers.is_empty()
+    }
+
+    /// The actions running now, for whom.
+    pub fn running(&self) -> impl Iterator<Item = (&str, &str)> {
+        self.runs.iter().map(|(a, r)| (a.as_str(), r.from.as_str()))
+    }
+
+    /// Looks at what the actions and conditions say now: `status(action)` is
+    /// `(finished, failed)`, `condition(name)` a value (`None` counts as false). A running
+    /// action that finished or failed is answered once; a watched condition is sent when it
+    /// differs from what its watcher was last sent.
+    pub fn poll(
+        &mut self,
+        mut status: impl FnMut(&str) -> (bool, bool),
+        mut condition: impl FnMut(&str) -> Option<bool>,
+    ) {
+        for (action, r) in self.runs.iter_mut().filter(|(_, r)| !r.answered) {
+            let (finished, failed) = status(action);
+            if finished || failed {
+                r.answered = true;
+                let done = TeamMsg::Done {
+                    action: action.clone(),
+                    run: r.run,
+                    failed,
+                };
+                let (to, body) = (r.from.clone(), done.encode());
+                self.outgoing.push(Outgoing { to, body });
+            }
+        }
+        for (to, w) in &mut self.watchers {
+            let mut values = BTreeMap::new();
+            for c in &w.conditions {
+                let v = condition(c).unwrap_or(false);
+                if w.sent.get(c) != Some(&v) {
+                    w.sent.insert(c.clone(), v);
+                    values.insert(c.clone(), v);
+                }
+            }
+            if !values.is_empty() {
+                let body = TeamMsg::Conditions { values }.encode();
+                self.outgoing.push(Outgoing {
+                    to: to.clone(),
+                    body,
+                });
+            }
+        }
+    }
+
+    /// The team's members changed: actions started by an agent no longer present are
+    /// dropped and returned (to be stopped: nobody will end them), and its watches end.
+    pub fn members<'a>(&mut self, present: impl IntoIterator<Item = &'a str>) -> Vec<String> {
+        let present: BTreeSet<&str> = present.into_iter().collect();
+        let gone = |from: &str| !present.contains(from.split('/').next().unwrap_or(from));
+        self.watchers.retain(|from, _| !gone(from));
+        let orphans: Vec<String> = self
+            .runs
+            .iter()
+            .filter(|(_, r)| gone(&r.from))
+            .map(|(a, _)| a.clone())
+            .collect();
+        for a in &orphans {
+            self.runs.remove(a);
+        }
+        orphans
+    }
+
+    /// The messages to send, in order.
+    pub fn take_outgoing(&mut self) -> Vec<Outgoing> {
+        std::mem::take(&mut self.outgoing)
+    }
+}

@@ -1,0 +1,174 @@
+//! The shipped rescue team (configs/rescue/team) in one `petrel run`: a world agent with three
+//! robot bodies, three robot agents linked to them over the team, a coordinator running the
+//! team plan. Each robot searches its third of the floor; the run ends at the plan's goal.
+
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use crate::support::*;
+
+/// The team needs about 95 simulated seconds at 4x (25 s of wall time alone, more on a loaded
+/// machine; the fault scenario about twice that): each run is given 200 s (`--for`), the test
+/// 240 s before it kills it and fails.
+const DEADLINE: Duration = Duration::from_secs(240);
+
+/// Waits for `child` on its own thread, an explicit deadline (no polling); kills it after.
+fn wait(child: Child) -> Output {
+    let pid = child.id();
+    let (done, finished) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = done.send(child.wait_with_output());
+    });
+    match finished.recv_timeout(DEADLINE) {
+        Ok(out) => out.expect("waiting for petrel"),
+        Err(_) => {
+            // Not reaped yet, so the pid is still this child's.
+            unsafe { libc::kill(pid as libc::pid_t, libc::SIGKILL) };
+            panic!("the rescue team still ran after {DEADLINE:?}; killed");
+        }
+    }
+}
+
+const AGENTS: [&str; 5] = ["world", "robot_1", "robot_2", "robot_3", "coordinator"];
+
+/// The shipped configs with a fresh team name and free ports, in `dir/team` beside the plan,
+/// and the world file in `dir` (the configs name it `../rescue.txt`).
+fn team_configs(dir: &Path, team: &str) -> Vec<String> {
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/rescue");
+    std::fs::create_dir(dir.join("team")).unwrap();
+    std::fs::copy(shipped.join("rescue.txt"), dir.join("rescue.txt")).unwrap();
+    std::fs::copy(shipped.join("team/team.plan"), dir.join("team/team.plan")).unwrap();
+    let ports: Vec<(u16, u16)> = (7460..=7464).map(|p| (p, free_port())).collect();
+    AGENTS
+        .iter()
+        .map(|agent| {
+            let mut text =
+                std::fs::read_to_string(shipped.join(format!("team/{agent}.ron"))).unwrap();
+            text = text.replace("name: \"rescue\"", &format!("name: \"{team}\""));
+            for (port, free) in &ports {
+                text = text.replace(&format!("127.0.0.1:{port}"), &format!("127.0.0.1:{free}"));
+            }
+            let path = dir.join(format!("team/{agent}.ron"));
+            std::fs::write(&path, text).unwrap();
+            path.display().to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
+    let dir = tempfile::tempdir().unwrap();
+    let configs = team_configs(dir.path(), &team_name("rescue-team"));
+    let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .current_dir(dir.path())
+        .arg("run")
+        .args(&configs)
+        .args(["--for", "200s"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("petrel starts");
+    let out = wait(child);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && stdout.contains("plan `team`: goal"),
+        "{}\nstdout:\n{stdout}\nwhy it stopped, and problems:\n{}",
+        out.status,
+        stderr
+            .lines()
+            .filter(|l| l.contains("stopping") || l.contains("ERROR") || l.contains(" WARN petrel"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    // The picture of the run: every robot's trajectory.
+    assert!(dir.path().join("out/rescue-team.png").is_file(), "{stdout}");
+    assert!(
+        stdout.contains("robots' trajectories") && stdout.contains("  robot_3: #"),
+        "{stdout}"
+    );
+    // Each robot carried out its own search, to the end, once.
+    for search in [
+        "robot_1#search_west",
+        "robot_2#search_middle",
+        "robot_3#search_east",
+    ] {
+        assert!(
+            stdout.contains(&format!("{search}: 1 start, 1 end, 0 failures")),
+            "{search}:\n{stdout}"
+        );
+    }
+    // Victims found by any robot are merged into the coordinator's list, with who found them.
+    assert!(
+        stdout.contains("[victims] victim 1 at ("),
+        "victims:\n{stdout}"
+    );
+    assert!(
+        stdout.contains("team victims: ") && stdout.contains(" found by robot_"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_goal() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let configs = team_configs(dir.path(), &team_name("rescue-fault"));
+    // robot_1 in its own process, the rest of the team in another.
+    let (robot_1, others): (Vec<_>, Vec<_>) =
+        configs.iter().partition(|c| c.ends_with("robot_1.ron"));
+    let run = |configs: &[&String], stderr: Stdio| {
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .current_dir(dir.path())
+            .arg("run")
+            .args(configs)
+            .args(["--for", "200s"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(stderr)
+            .spawn()
+            .expect("petrel starts")
+    };
+    let mut team = run(&others, Stdio::piped());
+    let mut victim = run(&robot_1, Stdio::piped());
+    // Killed (SIGKILL: no goodbye) as soon as its search has started; the log line is the
+    // signal, read as it comes (a dead or silent process ends the read: the test then fails).
+    let log = BufReader::new(victim.stderr.take().unwrap());
+    let mut seen = Vec::new();
+    let started = log.lines().map_while(Result::ok).any(|l| {
+        let hit = l.contains("robot_1#search_west call=start");
+        seen.push(l);
+        hit
+    });
+    victim.kill().unwrap();
+    victim.wait().unwrap();
+    if !started {
+        let _ = team.kill();
+        let _ = team.wait();
+        let tail = seen[seen.len().saturating_sub(15)..].join("\n");
+        panic!("robot_1 never started its search; its log ends:\n{tail}");
+    }
+    let out = wait(team);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.contains("plan `team`: goal"),
+        "{}\n{stdout}",
+        out.status
+    );
+    // The world saw robot_1's agent leave: its body is crossed out where it stopped.
+    assert!(
+        stdout.contains("robot_1: #1f77b4, left the team at t = "),
+        "{stdout}"
+    );
+    // robot_1's search failed when it left the team, and robot_3 searched the west after the east.
+    for line in [
+        "robot_1#search_west: 1 start, 0 ends, 1 failure,",
+        "robot_3#search_west: 1 start, 1 end, 0 failures",
+        "robot_3#search_east: 1 start, 1 end, 0 failures",
+    ] {
+        assert!(stdout.contains(line), "{line}:\n{stdout}");
+    }
+}
