@@ -28,6 +28,25 @@ fn config(dir: &std::path::Path, fault: &str) -> std::path::PathBuf {
     path
 }
 
+/// `petrel run` on one worker with a module whose first step blocks for good, once started.
+fn blocked_on_one_worker(dir: &std::path::Path, stop_timeout: &str) -> Running {
+    let config = config(dir, "block");
+    let mut petrel = Running::start(
+        &[
+            "run",
+            config.to_str().unwrap(),
+            "--workers",
+            "1",
+            "--stop-timeout",
+            stop_timeout,
+            "--no-remote",
+        ],
+        dir,
+    );
+    petrel.wait_for("agent started");
+    petrel
+}
+
 fn run(dir: &std::path::Path, args: &[&str]) -> (Option<i32>, String, String) {
     let out = bounded::output_within_deadline(
         Command::new(env!("CARGO_BIN_EXE_petrel"))
@@ -110,20 +129,7 @@ fn a_module_that_does_not_stop_in_time_is_killed_and_the_summary_says_so() {
 #[test]
 fn sigterm_ends_the_process_when_a_step_blocks_forever() {
     let dir = tempfile::tempdir().unwrap();
-    let config = config(dir.path(), "block");
-    let mut petrel = Running::start(
-        &[
-            "run",
-            config.to_str().unwrap(),
-            "--workers",
-            "1",
-            "--stop-timeout",
-            "300ms",
-            "--no-remote",
-        ],
-        dir.path(),
-    );
-    petrel.wait_for("agent started");
+    let mut petrel = blocked_on_one_worker(dir.path(), "300ms");
     petrel.signal("TERM");
     let (status, _, log) = petrel.finish();
     assert_eq!(status.code(), Some(1), "{log}");
@@ -133,21 +139,8 @@ fn sigterm_ends_the_process_when_a_step_blocks_forever() {
 #[test]
 fn a_second_ctrl_c_exits_at_once_without_waiting_for_the_stop_timeout() {
     let dir = tempfile::tempdir().unwrap();
-    let config = config(dir.path(), "block");
     // Far longer than the test's deadline: only the second Ctrl-C can end this run in time.
-    let mut petrel = Running::start(
-        &[
-            "run",
-            config.to_str().unwrap(),
-            "--workers",
-            "1",
-            "--stop-timeout",
-            "1h",
-            "--no-remote",
-        ],
-        dir.path(),
-    );
-    petrel.wait_for("agent started");
+    let mut petrel = blocked_on_one_worker(dir.path(), "1h");
     petrel.signal("INT");
     petrel.wait_for("Ctrl-C again to exit at once");
     petrel.signal("INT");
