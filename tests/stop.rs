@@ -129,7 +129,7 @@ fn a_module_that_does_not_stop_in_time_is_killed_and_the_summary_says_so() {
 #[test]
 fn sigterm_ends_the_process_when_a_step_blocks_forever() {
     let dir = tempfile::tempdir().unwrap();
-    let mut petrel = blocked_on_one_worker(dir.path(), "300ms");
+    let petrel = blocked_on_one_worker(dir.path(), "300ms");
     petrel.signal("TERM");
     let (status, _, log) = petrel.finish();
     assert_eq!(status.code(), Some(1), "{log}");
