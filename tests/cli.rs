@@ -139,11 +139,9 @@ fn run_for_a_while_prints_a_summary_and_writes_a_runnable_snapshot() {
 fn bad_arguments_are_explained() {
     let out = petrel(&["run", "configs/pipeline.ron", "--for", "soon"]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(
-        text(&out.stderr).contains("invalid value 'soon' for '--for <DURATION>'"),
-        "{}",
-        text(&out.stderr)
-    );
+    // The wording is clap's: only that it names the option and the value is ours to hold.
+    let said = text(&out.stderr);
+    assert!(said.contains("'soon'") && said.contains("--for"), "{said}");
     let missing = petrel(&["run", "configs/nope.ron"]);
     assert_eq!(missing.status.code(), Some(2));
     assert!(text(&missing.stderr).starts_with("configs/nope.ron: error: cannot read config:"));
