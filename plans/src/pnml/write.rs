@@ -16,6 +16,11 @@ fn esc(s: &str) -> String {
             '>' => out.push_str("&gt;"),
             '"' => out.push_str("&quot;"),
             '\'' => out.push_str("&apos;"),
+            // XML 1.0 allows no other control character, not even as a reference: write its
+            // visible stand-in (U+2400 + code, e.g. ␁), so the file stays well-formed.
+            c if c.is_ascii_control() && !matches!(c, '\t' | '\n' | '\r') => {
+                let _ = write!(out, "&#{};", 0x2400 + c as u32);
+            }
             c if c.is_ascii() => out.push(c),
             c => {
                 let _ = write!(out, "&#{};", c as u32);
@@ -109,4 +114,23 @@ pub fn write_pnml(plan: &Plan) -> String {
     }
     out.push_str("  </net>\n</pnml>\n");
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::esc;
+
+    #[test]
+    fn escapes_markup_non_ascii_and_control_characters() {
+        assert_eq!(esc("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
+        assert_eq!(esc("café"), "caf&#233;");
+        // U+0001 and U+001B would make the file ill-formed XML; DEL (U+007F) is allowed.
+        assert_eq!(esc("x\u{1}y\u{1b}\t"), "x&#9217;y&#9243;\t");
+        let doc = format!("<n>{}</n>", esc("go\u{1}\u{7}<home>"));
+        let parsed = roxmltree::Document::parse(&doc).expect("well-formed");
+        assert_eq!(
+            parsed.root_element().text(),
+            Some("go\u{2401}\u{2407}<home>")
+        );
+    }
 }
