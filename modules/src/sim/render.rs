@@ -214,13 +214,14 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
     img
 }
 
-/// Renders and writes a PNG file.
-pub fn save_png(
-    path: &Path,
-    grid: &OccupancyGrid,
-    layers: &RenderLayers,
-) -> Result<(), image::ImageError> {
-    render(grid, layers).save_with_format(path, image::ImageFormat::Png)
+/// Renders and writes a PNG file (to a temporary file renamed into place).
+pub fn save_png(path: &Path, grid: &OccupancyGrid, layers: &RenderLayers) -> std::io::Result<()> {
+    let mut png = Vec::new();
+    render(grid, layers)
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .map_err(std::io::Error::other)?;
+    // Whole or not at all: a full disk or a kill mid-write never leaves half a picture.
+    petrel_actors::files::write_atomically(path, &png)
 }
 
 fn disc(img: &mut RgbImage, (cx, cy): (f64, f64), r: f64, colour: Rgb<u8>) {
