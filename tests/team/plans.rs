@@ -257,6 +257,13 @@ async fn a_robot_given_two_actions_on_the_same_modules_runs_them_one_after_the_o
     })
     .await;
     let running = first.running.keys().next().cloned().unwrap();
+    // The memory can say "started" a moment before the action switched its module on and
+    // began counting `elapsed()`: a write before that would not count as written since.
+    let enabled = r1.handle::<bool>("probe/enabled").await;
+    wait_for(&enabled, "the first search switching the probe on", |on| {
+        *on
+    })
+    .await;
     r1.agent
         .blackboard()
         .set("probe/in/value", 1.0)
@@ -270,6 +277,11 @@ async fn a_robot_given_two_actions_on_the_same_modules_runs_them_one_after_the_o
     .await;
     let m = memory.get();
     assert_eq!(m.actions[&running].ends, 1, "{m:?}");
+    // The first search's end switched the probe off; the second switches it on again.
+    wait_for(&enabled, "the second search switching the probe on", |on| {
+        *on
+    })
+    .await;
     r1.agent
         .blackboard()
         .set("probe/in/value", 2.0)
