@@ -47,10 +47,21 @@ fn blocked_on_one_worker(dir: &std::path::Path, stop_timeout: &str) -> Running {
     petrel
 }
 
-fn run(dir: &std::path::Path, args: &[&str]) -> (Option<i32>, String, String) {
+/// `petrel run` of the config with `fault` for 1 s on `workers` threads, 300 ms stop timeout:
+/// exit code, standard output, log.
+fn run_for_1s(dir: &std::path::Path, fault: &str, workers: &str) -> (Option<i32>, String, String) {
+    let config = config(dir, fault);
     let out = bounded::output_within_deadline(
         Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args(args)
+            .args([
+                "run",
+                config.to_str().unwrap(),
+                "--for",
+                "1s",
+                "--workers",
+                workers,
+            ])
+            .args(["--stop-timeout", "300ms", "--no-remote"])
             .env("RUST_LOG", "info")
             .env("PETREL_RUNTIME_DIR", dir),
     );
@@ -64,21 +75,7 @@ fn run(dir: &std::path::Path, args: &[&str]) -> (Option<i32>, String, String) {
 #[test]
 fn run_for_ends_the_process_when_a_spinning_step_holds_the_only_worker() {
     let dir = tempfile::tempdir().unwrap();
-    let config = config(dir.path(), "spin");
-    let (code, _, log) = run(
-        dir.path(),
-        &[
-            "run",
-            config.to_str().unwrap(),
-            "--for",
-            "1s",
-            "--workers",
-            "1",
-            "--stop-timeout",
-            "300ms",
-            "--no-remote",
-        ],
-    );
+    let (code, _, log) = run_for_1s(dir.path(), "spin", "1");
     assert_eq!(code, Some(1), "{log}");
     assert!(
         log.contains(
@@ -97,21 +94,7 @@ fn a_module_that_does_not_stop_in_time_is_killed_and_the_summary_says_so() {
     let dir = tempfile::tempdir().unwrap();
     // `hang`: a step that awaits forever, which the runtime can kill. (A step that blocks its
     // thread may strand tasks tokio queued on that worker, so only the watchdog can end it.)
-    let config = config(dir.path(), "hang");
-    let (code, summary, log) = run(
-        dir.path(),
-        &[
-            "run",
-            config.to_str().unwrap(),
-            "--for",
-            "1s",
-            "--workers",
-            "2",
-            "--stop-timeout",
-            "300ms",
-            "--no-remote",
-        ],
-    );
+    let (code, summary, log) = run_for_1s(dir.path(), "hang", "2");
     assert_eq!(code, Some(1), "{log}");
     let status = |module: &str| {
         summary

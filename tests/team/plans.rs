@@ -260,15 +260,14 @@ async fn a_robot_given_two_actions_on_the_same_modules_runs_them_one_after_the_o
     // The memory can say "started" a moment before the action switched its module on and
     // began counting `elapsed()`: a write before that would not count as written since.
     let enabled = r1.handle::<bool>("probe/enabled").await;
-    wait_for(&enabled, "the first search switching the probe on", |on| {
-        *on
-    })
-    .await;
-    r1.agent
-        .blackboard()
-        .set("probe/in/value", 1.0)
-        .await
-        .unwrap();
+    let probe = |value: f64, search: &'static str| {
+        let (enabled, bb) = (&enabled, r1.agent.blackboard().clone());
+        async move {
+            wait_for(enabled, search, |on| *on).await;
+            bb.set("probe/in/value", value).await.unwrap();
+        }
+    };
+    probe(1.0, "the first search switching the probe on").await;
     wait_for(
         &memory,
         "the other search started after the first ended",
@@ -278,15 +277,7 @@ async fn a_robot_given_two_actions_on_the_same_modules_runs_them_one_after_the_o
     let m = memory.get();
     assert_eq!(m.actions[&running].ends, 1, "{m:?}");
     // The first search's end switched the probe off; the second switches it on again.
-    wait_for(&enabled, "the second search switching the probe on", |on| {
-        *on
-    })
-    .await;
-    r1.agent
-        .blackboard()
-        .set("probe/in/value", 2.0)
-        .await
-        .unwrap();
+    probe(2.0, "the second search switching the probe on").await;
     let result = boss.handle::<String>("mission/out/result").await;
     wait_for(&result, "the plan's goal", |r| r == "goal").await;
     for m in [r1, boss] {
