@@ -8,7 +8,6 @@
 
 mod common;
 
-use std::path::Path;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -16,30 +15,6 @@ use futures_util::{SinkExt, StreamExt};
 use petrel::actors::{Agent, ConfigFile, DEFAULT_STOP_TIMEOUT};
 use petrel::console::{AgentSource, Console, ConsoleOptions, LogTail};
 use tokio_tungstenite::tungstenite::Message;
-
-fn cpu_time() -> Duration {
-    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
-    // SAFETY: getrusage fills the struct it is given.
-    let usage = unsafe {
-        libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr());
-        usage.assume_init()
-    };
-    let t = |tv: libc::timeval| Duration::new(tv.tv_sec as u64, tv.tv_usec as u32 * 1000);
-    t(usage.ru_utime) + t(usage.ru_stime)
-}
-
-fn navigate() -> ConfigFile {
-    let mut file =
-        ConfigFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/navigate.ron"))
-            .unwrap();
-    let overlay = ConfigFile::parse(
-        "overlay.ron",
-        r#"Agent(name: "robot1", modules: [(name: "recorder", type: "sim.recorder", values: {"params/png": ""})])"#,
-    )
-    .unwrap();
-    file.overlay(overlay);
-    file
-}
 
 /// A client that watches every property and reads what is pushed; returns the bytes read.
 async fn watch_everything(addr: std::net::SocketAddr) -> tokio::task::JoinHandle<usize> {
@@ -66,7 +41,7 @@ fn run(file: &ConfigFile, console: bool) -> Duration {
         .start_paused(true)
         .build()
         .unwrap();
-    let start = cpu_time();
+    let start = common::cpu_time();
     rt.block_on(async {
         let agent = Agent::start(file, &common::registry()).await.unwrap();
         let watching = match console {
@@ -94,11 +69,11 @@ fn run(file: &ConfigFile, console: bool) -> Duration {
             assert!(read > 10_000, "the client saw the values ({read} bytes)");
         }
     });
-    cpu_time() - start
+    common::cpu_time() - start
 }
 
 fn inspect_overhead(c: &mut Criterion) {
-    let file = navigate();
+    let file = common::navigate();
     let mut g = c.benchmark_group("inspect_overhead");
     g.bench_function("navigate_console_watching_everything", |b| {
         b.iter_custom(|iters| (0..iters).map(|_| run(&file, true)).sum())

@@ -12,30 +12,6 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use petrel::actors::{Agent, ConfigFile, DEFAULT_STOP_TIMEOUT};
 use petrel::record::{Format, RecordOptions, Recorder};
 
-fn cpu_time() -> Duration {
-    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
-    // SAFETY: getrusage fills the struct it is given.
-    let usage = unsafe {
-        libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr());
-        usage.assume_init()
-    };
-    let t = |tv: libc::timeval| Duration::new(tv.tv_sec as u64, tv.tv_usec as u32 * 1000);
-    t(usage.ru_utime) + t(usage.ru_stime)
-}
-
-fn navigate() -> ConfigFile {
-    let mut file =
-        ConfigFile::load(Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/navigate.ron"))
-            .unwrap();
-    let overlay = ConfigFile::parse(
-        "overlay.ron",
-        r#"Agent(name: "robot1", modules: [(name: "recorder", type: "sim.recorder", values: {"params/png": ""})])"#,
-    )
-    .unwrap();
-    file.overlay(overlay);
-    file
-}
-
 /// One run; returns the CPU time it took.
 fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
     let rt = tokio::runtime::Builder::new_current_thread()
@@ -43,7 +19,7 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
         .start_paused(true)
         .build()
         .unwrap();
-    let start = cpu_time();
+    let start = common::cpu_time();
     rt.block_on(async {
         let agent = Agent::start(file, &common::registry()).await.unwrap();
         let recorder = match record {
@@ -63,11 +39,11 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
             assert_eq!(report.dropped, 0);
         }
     });
-    cpu_time() - start
+    common::cpu_time() - start
 }
 
 fn record_overhead(c: &mut Criterion) {
-    let file = navigate();
+    let file = common::navigate();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("nav.mcap");
     let mut g = c.benchmark_group("record_overhead");

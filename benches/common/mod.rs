@@ -10,6 +10,33 @@ use petrel::actors::{
     QueueWriter, Schedule,
 };
 
+/// CPU time this process has used (user + system), for benches that measure CPU, not wall time.
+pub fn cpu_time() -> Duration {
+    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+    // SAFETY: getrusage fills the struct it is given.
+    let usage = unsafe {
+        libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr());
+        usage.assume_init()
+    };
+    let t = |tv: libc::timeval| Duration::new(tv.tv_sec as u64, tv.tv_usec as u32 * 1000);
+    t(usage.ru_utime) + t(usage.ru_stime)
+}
+
+/// `configs/navigate.ron` with its recorder drawing no picture.
+pub fn navigate() -> ConfigFile {
+    let mut file = ConfigFile::load(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/navigate.ron"),
+    )
+    .unwrap();
+    let overlay = ConfigFile::parse(
+        "overlay.ron",
+        r#"Agent(name: "robot1", modules: [(name: "recorder", type: "sim.recorder", values: {"params/png": ""})])"#,
+    )
+    .unwrap();
+    file.overlay(overlay);
+    file
+}
+
 /// Short criterion runs: ratios against in-run baselines are what we record.
 pub fn criterion() -> criterion::Criterion {
     criterion::Criterion::default()
