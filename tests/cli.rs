@@ -585,41 +585,6 @@ fn a_world_file_that_does_not_parse_is_refused_by_check_and_run_before_anything_
     }
 }
 
-#[test]
-fn a_module_that_wakes_itself_starves_neither_the_others_nor_the_stop_on_one_worker() {
-    // `s` reads its own output: every step wakes it again, forever.
-    let (_dir, config) = temp_config(
-        "self.ron",
-        r#"Agent(name: "r", modules: [
-    (name: "s", type: "demo.scale", links: {"in/value": "s/out/value"}, values: {"params/factor": 1.0001}),
-    (name: "c", type: "demo.counter", values: {"params/period_ms": 100}),
-])"#,
-    );
-    let out = petrel(&[
-        "run",
-        config.to_str().unwrap(),
-        "--for",
-        "1s",
-        "--workers",
-        "1",
-        "--no-remote",
-    ]);
-    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
-    let summary = text(&out.stdout);
-    let steps = |module: &str| -> u64 {
-        let line = summary
-            .lines()
-            .find(|l| l.split_whitespace().next() == Some(module))
-            .unwrap_or_else(|| panic!("no summary line for {module}: {summary}"));
-        line.split_whitespace().nth(3).unwrap().parse().unwrap()
-    };
-    assert!(steps("s") > 1000, "the busy module ran: {summary}");
-    assert!(
-        steps("c") >= 1,
-        "the periodic module ran beside it: {summary}"
-    );
-}
-
 /// Runs petrel with its standard output a pipe whose reading end is already closed, so every
 /// write to it fails (as `petrel … | head -1` after `head` has exited).
 fn petrel_into_a_closed_pipe(args: &[&str]) -> Output {

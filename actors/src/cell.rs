@@ -4,7 +4,7 @@
 //! move through these cells without any actor round trip. A write replaces the cell's value
 //! under a short lock and raises the [`Signal`] of every module watching the cell.
 
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicU8, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicU8, Ordering};
 use std::sync::Arc;
 
 use arc_swap::ArcSwap;
@@ -12,6 +12,7 @@ use parking_lot::{Mutex, RwLock};
 use tokio::sync::Notify;
 use tokio::time::Instant;
 
+use crate::loop_watch::Hop;
 use crate::value::{AnyValue, TypeInfo};
 
 /// Why a module woke up; a set of these is reported to the module's step.
@@ -31,7 +32,6 @@ pub(crate) mod cause {
 /// The wake-up signal of one module: one per module name, kept across restarts.
 ///
 /// Raising it never blocks and is never lost: if the module is busy, the next wait returns at once.
-#[derive(Default)]
 pub(crate) struct Signal {
     notify: Notify,
     causes: AtomicU8,
@@ -39,10 +39,37 @@ pub(crate) struct Signal {
     /// wakes only the modules that will step, and the recorded causes make the module step
     /// when it is enabled again.
     quiet: AtomicBool,
+    /// The longest chain of steps that led to the data raised since the last step, and whose
+    /// write ended it: a packed [`Hop`] (see [`loop_watch`](crate::loop_watch)).
+    hops: AtomicU64,
+    /// Names this signal in a [`Hop`].
+    id: u32,
+}
+
+impl Default for Signal {
+    fn default() -> Self {
+        static NEXT_ID: AtomicU32 = AtomicU32::new(1);
+        Signal {
+            notify: Notify::new(),
+            causes: AtomicU8::new(0),
+            quiet: AtomicBool::new(false),
+            hops: AtomicU64::new(0),
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+        }
+    }
 }
 
 impl Signal {
     pub fn raise(&self, cause: u8) {
+        if cause & (cause::CHANGE | cause::ITEMS) != 0 {
+            if let Some(step) = crate::loop_watch::current() {
+                let hop = Hop {
+                    hops: step.hops.saturating_add(1),
+                    waker: step.waker,
+                };
+                self.hops.fetch_max(hop.pack(), Ordering::Relaxed);
+            }
+        }
         self.causes.fetch_or(cause, Ordering::Release);
         if cause & !cause::STEPS == 0 && self.quiet.load(Ordering::Acquire) {
             return;
@@ -63,6 +90,17 @@ impl Signal {
 
     pub fn take(&self) -> u8 {
         self.causes.swap(0, Ordering::Acquire)
+    }
+
+    /// The longest chain that led to the data raised since the last call (`hops` 0 when no
+    /// step wrote it), and starts again.
+    pub fn take_hop(&self) -> Hop {
+        Hop::unpack(self.hops.swap(0, Ordering::Relaxed))
+    }
+
+    /// Names this signal (and the module it wakes) in a [`Hop`].
+    pub fn id(&self) -> u32 {
+        self.id
     }
 }
 

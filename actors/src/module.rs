@@ -73,6 +73,13 @@ pub trait Module: Send + Sized + 'static {
         Vec::new()
     }
 
+    /// What makes this module wake itself, said when the runtime finds it re-triggering
+    /// itself without progress (e.g. the context rule whose change undoes its own condition).
+    /// The runtime already names the link cycle, if there is one.
+    fn loop_hint(&self) -> Option<String> {
+        None
+    }
+
     /// Prepares the module after config values and links are in place; an error stops it
     /// cleanly. Return an [`Unrecoverable`] error for what a restart cannot fix (a file that
     /// does not parse): the supervisor then reports it once and does not restart the module.
@@ -245,6 +252,8 @@ pub struct Context {
     pub(crate) agent: Arc<str>,
     pub(crate) module: Arc<str>,
     pub(crate) cause: Cause,
+    /// Steps in a row that led to this one through writes (see `loop_watch.rs`).
+    pub(crate) hops: u32,
     pub(crate) steps: u64,
     /// The step time, shared with the module's output handles.
     pub(crate) clock: Arc<StepClock>,
@@ -266,6 +275,7 @@ impl Context {
             control,
             agent: agent.into(),
             module: module.into(),
+            hops: 0,
             cause: Cause(0),
             steps: 0,
             clock,
@@ -305,6 +315,13 @@ impl Context {
     /// This module instance's name.
     pub fn module(&self) -> &str {
         &self.module
+    }
+
+    /// Whether this step is part of a loop: the last of thousands of steps in a row, each woken
+    /// by the previous one's writes, with no tick, timeout or outside write between them. The
+    /// runtime reports such a loop itself; a module that logs at every step should log less.
+    pub fn in_a_loop(&self) -> bool {
+        self.hops >= crate::loop_watch::LOOP_HOPS
     }
 
     /// Why this step runs.

@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 
 pub mod engine;
+pub mod lint;
 mod manager;
 pub mod rules;
 

@@ -175,8 +175,13 @@ pub(crate) fn check_all(
         let Some(rules) = file_param(&built, &m.name, "params/rules") else {
             continue;
         };
-        if let Err(rule_errors) = petrel_contexts::check_rules(rules.as_path(), &built) {
-            errors.extend(rule_errors);
+        match petrel_contexts::check_rules(rules.as_path(), &built, &m.name) {
+            Ok(warnings) => {
+                for warning in warnings {
+                    eprintln!("{}", warning.as_warning());
+                }
+            }
+            Err(rule_errors) => errors.extend(rule_errors),
         }
     }
     for (module, input, output) in self_feeding_links(&built) {

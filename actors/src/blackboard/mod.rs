@@ -50,6 +50,7 @@ pub(crate) enum BlackboardMsg {
     Latest(String, Reply<Arc<crate::cell::Endpoint>>),
     Snapshot(Reply<String>),
     LinkOf(String, Reply<Option<String>>),
+    FeedbackCycle(String, Reply<Option<Vec<String>>>),
     AddModule(
         Box<ModuleConfig>,
         ModuleType,
@@ -157,6 +158,9 @@ impl Actor for BlackboardActor {
                 let _ = reply.send(result);
             }
             BlackboardMsg::Team(request) => team::handle(reg, request),
+            BlackboardMsg::FeedbackCycle(module, reply) => {
+                let _ = reply.send(Ok(reg.feedback_cycle(&module)));
+            }
             BlackboardMsg::Snapshot(reply) => {
                 let _ = reply.send(Ok(crate::snapshot::write(reg)));
             }
@@ -352,6 +356,15 @@ impl Blackboard {
             .call(|r| BlackboardMsg::Endpoint(address.to_string(), r))
             .await?;
         Ok(AnyHandle { ep })
+    }
+
+    /// The shortest cycle of links through `module` (see [`Registry::feedback_cycle`]).
+    pub(crate) async fn feedback_cycle(
+        &self,
+        module: &str,
+    ) -> Result<Option<Vec<String>>, BlackboardError> {
+        self.call(|r| BlackboardMsg::FeedbackCycle(module.to_string(), r))
+            .await
     }
 
     /// The whole blackboard as a RON agent config (values, links, queue capacities).

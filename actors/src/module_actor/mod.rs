@@ -6,7 +6,6 @@
 //! error ends the actor and reaches the supervisor, and a kill drops the running step.
 
 use std::marker::PhantomData;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -17,6 +16,7 @@ use tracing::Instrument;
 use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
 use crate::cell::{cause, Signal};
+use crate::loop_watch::{self, LoopWatch};
 use crate::module::{Cause, Context, Module, Schedule, Unrecoverable, WatchTarget};
 use crate::panic_report::catching;
 use crate::ports::{Handle, Ports};
@@ -24,41 +24,15 @@ use crate::queue::ReaderEndpoint;
 use crate::step_probe::StepMark;
 
 mod builtins;
+mod loops;
 mod stats;
+mod stop;
 
 pub use builtins::status;
 pub(crate) use builtins::{declare_builtins, Builtins};
+use loops::{report_loop, Loop};
 use stats::StepStats;
-
-/// A request to stop one module instance, shared by its supervisor and its actor. Stopping
-/// raises the module's signal, so the request is seen at once, even by a waiting module.
-#[derive(Default)]
-pub(crate) struct StopRequest {
-    requested: AtomicBool,
-    signal: parking_lot::Mutex<Option<Arc<Signal>>>,
-}
-
-impl StopRequest {
-    pub fn request(&self) {
-        let signal = self.signal.lock();
-        self.requested.store(true, Ordering::SeqCst);
-        if let Some(signal) = signal.as_ref() {
-            signal.raise(cause::STOP);
-        }
-    }
-
-    fn attach(&self, signal: &Arc<Signal>) {
-        let mut slot = self.signal.lock();
-        *slot = Some(signal.clone());
-        if self.requested.load(Ordering::SeqCst) {
-            signal.raise(cause::STOP);
-        }
-    }
-
-    fn is_requested(&self) -> bool {
-        self.requested.load(Ordering::Relaxed)
-    }
-}
+pub(crate) use stop::StopRequest;
 
 pub(crate) struct ModuleArgs {
     pub modules: ModuleControl,
@@ -95,6 +69,7 @@ pub(crate) struct Running<M> {
     step_mark: Arc<StepMark>,
     span: tracing::Span,
     stats: StepStats,
+    loops: LoopWatch,
 }
 
 /// Why module code failed, if it did: its error, or the panic the hook reported.
@@ -179,6 +154,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             step_mark: args.step_mark,
             span,
             stats: StepStats::default(),
+            loops: LoopWatch::default(),
         })
     }
 
@@ -316,6 +292,14 @@ impl<M: Module> Running<M> {
 
     async fn step(&mut self, causes: u8) -> anyhow::Result<()> {
         self.ctx.cause = Cause(causes);
+        // A step woken by time starts a new chain; one woken by writes continues theirs.
+        let raised = self.signal.take_hop();
+        let hops = if causes & (cause::PERIOD | cause::TIMEOUT) != 0 {
+            0
+        } else {
+            raised.hops
+        };
+        self.ctx.hops = hops;
         // The step's time is read once, here if the step is timed, else when first needed.
         let started = self.stats.wants_timing().then(Instant::now);
         match started {
@@ -325,11 +309,23 @@ impl<M: Module> Running<M> {
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
         let mark = self.step_mark.clone();
         let in_step = mark.enter();
-        let result = self
-            .run_step()
+        let result = loop_watch::in_step(hops, self.signal.id(), self.run_step())
             .instrument(tracing::trace_span!("step"))
             .await;
         drop(in_step);
+        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now()) {
+            let woken_by_itself = raised.waker == self.signal.id();
+            let hint = self.module.loop_hint();
+            let blackboard = self.ctx.blackboard().clone();
+            let module = self.ctx.module().to_string();
+            let found = Loop {
+                hops,
+                steps,
+                woken_by_itself,
+                hint,
+            };
+            report_loop(&self.span, &blackboard, &module, found).await;
+        }
         if result.is_ok() {
             // The step is done with what it took from its queues.
             for reader in &self.readers {

@@ -23,7 +23,9 @@ impl ContextManager {
         match action {
             Action::Activated(context) | Action::Deactivated(context) => {
                 let now_active = matches!(action, Action::Activated(_));
-                if tracing::enabled!(tracing::Level::INFO) {
+                self.last_switched = Some(context.clone());
+                // In a loop the runtime names the context once; a line per switch would flood.
+                if tracing::enabled!(tracing::Level::INFO) && !ctx.in_a_loop() {
                     let trigger = self.trigger_values(context);
                     let what = if now_active {
                         "activated"
@@ -59,7 +61,7 @@ impl ContextManager {
                 };
                 // Continuous expressions update often: the first change is news, the rest detail.
                 // Values are formatted only when someone listens.
-                if first && tracing::enabled!(tracing::Level::INFO) {
+                if first && tracing::enabled!(tracing::Level::INFO) && !ctx.in_a_loop() {
                     let (old, new) = (info.short(&old), info.short(&new));
                     tracing::info!(%context, %target, %old, %new, "context sets");
                 } else if tracing::enabled!(tracing::Level::DEBUG) {
@@ -71,7 +73,9 @@ impl ContextManager {
             Action::Restore(target) => {
                 if let Some(original) = self.original_values.remove(target) {
                     let handle = self.handle(target)?;
-                    tracing::info!(%target, value = %handle.type_info().short(&original), "context restores");
+                    if !ctx.in_a_loop() {
+                        tracing::info!(%target, value = %handle.type_info().short(&original), "context restores");
+                    }
                     handle.set(original)?;
                 }
             }

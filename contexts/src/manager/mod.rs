@@ -80,16 +80,25 @@ fn mentioned(loaded: &LoadedRules) -> Vec<String> {
     paths
 }
 
-/// Checks a rules file against an agent's registry (what `petrel check` does); returns the
-/// context names.
-pub fn check_rules(path: &Path, registry: &Registry) -> Result<Vec<String>, Vec<RuleError>> {
+/// Checks a rules file against an agent's registry for the context manager `manager` (what
+/// `petrel check` does): the errors `run` would refuse it for, or the warnings (contexts whose
+/// changes reach their own condition), each at its place in the file.
+pub fn check_rules(
+    path: &Path,
+    registry: &Registry,
+    manager: &str,
+) -> Result<Vec<RuleError>, Vec<RuleError>> {
     let loaded = LoadedRules::load(path)?;
-    Engine::build(&loaded, registry)?;
-    Ok(loaded
-        .rules
-        .contexts
-        .iter()
-        .map(|c| c.name.clone())
+    let mut errors = crate::lint::stops_its_manager(&loaded, manager);
+    if let Err(more) = Engine::build(&loaded, registry) {
+        errors.extend(more);
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    Ok(crate::lint::self_undoing(&loaded.rules.contexts)
+        .into_iter()
+        .map(|s| loaded.error(&s.context, Some(&s.target), None, s.message()))
         .collect())
 }
 
@@ -120,6 +129,10 @@ pub struct ContextManager {
     original_runs: HashMap<Arc<str>, bool>,
     reload_seen: u64,
     started: Option<Instant>,
+    /// Contexts whose changes reach their own condition, to name in a loop report.
+    self_undoing: Vec<crate::lint::SelfUndoing>,
+    /// The context that switched last, to name in a loop report.
+    last_switched: Option<Arc<str>>,
     /// Declared so configs can link it to the agent's clock (see `clock`).
     _clock_input: Input<f64>,
     /// The time conditions run on: `in/clock` when linked (a simulator's `out/simTime`, the
@@ -170,6 +183,8 @@ impl Module for ContextManager {
             original_runs: HashMap::new(),
             reload_seen: 0,
             started: None,
+            self_undoing: Vec::new(),
+            last_switched: None,
             _clock_input: ports.input(
                 "in/clock",
                 0.0,
@@ -190,6 +205,16 @@ impl Module for ContextManager {
         self.watched
             .iter()
             .fold(schedule, |s, w| s.on_change(&w.handle))
+    }
+
+    fn loop_hint(&self) -> Option<String> {
+        let context = self.last_switched.as_deref()?;
+        Some(
+            match self.self_undoing.iter().find(|s| s.context == context) {
+                Some(found) => found.message(),
+                None => format!("context `{context}` switched last"),
+            },
+        )
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -262,7 +287,12 @@ impl ContextManager {
                 handles.insert(Arc::from(address), handle);
             }
         }
+        let refused = crate::lint::stops_its_manager(&loaded, ctx.module());
+        if !refused.is_empty() {
+            return Err(show(refused));
+        }
         let engine = Engine::build(&loaded, &handles).map_err(show)?;
+        self.self_undoing = crate::lint::self_undoing(&loaded.rules.contexts);
         self.watched = engine
             .properties()
             .filter_map(|(prop, path)| {

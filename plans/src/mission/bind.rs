@@ -35,6 +35,8 @@ pub(crate) struct BoundAction {
     pub log: Option<String>,
     /// No binding and `params/allow_unbound`: finishes as soon as it is checked.
     pub unbound: bool,
+    /// The warning about an unbound action is said once, not at every call.
+    pub unbound_said: bool,
 }
 
 impl BoundAction {
@@ -234,6 +236,7 @@ impl Binder<'_> {
             failed_text: String::new(),
             log: None,
             unbound: false,
+            unbound_said: false,
         };
         let Some((key, params)) = match_action(p.actions.0.keys().map(|k| k.as_str()), &name.local)
         else {

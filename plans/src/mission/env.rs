@@ -148,7 +148,11 @@ impl Environment for MissionEnv<'_> {
             return;
         };
         if a.unbound {
-            tracing::warn!(action = name, call = %kind, "unbound action: nothing to do");
+            if std::mem::replace(&mut a.unbound_said, true) {
+                tracing::debug!(action = name, call = %kind, "unbound action: nothing to do");
+            } else {
+                tracing::warn!(action = name, call = %kind, "unbound action: nothing to do (said once per action)");
+            }
             return;
         }
         tracing::debug!(action = name, call = %kind, "action call");

@@ -54,6 +54,7 @@ mod builtin;
 mod config;
 mod env;
 mod hints;
+mod loops;
 mod memory;
 mod module;
 mod prepare;

@@ -278,6 +278,7 @@ impl Mission {
             changed: Vec::new(),
             clock,
             memory: MissionMemory::default(),
+            loops: Default::default(),
         };
         let memory = self.memory.get();
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {

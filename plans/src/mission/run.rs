@@ -30,6 +30,8 @@ pub(super) struct Run {
     pub memory: MissionMemory,
     /// Other robots' actions and conditions, or this robot's executor (see `team.rs`).
     pub team: TeamIo,
+    /// Rounds that fire in a circle without waiting (see `loops.rs`).
+    pub loops: super::loops::LoopFinder,
 }
 
 /// Plan steps run back to back in one module step at most (see [`Mission::step`]).
@@ -51,16 +53,51 @@ impl Run {
         // Every condition is known here (unbound atoms read `in/conditions`), so the report's
         // `unknown_conditions` stays empty.
         let report = step(&self.plan, &mut self.state, &mut env);
-        if !report.fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
-            let fired: Vec<&str> = report
-                .fired
-                .iter()
-                .map(|&t| self.plan.transitions()[t].label.as_str())
-                .collect();
+        if report.fired.is_empty() {
+            self.loops.waited();
+        } else {
+            self.note_loop(&report);
+        }
+        // A looping plan's firings were reported as one cycle: a line each would flood the log.
+        if !report.fired.is_empty()
+            && !self.loops.looping()
+            && tracing::enabled!(tracing::Level::INFO)
+        {
+            let fired = self.labels(&report);
             let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
             tracing::info!(?fired, ?calls, "plan step");
         }
         report
+    }
+
+    fn labels(&self, report: &crate::exec::StepReport) -> Vec<String> {
+        report
+            .fired
+            .iter()
+            .map(|&t| shown(&self.plan.transitions()[t]))
+            .collect()
+    }
+
+    /// Reports the plan when its rounds fire in a circle without ever waiting.
+    fn note_loop(&mut self, report: &crate::exec::StepReport) {
+        let (plan, state) = (&self.plan, &self.state);
+        let found = self.loops.fired(std::time::Instant::now(), || {
+            let labels = report.fired.iter();
+            let labels = labels.map(|&t| shown(&plan.transitions()[t]));
+            (state.save(), labels.collect())
+        });
+        if let Some(found) = found {
+            tracing::warn!(
+                rounds = found.rounds,
+                cycle = ?found.cycle,
+                "plan `{}` fires in a circle without waiting for anything: {} comes back after {}; {} rounds in a row fired and none waited for an action, a condition or time (reported at most every {}s; its firings are not logged one by one meanwhile)",
+                self.plan.name(),
+                marking(&self.plan, &self.state),
+                found.cycle.join(" → "),
+                found.rounds,
+                super::loops::REPORT_EVERY.as_secs()
+            );
+        }
     }
 
     /// Brings the expressions up to date with the properties they read, at `now`.
@@ -147,6 +184,14 @@ impl Run {
         }
         self.memory = memory.clone();
         Ok(())
+    }
+}
+
+/// A transition as the log shows it: its label, or its id when it has none (a jump).
+fn shown(t: &crate::model::Transition) -> String {
+    match t.label.trim() {
+        "" => t.id.clone(),
+        label => label.to_string(),
     }
 }
 

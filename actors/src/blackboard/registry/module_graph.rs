@@ -94,4 +94,54 @@ impl Registry {
         }
         graph
     }
+
+    /// The shortest cycle of links that leads from `module`'s outputs back to its inputs, as
+    /// `writer/out/x → reader/in/y` steps, or `None` when no link cycle passes through it.
+    pub fn feedback_cycle(&self, module: &str) -> Option<Vec<String>> {
+        let graph = self.module_graph();
+        let start = graph
+            .node_indices()
+            .find(|&n| matches!(&graph[n], GraphNode::Module { name, .. } if name == module))?;
+        let name = |n: NodeIndex| match &graph[n] {
+            GraphNode::Module { name, .. } => name.clone(),
+            GraphNode::Remote { agent, module } => format!("{agent}/{module}"),
+        };
+        // Breadth first from `start`, remembering the edge that reached each module first.
+        let mut reached_by: HashMap<NodeIndex, petgraph::graph::EdgeIndex> = HashMap::new();
+        let mut frontier = std::collections::VecDeque::from([start]);
+        while let Some(at) = frontier.pop_front() {
+            for edge in graph.edges(at) {
+                use petgraph::visit::EdgeRef;
+                let next = edge.target();
+                if reached_by.contains_key(&next) {
+                    continue;
+                }
+                reached_by.insert(next, edge.id());
+                if next == start {
+                    let mut steps = Vec::new();
+                    let mut to = start;
+                    loop {
+                        let id = reached_by[&to];
+                        let (from, _) = graph.edge_endpoints(id)?;
+                        let link = &graph[id];
+                        steps.push(format!(
+                            "{}/{} → {}/{}",
+                            name(from),
+                            link.source,
+                            name(to),
+                            link.reader
+                        ));
+                        to = from;
+                        if to == start {
+                            break;
+                        }
+                    }
+                    steps.reverse();
+                    return Some(steps);
+                }
+                frontier.push_back(next);
+            }
+        }
+        None
+    }
 }

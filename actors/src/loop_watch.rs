@@ -1,0 +1,131 @@
+//! Finding modules that re-trigger themselves without progress.
+//!
+//! Every step carries a *hop count*: how many steps in a row led to it through writes, with no
+//! tick, timeout or outside write in between. A write made by a step of hop count `h` wakes its
+//! readers with `h + 1`; a step woken by time starts again at 0. A chain of modules reaches its
+//! length and stops; a cycle (a module linked to its own output, two modules feeding each other,
+//! a context rule whose change undoes its own condition, a plan firing in a circle) climbs
+//! without end. Past [`LOOP_HOPS`] the module is reported, then again at most every
+//! [`REPORT_EVERY`] while it goes on, so a runaway loop costs one log line, not one per step.
+//!
+//! The count travels in a task-local around each step (steps are async, and a task may move
+//! between threads) and in the module's [`Signal`](crate::cell::Signal).
+
+use std::time::{Duration, Instant};
+
+/// Hops after which a chain of steps counts as a loop. A real pipeline is tens of modules
+/// long; a loop on the CPU passes this in a few milliseconds.
+pub(crate) const LOOP_HOPS: u32 = 1_000;
+
+/// The least time between two reports of the same module's loop.
+pub(crate) const REPORT_EVERY: Duration = Duration::from_secs(10);
+
+/// What a write passes on to the modules it wakes: the writing step's hop count and the id of
+/// the writing module's signal, packed so that one atomic maximum keeps the longest chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Hop {
+    /// Steps in a row that led here.
+    pub hops: u32,
+    /// The [`Signal`](crate::cell::Signal) id of the module whose write it was.
+    pub waker: u32,
+}
+
+impl Hop {
+    /// Packs the hop, the count in the high half so that comparing packed values compares counts.
+    pub fn pack(self) -> u64 {
+        (u64::from(self.hops) << 32) | u64::from(self.waker)
+    }
+
+    pub fn unpack(packed: u64) -> Self {
+        Hop {
+            hops: (packed >> 32) as u32,
+            waker: packed as u32,
+        }
+    }
+}
+
+tokio::task_local! {
+    static STEP: Hop;
+}
+
+/// The hop the writes of the step running on this task pass on, or `None` outside any step.
+pub(crate) fn current() -> Option<Hop> {
+    STEP.try_with(|h| *h).ok()
+}
+
+/// Runs the step of the module whose signal is `me`, `hops` steps down a chain.
+pub(crate) async fn in_step<F: std::future::Future>(hops: u32, me: u32, step: F) -> F::Output {
+    STEP.scope(Hop { hops, waker: me }, step).await
+}
+
+/// One module's loop state: when it was last reported, and how many looping steps since.
+#[derive(Debug, Default)]
+pub(crate) struct LoopWatch {
+    last_report: Option<Instant>,
+    looping_steps: u64,
+}
+
+impl LoopWatch {
+    /// Notes a step of `hops`; returns the number of looping steps to report, when a report is due.
+    pub fn observe(&mut self, hops: u32, now: Instant) -> Option<u64> {
+        if hops < LOOP_HOPS {
+            return None;
+        }
+        self.looping_steps += 1;
+        let due = self
+            .last_report
+            .is_none_or(|last| now.duration_since(last) >= REPORT_EVERY);
+        due.then(|| {
+            self.last_report = Some(now);
+            std::mem::take(&mut self.looping_steps)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_chain_shorter_than_the_limit_is_never_reported() {
+        let mut watch = LoopWatch::default();
+        let now = Instant::now();
+        assert!((0..LOOP_HOPS).all(|h| watch.observe(h, now).is_none()));
+    }
+
+    #[test]
+    fn a_loop_is_reported_once_then_at_most_every_ten_seconds_with_the_steps_between() {
+        let mut watch = LoopWatch::default();
+        let t0 = Instant::now();
+        assert_eq!(watch.observe(LOOP_HOPS, t0), Some(1));
+        for i in 1..=1000 {
+            let at = t0 + Duration::from_millis(i);
+            assert_eq!(watch.observe(LOOP_HOPS + i as u32, at), None);
+        }
+        assert_eq!(watch.observe(u32::MAX, t0 + REPORT_EVERY), Some(1001));
+        assert_eq!(watch.observe(u32::MAX, t0 + REPORT_EVERY), None);
+    }
+
+    #[tokio::test]
+    async fn the_hop_is_seen_inside_its_step_only() {
+        assert_eq!(current(), None);
+        let inside = in_step(7, 3, async {
+            tokio::task::yield_now().await;
+            current()
+        })
+        .await;
+        assert_eq!(inside, Some(Hop { hops: 7, waker: 3 }));
+        assert_eq!(current(), None);
+    }
+
+    #[test]
+    fn packed_hops_compare_by_count_first() {
+        let short = Hop {
+            hops: 2,
+            waker: u32::MAX,
+        };
+        let long = Hop { hops: 3, waker: 0 };
+        assert!(long.pack() > short.pack());
+        assert_eq!(Hop::unpack(short.pack()), short);
+    }
+}
