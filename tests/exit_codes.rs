@@ -10,7 +10,8 @@ use std::process::Command;
 /// The files every case may use, written into one temporary directory.
 const FILES: &[(&str, &str)] = &[
     ("goal.plan", "log_hello"),
-    ("fail.plan", "log_hello; fail_plan"),
+    // `go` never holds here (nothing sets it), so the plan fails; it has a goal, as a mission must.
+    ("fail.plan", "< go ? log_hello : (not go) ? log_hello; fail_plan >"),
     ("slow.plan", "wait_60"),
     ("bad.plan", "a; ;; b("),
     (

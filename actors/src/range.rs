@@ -49,8 +49,9 @@ impl Range {
     }
 }
 
-/// A number as people read it: `0.25`, `1000`, `1e300`, `1e-12`, `NaN`, `inf`.
-pub(crate) fn short_number(x: f64) -> String {
+/// A number as people read it in a message: `0.25`, `1000`, `1e300`, `1e-12`, `NaN`, `inf`
+/// (never 300 digits, at most six decimals).
+pub fn short_number(x: f64) -> String {
     let a = x.abs();
     if x.is_finite() && a != 0.0 && !(1e-4..1e7).contains(&a) {
         format!("{x:e}")

@@ -367,12 +367,25 @@ pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile,
     link_mission_clocks(&mut file);
     if let Some(rules) = file.config.contexts.clone() {
         // Relative to the config file, like every file path in it (resolved when built).
-        let exists = file
+        let taken = file
             .config
             .modules
             .iter()
-            .any(|m| m.name == CONTEXTS_MODULE);
-        if !exists {
+            .find(|m| m.name == CONTEXTS_MODULE);
+        // A snapshot lists the manager itself; any other module of that name would silently
+        // replace it, and the rules would never run.
+        if let Some(m) = taken.filter(|m| m.type_name != "context.manager") {
+            let message = format!(
+                "the name `{CONTEXTS_MODULE}` is taken by the context manager that the agent's `contexts:` field adds; rename this `{}` module",
+                m.type_name
+            );
+            return Err(ConfigErrors(vec![file.error(
+                CONTEXTS_MODULE,
+                None,
+                message,
+            )]));
+        }
+        if taken.is_none() {
             // Contexts run on the same clock as the agent's mission (`in/clock`), if it has one.
             let clock = file
                 .config

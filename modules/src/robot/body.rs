@@ -8,7 +8,8 @@
 //! real driver: a robot agent's config changes only in the agent and module it names.
 
 use petrel_actors::{
-    Context, Image, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter, Schedule, Twist2,
+    CheckProblem, Context, Image, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter,
+    Schedule, Twist2,
 };
 
 /// `sim.body`: a robot body hosted by a `sim.world` (see the module docs).
@@ -43,6 +44,15 @@ impl Module for SimBody {
             _sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             _vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1"),
         }
+    }
+
+    /// The start pose's shape; the world checks where it lies when it places the body.
+    fn check(&self) -> Vec<CheckProblem> {
+        let start = self._start.get();
+        super::world_body::start_problem(&start)
+            .map(|p| CheckProblem::new("params/start", p))
+            .into_iter()
+            .collect()
     }
 
     /// Never steps: the world writes its outputs.

@@ -4,14 +4,14 @@ use std::time::Duration;
 
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Ports, Pose2,
+    CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Point2, Ports, Pose2,
     QueueWriter, Range, Schedule, Twist2, Unrecoverable,
 };
 use tokio::time::Instant;
 
 mod config;
 
-use super::world_body::{check_bodies, start_pose, BodyIo, BodyNames};
+use super::world_body::{check_bodies, start_pose, start_problem, BodyIo, BodyNames};
 use super::world_tracks::Tracks;
 use super::{check_params, param_error};
 use crate::sim::camera::{self, CameraMotion};
@@ -33,6 +33,17 @@ const ROBOT_PARAMS: &[(&str, &str)] = &[
 /// Side of the square around each victim that the simulator makes solid, metres (inside
 /// the camera's victim cylinder, [`camera::VICTIM_RADIUS`]).
 const VICTIM_BODY: f64 = 0.3;
+
+/// The world's walls with its victims filled in: victims are bodies on the floor, so a robot
+/// must drive around them, and its laser sees them as small obstacles (the camera sees who
+/// they are).
+fn with_victims(mut grid: crate::sim::grid::Grid, victims: &[Point2]) -> crate::sim::grid::Grid {
+    let r = VICTIM_BODY / 2.0;
+    for v in victims {
+        grid.fill_rect(v.0.x - r, v.0.y - r, v.0.x + r, v.0.y + r);
+    }
+    grid
+}
 
 /// Simulation steps run at most per wake-up in real-time mode: a host that falls further
 /// behind slows simulated time down instead of freezing in a catch-up burst.
@@ -182,11 +193,32 @@ impl Module for SimWorld {
     }
 
     /// The world file must parse: `petrel check` says so before anything runs.
+    /// The world file, and where the robot of a single-robot world starts (bodies are placed
+    /// from their own modules' values, which a check of this module cannot see: the world
+    /// refuses them at init).
     fn check(&self) -> Vec<CheckProblem> {
-        match self.load_map() {
-            Ok(_) => Vec::new(),
-            Err(e) => vec![CheckProblem::new("params/world", e.0)],
+        let map = match self.load_map() {
+            Ok(map) => map,
+            Err(e) => return vec![CheckProblem::new("params/world", e.0)],
+        };
+        let start = self.start.get();
+        if let Some(problem) = start_problem(&start) {
+            return vec![CheckProblem::new("params/start", problem)];
         }
+        // Other parameters are refused by their ranges, or here below at init.
+        let (true, Ok(config)) = (self.bodies.get().0.is_empty(), self.robot_config()) else {
+            return Vec::new();
+        };
+        let file = self.world_file.get();
+        let placed = start_pose(&start, &map.starts, 0, &file, None)
+            .map_err(|e| CheckProblem::new("params/start", format!("{e:#}")))
+            .and_then(|pose| {
+                let mut world = World::new(with_victims(map.grid, &map.features.victims), 0);
+                world
+                    .add_robot(config, pose)
+                    .map_err(|e| CheckProblem::new(&format!("params/{}", e.param), e.message))
+            });
+        placed.err().into_iter().collect()
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -210,14 +242,7 @@ impl Module for SimWorld {
         self.camera_config()?;
         let rate = self.camera_rate.value();
         check_params(positive, &[("camera/rate_hz", rate)])?;
-        // Victims are bodies on the floor: the robot must drive around them, and its laser
-        // sees them as small obstacles (the camera sees who they are).
-        let mut grid = map.grid;
-        for v in &map.features.victims {
-            let r = VICTIM_BODY / 2.0;
-            grid.fill_rect(v.0.x - r, v.0.y - r, v.0.x + r, v.0.y + r);
-        }
-        let mut world = World::new(grid, seed);
+        let mut world = World::new(with_victims(map.grid, &map.features.victims), seed);
         let mut ios = Vec::with_capacity(names.len());
         for (rank, name) in names.iter().enumerate() {
             let is_own = bodies.is_empty();

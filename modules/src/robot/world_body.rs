@@ -155,6 +155,27 @@ async fn value(bb: &Blackboard, address: &str) -> anyhow::Result<RemoteValue> {
 
 /// Where robot `rank` starts: `configured` (`[x, y, heading_deg]`) or, when empty, the world
 /// file's `R` marker of that rank. `body` names the `sim.body` module whose parameter it is.
+/// What is wrong with a configured start pose on its own (its shape, a number that is not
+/// finite), before any world places it.
+pub(super) fn start_problem(configured: &[f64]) -> Option<String> {
+    match configured {
+        [] => None,
+        [_, _, _] if configured.iter().all(|v| v.is_finite()) => None,
+        [_, _, _] => Some(format!(
+            "expected `[x, y, heading_deg]` of finite numbers, got [{}]",
+            configured
+                .iter()
+                .map(|&v| petrel_actors::short_number(v))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+        other => Some(format!(
+            "expected `[x, y, heading_deg]` or `[]`, got {} numbers",
+            other.len()
+        )),
+    }
+}
+
 pub(super) fn start_pose(
     configured: &[f64],
     markers: &[Pose2],
@@ -174,7 +195,12 @@ pub(super) fn start_pose(
                 rank + 1
             )
         }),
-        &[x, y, deg] => Ok(Pose2::new(x, y, deg.to_radians())),
-        other => bail!("invalid parameter `{param}`: expected `[x, y, heading_deg]` or `[]`, got {other:?}"),
+        &[x, y, deg] if start_problem(configured).is_none() => {
+            Ok(Pose2::new(x, y, deg.to_radians()))
+        }
+        other => bail!(
+            "invalid parameter `{param}`: {}",
+            start_problem(other).unwrap_or_default()
+        ),
     }
 }

@@ -87,14 +87,26 @@ impl World {
     /// overlaps a wall.
     pub fn add_robot(&mut self, config: RobotConfig, start: Pose2) -> Result<RobotId, ParamError> {
         config.validate()?;
+        let n = petrel_actors::short_number;
+        let (x0, y0, x1, y1) = self.grid.bounds();
+        let inside = (x0..=x1).contains(&start.x()) && (y0..=y1).contains(&start.y());
+        if !inside || !start.theta().is_finite() {
+            return Err(ParamError {
+                param: "start".into(),
+                message: format!(
+                    "expected a start pose inside the world (x in {}..={}, y in {}..={}, a finite heading), got ({}, {}, {})",
+                    n(x0), n(x1), n(y0), n(y1), n(start.x()), n(start.y()), n(start.theta())
+                ),
+            });
+        }
         if self.grid.disc_collides(start.x(), start.y(), config.radius) {
             return Err(ParamError {
                 param: "start".into(),
                 message: format!(
-                    "expected a free start pose, but a disc of radius {} at ({:.3}, {:.3}) overlaps a wall",
-                    config.radius,
-                    start.x(),
-                    start.y()
+                    "expected a free start pose, but a disc of radius {} at ({}, {}) overlaps a wall",
+                    n(config.radius),
+                    n(start.x()),
+                    n(start.y())
                 ),
             });
         }
@@ -105,9 +117,9 @@ impl World {
             return Err(ParamError {
                 param: "start".into(),
                 message: format!(
-                    "expected a free start pose, but ({:.3}, {:.3}) overlaps another robot",
-                    start.x(),
-                    start.y()
+                    "expected a free start pose, but ({}, {}) overlaps another robot",
+                    n(start.x()),
+                    n(start.y())
                 ),
             });
         }

@@ -66,6 +66,14 @@ async fn prepare_all(
         Ok(loaded) => loaded,
         Err(e) => return (Err(plan_problem(format!("{e:#}"))), Vec::new()),
     };
+    // `plan check` refuses it too; a robot serving a team plan runs no plan of its own.
+    if loaded.plan.goal_places().is_empty() && !setup.serve {
+        let message = format!(
+            "{module}/params/plan: {}: the plan has no goal place, so it can never succeed (`petrel plan check` lists what it can reach)",
+            setup.plan
+        );
+        return (Err(plan_problem(message)), Vec::new());
+    }
     let params = Params {
         module,
         scope: Scope {

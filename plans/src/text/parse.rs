@@ -107,6 +107,12 @@ impl<'a> Parser<'a> {
         let mut more = true;
         loop {
             if more {
+                if let (at, Tok::Punct(";")) = self.peek()? {
+                    return self.err(
+                        at,
+                        "expected an action before this ';' (two ';' in a row, or a ';' with nothing before it)",
+                    );
+                }
                 if let (at, Tok::Word(_) | Tok::Punct("<" | "{")) = self.peek()? {
                     let (_, tok) = self.next()?;
                     let item = match tok {

@@ -69,6 +69,10 @@ pub struct Registry {
     tapped_outboxes: std::collections::HashSet<String>,
 }
 
+/// The most items an output queue may be configured to hold (items are shared, so this
+/// bounds bookkeeping, not copies).
+pub const MAX_QUEUE_CAPACITY: usize = 1 << 20;
+
 impl Registry {
     /// An empty registry for `agent`.
     pub fn new(agent: &str) -> Self {
@@ -492,10 +496,18 @@ impl Registry {
         }
     }
 
-    /// Sets the capacity of an output queue.
+    /// Sets the capacity of an output queue: 1 to [`MAX_QUEUE_CAPACITY`] items.
     pub fn set_capacity(&mut self, address: &str, capacity: usize) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {
+            Handle::QueueOut(_) if !(1..=MAX_QUEUE_CAPACITY).contains(&capacity) => {
+                Err(BlackboardError::OutOfRange {
+                    key,
+                    value: capacity.to_string(),
+                    range: format!("a capacity in 1..={MAX_QUEUE_CAPACITY}"),
+                    doc: "items an output queue holds until every reader has taken them; 0 could hold nothing".into(),
+                })
+            }
             Handle::QueueOut(core) => {
                 core.set_capacity(capacity);
                 Ok(())
