@@ -31,6 +31,7 @@ mod summary;
 pub mod supervision;
 mod supervisor;
 pub mod team;
+mod text_position;
 pub mod types;
 pub mod url;
 mod value;
@@ -54,6 +55,10 @@ pub use step_probe::{StepProbe, StepSample};
 pub use summary::{ModuleReport, RunSummary};
 pub use supervision::SupervisorEvent;
 pub use supervisor::EXIT_GAVE_UP;
-pub use types::{FilePath, Image, LaserScan, OccupancyGrid, Point2, Pose2, PropertyType, Twist2};
+pub use text_position::{line_column, LineIndex};
+pub use types::{
+    cell_to_world, world_to_cell, FilePath, Image, LaserScan, OccupancyGrid, Point2, Pose2,
+    PropertyType, Twist2,
+};
 pub use url::PropertyUrl;
 pub use value::{config_form, config_value_error, spaced_ron, AnyValue, TypeInfo};

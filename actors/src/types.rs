@@ -318,7 +318,39 @@ pub struct OccupancyGrid {
     pub data: Arc<[i8]>,
 }
 
+/// The cell of a grid (origin pose of cell (0, 0)'s lower-left corner, cell size) holding world
+/// point `(x, y)`, maybe outside the grid: the one world-to-cell conversion of petrel's grids,
+/// with the origin's yaw honoured.
+pub fn world_to_cell(origin: &Pose2, resolution: f64, x: f64, y: f64) -> (i64, i64) {
+    let local = origin
+        .0
+        .inverse_transform_point(&nalgebra::Point2::new(x, y));
+    (
+        (local.x / resolution).floor() as i64,
+        (local.y / resolution).floor() as i64,
+    )
+}
+
+/// The world position of the centre of cell `(col, row)`: the inverse of [`world_to_cell`].
+pub fn cell_to_world(origin: &Pose2, resolution: f64, col: i64, row: i64) -> Point2 {
+    let local = nalgebra::Point2::new(
+        (col as f64 + 0.5) * resolution,
+        (row as f64 + 0.5) * resolution,
+    );
+    Point2(origin.0.transform_point(&local))
+}
+
 impl OccupancyGrid {
+    /// The cell holding world point `(x, y)` (maybe outside the grid); see [`world_to_cell`].
+    pub fn cell_of(&self, x: f64, y: f64) -> (i64, i64) {
+        world_to_cell(&self.origin, self.resolution, x, y)
+    }
+
+    /// The world position of cell `(col, row)`'s centre; see [`cell_to_world`].
+    pub fn cell_center(&self, col: i64, row: i64) -> Point2 {
+        cell_to_world(&self.origin, self.resolution, col, row)
+    }
+
     /// The value of cell `(col, row)`, or `None` outside the grid.
     pub fn get(&self, col: i64, row: i64) -> Option<i8> {
         if col < 0 || row < 0 || col >= self.width as i64 || row >= self.height as i64 {
@@ -331,6 +363,24 @@ impl OccupancyGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn world_and_cell_conversions_honour_a_rotated_origin_and_invert_each_other() {
+        let res = 0.5;
+        let plain = Pose2::new(1.0, 2.0, 0.0);
+        assert_eq!(world_to_cell(&plain, res, 1.0, 2.0), (0, 0));
+        assert_eq!(world_to_cell(&plain, res, 0.99, 2.0), (-1, 0));
+        assert_eq!(world_to_cell(&plain, res, 2.6, 3.1), (3, 2));
+        // Turned a quarter left: the grid's x axis points along world +y.
+        let turned = Pose2::new(1.0, 2.0, std::f64::consts::FRAC_PI_2);
+        assert_eq!(world_to_cell(&turned, res, 0.9, 3.1), (2, 0));
+        for origin in [plain, turned] {
+            for (col, row) in [(0, 0), (3, -2), (-5, 7)] {
+                let c = cell_to_world(&origin, res, col, row);
+                assert_eq!(world_to_cell(&origin, res, c.0.x, c.0.y), (col, row));
+            }
+        }
+    }
 
     #[test]
     fn pose_round_trips_through_ron_as_x_y_theta() {

@@ -20,7 +20,7 @@ pub struct ConfigError {
 impl ConfigError {
     /// An error at byte `offset` of `text`, the contents of `file`.
     pub fn at(file: &Path, text: &str, offset: usize, message: String) -> Self {
-        let (line, column) = line_column(text, offset);
+        let (line, column) = crate::line_column(text, offset);
         ConfigError {
             file: file.into(),
             line,
@@ -118,11 +118,4 @@ pub fn parse_ron<T: serde::de::DeserializeOwned>(
     options
         .from_str::<T>(text)
         .map_err(|e| ConfigError::from_ron(path, &e, what))
-}
-
-/// 1-based line and column of byte offset `at` in `text`.
-fn line_column(text: &str, at: usize) -> (usize, usize) {
-    let line = text[..at].matches('\n').count() + 1;
-    let column = at - text[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
-    (line, column)
 }

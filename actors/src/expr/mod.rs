@@ -92,10 +92,10 @@ pub struct ExprError {
 impl ExprError {
     /// An error at byte `offset` of `src`.
     pub fn at(src: &str, offset: usize, message: impl Into<String>) -> Self {
-        let before = &src[..offset.min(src.len())];
+        let (line, column) = crate::line_column(src, offset);
         ExprError {
-            line: before.matches('\n').count() as u32 + 1,
-            column: before.rsplit('\n').next().unwrap_or("").chars().count() as u32 + 1,
+            line: line as u32,
+            column: column as u32,
             message: message.into(),
         }
     }

@@ -124,15 +124,13 @@ pub fn explore(
         return Exploration::Waiting;
     }
     let res = map.resolution;
-    let (ox, oy) = (map.origin.x(), map.origin.y());
     let class = |i: usize| match map.data[i] {
         v if v < 0 => Class::Unknown,
         v if v >= params.occupied_threshold => Class::Occupied,
         _ => Class::Free,
     };
     let index = |c: i64, r: i64| (r * w + c) as usize;
-    let rc = ((robot.x() - ox) / res).floor() as i64;
-    let rr = ((robot.y() - oy) / res).floor() as i64;
+    let (rc, rr) = map.cell_of(robot.x(), robot.y());
     if rc < 0 || rr < 0 || rc >= w || rr >= h || class(index(rc, rr)) == Class::Unknown {
         return Exploration::Waiting;
     }
@@ -178,8 +176,8 @@ pub fn explore(
     }
     let inside = |c: i64, r: i64| {
         params.area.is_none_or(|[x0, y0, x1, y1]| {
-            let (x, y) = (ox + (c as f64 + 0.5) * res, oy + (r as f64 + 0.5) * res);
-            (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
+            let centre = map.cell_center(c, r).0;
+            (x0..=x1).contains(&centre.x) && (y0..=y1).contains(&centre.y)
         })
     };
     // Until the robot can reach some of its area, every frontier counts (the nearest to the
@@ -231,9 +229,7 @@ pub fn explore(
             let n = cells.len() as f64;
             let mx = cells.iter().map(|p| p.0 as f64).sum::<f64>() / n;
             let my = cells.iter().map(|p| p.1 as f64).sum::<f64>() / n;
-            let centre = |p: &(i64, i64)| {
-                Point2::new(ox + (p.0 as f64 + 0.5) * res, oy + (p.1 as f64 + 0.5) * res)
-            };
+            let centre = |p: &(i64, i64)| map.cell_center(p.0, p.1);
             let allowed = |p: &&(i64, i64)| {
                 let q = centre(p);
                 blacklist

@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use petrel_actors::{LaserScan, OccupancyGrid, Pose2};
+use petrel_actors::{world_to_cell, LaserScan, OccupancyGrid, Pose2};
 
 use crate::sim::error::{finite, positive, ParamError};
 use crate::sim::raycast::traverse;
@@ -135,6 +135,7 @@ impl Mapper {
         );
         let (w, h) = (self.params.width as i64, self.params.height as i64);
         let (origin, res) = (self.params.origin, self.params.resolution);
+        let origin_pose = Pose2::new(origin.0, origin.1, 0.0);
         let (miss, hit) = (
             self.params.log_odds_miss as f32,
             self.params.log_odds_hit as f32,
@@ -162,10 +163,7 @@ impl Mapper {
             // The hit cell is the one just beyond the measured distance along the ray.
             let hit_cell = is_hit.then(|| {
                 let e = length + res * 1e-3;
-                (
-                    ((sx + e * c - origin.0) / res).floor() as i64,
-                    ((sy + e * s - origin.1) / res).floor() as i64,
-                )
+                world_to_cell(&origin_pose, res, sx + e * c, sy + e * s)
             });
             let mut apply = |col: i64, row: i64, delta: f32| {
                 if col >= 0 && row >= 0 && col < w && row < h {

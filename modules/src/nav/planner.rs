@@ -164,8 +164,7 @@ impl Planner {
         self.progress = 0;
         let cost = CostMap::build(map, &self.params.cost);
         let cell = |p: &Pose2| {
-            let col = ((p.x() - map.origin.x()) / map.resolution).floor() as i64;
-            let row = ((p.y() - map.origin.y()) / map.resolution).floor() as i64;
+            let (col, row) = map.cell_of(p.x(), p.y());
             cost.index(col, row)
         };
         let target = cell(&goal).and_then(|g| self.reachable_goal_cell(&cost, g, map.resolution));
@@ -181,11 +180,8 @@ impl Planner {
         let mut points: Vec<Point2> = cells
             .iter()
             .map(|&k| {
-                let (col, row) = ((k % cost.width) as f64, (k / cost.width) as f64);
-                Point2::new(
-                    map.origin.x() + (col + 0.5) * map.resolution,
-                    map.origin.y() + (row + 0.5) * map.resolution,
-                )
+                let (col, row) = ((k % cost.width) as i64, (k / cost.width) as i64);
+                map.cell_center(col, row)
             })
             .collect();
         // End exactly at the goal rather than at its cell centre, unless the goal itself is
@@ -249,8 +245,7 @@ impl Planner {
         let skip = (self.params.cost.lethal_clearance() / res).ceil() as usize;
         let from = (self.progress + skip).min(self.path.len());
         self.path[from..].iter().any(|p| {
-            let col = ((p.0.x - map.origin.x()) / res).floor() as i64;
-            let row = ((p.0.y - map.origin.y()) / res).floor() as i64;
+            let (col, row) = map.cell_of(p.0.x, p.0.y);
             (-reach..=reach).any(|dr| {
                 (-reach..=reach).any(|dc| {
                     ((dc * dc + dr * dr) as f64) <= r2

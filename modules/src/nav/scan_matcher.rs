@@ -10,7 +10,7 @@
 //! fitted (a robot that lost itself must not draw a second, shifted map over the first).
 //! The fit is the localization quality.
 
-use petrel_actors::{LaserScan, Pose2};
+use petrel_actors::{cell_to_world, world_to_cell, LaserScan, Pose2};
 
 use crate::sim::error::{positive, ParamError};
 
@@ -256,11 +256,11 @@ impl ScanMatcher {
     pub fn add(&mut self, pose: Pose2, points: &[(f64, f64)]) {
         let p = &self.params;
         let (w, h) = (p.width as i64, p.height as i64);
+        let origin = Pose2::new(p.origin.0, p.origin.1, 0.0);
         let (s, c) = pose.theta().sin_cos();
         for &(px, py) in points {
             let (x, y) = (pose.x() + c * px - s * py, pose.y() + s * px + c * py);
-            let col = ((x - p.origin.0) / p.resolution).floor() as i64;
-            let row = ((y - p.origin.1) / p.resolution).floor() as i64;
+            let (col, row) = world_to_cell(&origin, p.resolution, x, y);
             if col < 0 || row < 0 || col >= w || row >= h {
                 continue;
             }
@@ -279,8 +279,8 @@ impl ScanMatcher {
             for &(dx, dy) in &self.kernel {
                 let (cc, rr) = (col + dx, row + dy);
                 if cc >= 0 && rr >= 0 && cc < w && rr < h {
-                    let cx = p.origin.0 + (cc as f64 + 0.5) * p.resolution;
-                    let cy = p.origin.1 + (rr as f64 + 0.5) * p.resolution;
+                    let centre = cell_to_world(&origin, p.resolution, cc, rr).0;
+                    let (cx, cy) = (centre.x, centre.y);
                     let v = (((cx - x).powi(2) + (cy - y).powi(2)) * inv).exp() as f32;
                     let cell = &mut self.field[(rr * w + cc) as usize];
                     *cell = cell.max(v);

@@ -78,7 +78,10 @@ impl LocalizerModule {
         }
         let lost_below = self.lost_below.value();
         if !(0.0..=1.0).contains(&lost_below) {
-            bail!("invalid parameter `params/lost_below`: expected a number in [0, 1], got {lost_below}");
+            bail!(
+                "invalid parameter `params/lost_below`: expected a number in [0, 1], got {}",
+                petrel_actors::short_number(lost_below)
+            );
         }
         let (res, size, origin) = (
             self.resolution.value(),
@@ -89,8 +92,8 @@ impl LocalizerModule {
         let (w, h) = (cells(size.0.x), cells(size.0.y));
         if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
             bail!(
-                "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {res} m per cell",
-                crate::sim::Grid::MAX_CELLS, size.0.x, size.0.y
+                "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
+                crate::sim::Grid::MAX_CELLS, petrel_actors::short_number(size.0.x), petrel_actors::short_number(size.0.y), petrel_actors::short_number(res)
             );
         }
         let matcher = ScanMatcherParams {

@@ -96,8 +96,8 @@ impl Module for MapperModule {
         let (w, h) = (cells(size.0.x), cells(size.0.y));
         if !(w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
             anyhow::bail!(
-                "invalid parameter `params/size`: expected a positive extent of at most {} cells, got {} x {} m at {res} m per cell",
-                crate::sim::Grid::MAX_CELLS, size.0.x, size.0.y
+                "invalid parameter `params/size`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
+                crate::sim::Grid::MAX_CELLS, petrel_actors::short_number(size.0.x), petrel_actors::short_number(size.0.y), petrel_actors::short_number(res)
             );
         }
         let params = MapperParams {

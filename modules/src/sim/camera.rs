@@ -98,7 +98,7 @@ impl CameraConfig {
                 param: "camera/fov_deg".into(),
                 message: format!(
                     "expected degrees in (0, 180), got {}",
-                    self.fov.to_degrees()
+                    petrel_actors::short_number(self.fov.to_degrees())
                 ),
             });
         }
@@ -107,14 +107,17 @@ impl CameraConfig {
                 param: "camera/exposure_ms".into(),
                 message: format!(
                     "expected milliseconds in (0, 200], got {}",
-                    self.exposure_ms
+                    petrel_actors::short_number(self.exposure_ms)
                 ),
             });
         }
         if !(self.gain >= 1.0 && self.gain <= 16.0) {
             return Err(ParamError {
                 param: "camera/gain".into(),
-                message: format!("expected a gain in [1, 16], got {}", self.gain),
+                message: format!(
+                    "expected a gain in [1, 16], got {}",
+                    petrel_actors::short_number(self.gain)
+                ),
             });
         }
         positive("camera/range_max", self.range_max)

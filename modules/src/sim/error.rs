@@ -92,7 +92,10 @@ pub fn positive(param: &str, value: f64) -> Result<(), ParamError> {
     } else {
         Err(ParamError {
             param: param.into(),
-            message: format!("expected a finite value > 0, got {value}"),
+            message: format!(
+                "expected a finite value > 0, got {}",
+                petrel_actors::short_number(value)
+            ),
         })
     }
 }
@@ -104,7 +107,10 @@ pub fn non_negative(param: &str, value: f64) -> Result<(), ParamError> {
     } else {
         Err(ParamError {
             param: param.into(),
-            message: format!("expected a finite value >= 0, got {value}"),
+            message: format!(
+                "expected a finite value >= 0, got {}",
+                petrel_actors::short_number(value)
+            ),
         })
     }
 }
@@ -116,7 +122,10 @@ pub fn finite(param: &str, value: f64) -> Result<(), ParamError> {
     } else {
         Err(ParamError {
             param: param.into(),
-            message: format!("expected a finite value, got {value}"),
+            message: format!(
+                "expected a finite value, got {}",
+                petrel_actors::short_number(value)
+            ),
         })
     }
 }

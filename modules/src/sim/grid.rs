@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use petrel_actors::{OccupancyGrid, Point2, Pose2};
+use petrel_actors::{cell_to_world, world_to_cell, OccupancyGrid, Point2, Pose2};
 
 use super::error::{finite, positive, ParamError};
 
@@ -18,6 +18,9 @@ pub struct Grid {
     resolution: f64,
     origin_x: f64,
     origin_y: f64,
+    /// The same origin as a pose, for the shared world/cell conversion (world files refuse a
+    /// rotated origin, so its yaw is 0).
+    origin: Pose2,
     /// 1 = solid, 0 = free; `u8` rather than `bool` so the ray caster reads plain bytes.
     cells: Vec<u8>,
 }
@@ -56,6 +59,7 @@ impl Grid {
             resolution,
             origin_x,
             origin_y,
+            origin: Pose2::new(origin_x, origin_y, 0.0),
             cells: vec![0; width * height],
         })
     }
@@ -125,18 +129,13 @@ impl Grid {
     /// The cell containing world point `(x, y)` (may be outside the grid).
     #[inline]
     pub fn cell_of(&self, x: f64, y: f64) -> (i64, i64) {
-        (
-            ((x - self.origin_x) / self.resolution).floor() as i64,
-            ((y - self.origin_y) / self.resolution).floor() as i64,
-        )
+        world_to_cell(&self.origin, self.resolution, x, y)
     }
 
     /// World coordinates of the centre of cell `(col, row)`.
     pub fn cell_center(&self, col: i64, row: i64) -> (f64, f64) {
-        (
-            self.origin_x + (col as f64 + 0.5) * self.resolution,
-            self.origin_y + (row as f64 + 0.5) * self.resolution,
-        )
+        let centre = cell_to_world(&self.origin, self.resolution, col, row).0;
+        (centre.x, centre.y)
     }
 
     /// Whether a disc of `radius` centred at `(x, y)` overlaps any solid cell (or leaves the grid).

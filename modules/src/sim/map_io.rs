@@ -255,7 +255,7 @@ impl Header<'_> {
             "resolution" => {
                 let r = self.numbers(key, value, column, "a number of metres per cell", 1)?[0];
                 if r <= 0.0 {
-                    return Err(self.error(column, format!("`resolution`: expected metres per cell > 0, got {r}")));
+                    return Err(self.error(column, format!("`resolution`: expected metres per cell > 0, got {}", petrel_actors::short_number(r))));
                 }
                 *self.resolution = r;
             }

@@ -123,7 +123,7 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
             &resolution.referenced,
             format!(
                 "`resolution`: expected metres per pixel > 0, got {}",
-                resolution.value
+                petrel_actors::short_number(resolution.value)
             ),
         ));
     }
@@ -133,7 +133,10 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
         [_, _, yaw] if yaw.is_finite() => {
             return Err(at(
                 &origin.referenced,
-                format!("`origin`: rotated maps are not supported; expected yaw 0, got {yaw}"),
+                format!(
+                    "`origin`: rotated maps are not supported; expected yaw 0, got {}",
+                    petrel_actors::short_number(*yaw)
+                ),
             ))
         }
         other => {
@@ -153,7 +156,10 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
         if !(0.0..=1.0).contains(&t.value) {
             return Err(at(
                 &t.referenced,
-                format!("`{key}`: expected a number in [0, 1], got {}", t.value),
+                format!(
+                    "`{key}`: expected a number in [0, 1], got {}",
+                    petrel_actors::short_number(t.value)
+                ),
             ));
         }
         Ok(t.value)

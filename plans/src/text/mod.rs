@@ -37,10 +37,8 @@ pub use compile::compile_text;
 
 /// 1-based line and character column of byte `offset` in `src`.
 pub(crate) fn line_col(src: &str, offset: usize) -> (u32, u32) {
-    let before = &src[..offset.min(src.len())];
-    let line = before.matches('\n').count() as u32 + 1;
-    let col = before.rsplit('\n').next().unwrap_or("").chars().count() as u32 + 1;
-    (line, col)
+    let (line, column) = petrel_actors::line_column(src, offset);
+    (line as u32, column as u32)
 }
 
 pub(crate) fn syntax_error(

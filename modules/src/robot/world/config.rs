@@ -34,7 +34,10 @@ impl SimWorld {
         let rate = self.laser_rate.value();
         let fov_deg = self.laser_fov_deg.value();
         if !(fov_deg > 0.0 && fov_deg <= 360.0) {
-            bail!("invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {fov_deg}");
+            bail!(
+                "invalid parameter `params/laser/fov_deg`: expected degrees in (0, 360], got {}",
+                petrel_actors::short_number(fov_deg)
+            );
         }
         let laser = match self.laser_enabled.value() {
             true => Some(LaserConfig {

@@ -1,0 +1,84 @@
+//! Where a byte offset is in a text, as an editor shows it: the one line:column function of
+//! every error petrel prints (configs, rules, expressions, plans, worlds).
+
+/// 1-based line and column of byte `offset` in `text`, the column counted in characters (so
+/// `é` or `→` before it count one each, as in an editor). An offset past the end is the end; an
+/// offset inside a character is that character.
+pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let mut at = offset.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
+    (line, column)
+}
+
+/// The starts of a text's lines, for many [`line_column`] lookups in one text: each costs a
+/// binary search and the characters of one line, not the whole text before it (a 100,000-action
+/// plan names the line of every action).
+pub struct LineIndex {
+    starts: Vec<usize>,
+}
+
+impl LineIndex {
+    /// Indexes `text`'s lines.
+    pub fn new(text: &str) -> Self {
+        let starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        LineIndex { starts }
+    }
+
+    /// [`line_column`] of byte `offset` in `text`, the text this index was made from.
+    pub fn line_column(&self, text: &str, offset: usize) -> (usize, usize) {
+        let mut at = offset.min(text.len());
+        while !text.is_char_boundary(at) {
+            at -= 1;
+        }
+        let line = self.starts.partition_point(|&s| s <= at);
+        let start = self.starts[line - 1];
+        (line, text[start..at].chars().count() + 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{line_column, LineIndex};
+
+    #[test]
+    fn the_index_agrees_with_the_plain_function_everywhere() {
+        let text = "ab\nçé→x\n\nlast é";
+        let index = LineIndex::new(text);
+        for offset in 0..=text.len() + 2 {
+            assert_eq!(
+                index.line_column(text, offset),
+                line_column(text, offset),
+                "{offset}"
+            );
+        }
+    }
+
+    #[test]
+    fn columns_count_characters_and_lines_start_at_one() {
+        let text = "ab\nçé→x\n";
+        assert_eq!(line_column(text, 0), (1, 1));
+        assert_eq!(line_column(text, 2), (1, 3));
+        assert_eq!(line_column(text, 3), (2, 1));
+        let x = text.find('x').unwrap();
+        assert_eq!(
+            line_column(text, x),
+            (2, 4),
+            "three characters, seven bytes before x"
+        );
+    }
+
+    #[test]
+    fn offsets_past_the_end_or_inside_a_character_never_panic() {
+        let text = "é";
+        assert_eq!(line_column(text, 1), (1, 1));
+        assert_eq!(line_column(text, 99), (1, 2));
+        assert_eq!(line_column("", 5), (1, 1));
+    }
+}
