@@ -11,7 +11,10 @@ use std::process::Command;
 const FILES: &[(&str, &str)] = &[
     ("goal.plan", "log_hello"),
     // `go` never holds here (nothing sets it), so the plan fails; it has a goal, as a mission must.
-    ("fail.plan", "< go ? log_hello : (not go) ? log_hello; fail_plan >"),
+    (
+        "fail.plan",
+        "< go ? log_hello : (not go) ? log_hello; fail_plan >",
+    ),
     ("slow.plan", "wait_60"),
     ("bad.plan", "a; ;; b("),
     (

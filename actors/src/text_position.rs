@@ -31,7 +31,13 @@ impl LineIndex {
         LineIndex { starts }
     }
 
-    /// [`line_column`] of byte `offset` in `text`, the text this index was made from.
+    /// The 1-based line of byte `offset`: a binary search, whatever the line's length.
+    pub fn line(&self, offset: usize) -> usize {
+        self.starts.partition_point(|&s| s <= offset)
+    }
+
+    /// [`line_column`] of byte `offset` in `text`, the text this index was made from (the
+    /// column costs the characters before it on its line).
     pub fn line_column(&self, text: &str, offset: usize) -> (usize, usize) {
         let mut at = offset.min(text.len());
         while !text.is_char_boundary(at) {
@@ -52,11 +58,12 @@ mod tests {
         let text = "ab\nçé→x\n\nlast é";
         let index = LineIndex::new(text);
         for offset in 0..=text.len() + 2 {
-            assert_eq!(
-                index.line_column(text, offset),
-                line_column(text, offset),
-                "{offset}"
-            );
+            let expected = line_column(text, offset);
+            assert_eq!(index.line_column(text, offset), expected, "{offset}");
+            let clamped = offset.min(text.len());
+            if text.is_char_boundary(clamped) {
+                assert_eq!(index.line(clamped), expected.0, "{offset}");
+            }
         }
     }
 

@@ -134,7 +134,7 @@ pub(crate) struct Sources {
     /// Line of each action's first occurrence in the plan file.
     pub action_lines: std::collections::HashMap<String, u32>,
     /// Per transition index, what the user wrote that made it (an action, a rule).
-    pub origins: std::collections::HashMap<usize, String>,
+    pub origins: std::collections::HashMap<usize, std::sync::Arc<str>>,
 }
 
 impl Plan {
@@ -202,7 +202,7 @@ impl Plan {
 
     /// What the user wrote that made transition `t` (text plans): "the rule at r.er:2 (...)".
     pub fn origin(&self, t: usize) -> Option<&str> {
-        self.sources.origins.get(&t).map(String::as_str)
+        self.sources.origins.get(&t).map(|o| &**o)
     }
 
     pub(crate) fn set_subplan(&mut self, exec: usize, plan: Arc<Plan>) {

@@ -22,6 +22,7 @@ struct Occurrence {
 struct Net<'a> {
     raw: RawNet,
     src: &'a str,
+    lines: petrel_actors::LineIndex,
     file: &'a str,
     init: usize,
     goal: Option<usize>,
@@ -239,7 +240,7 @@ impl Net<'_> {
     /// Records where action `name` is written (its first occurrence) and that the transitions
     /// made next are its own.
     fn written(&mut self, name: &str, at: usize) {
-        let (line, _) = super::line_col(self.src, at);
+        let line = self.lines.line(at) as u32;
         self.sources
             .action_lines
             .entry(name.to_string())
@@ -248,8 +249,8 @@ impl Net<'_> {
 
     /// Marks the last `n` transitions made as action `name`'s (written at byte `at`).
     fn own_last(&mut self, n: usize, name: &str, at: usize) {
-        let (line, _) = super::line_col(self.src, at);
-        let origin = format!("action `{name}` at {}:{line}", self.file);
+        let line = self.lines.line(at);
+        let origin: std::sync::Arc<str> = format!("action `{name}` at {}:{line}", self.file).into();
         let len = self.raw.transitions.len();
         for t in len.saturating_sub(n)..len {
             self.sources.origins.insert(t, origin.clone());
@@ -297,10 +298,10 @@ impl Net<'_> {
         };
         let last = self.trans(" ", &[cur], &[target]);
         // Every transition of the recovery is the rule's, for messages.
+        let origin: std::sync::Arc<str> =
+            format!("the rule at {} for `{name}`", rule.origin).into();
         for t in first..=last {
-            self.sources
-                .origins
-                .insert(t, format!("the rule at {} for `{name}`", rule.origin));
+            self.sources.origins.insert(t, origin.clone());
         }
     }
 }
@@ -335,6 +336,7 @@ pub fn compile_text(
             ..RawNet::default()
         },
         src,
+        lines: petrel_actors::LineIndex::new(src),
         file,
         init: 0,
         goal: None,
