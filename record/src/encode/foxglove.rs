@@ -112,6 +112,8 @@ struct PackedElementField {
 /// `foxglove.PackedElementField`'s `INT8`.
 const INT8: u8 = 2;
 
+/// `data` is last and written by [`write_with_data`]: base64 never needs JSON escaping, so
+/// it goes straight into the message instead of through a string and serde's escaping.
 #[derive(Serialize, Deserialize)]
 struct Grid {
     timestamp: Time,
@@ -122,9 +124,11 @@ struct Grid {
     row_stride: u32,
     cell_stride: u32,
     fields: Vec<PackedElementField>,
+    #[serde(skip_serializing)]
     data: String,
 }
 
+/// `data` is last and written by [`write_with_data`], as for [`Grid`].
 #[derive(Serialize, Deserialize)]
 struct RawImage {
     timestamp: Time,
@@ -133,6 +137,7 @@ struct RawImage {
     height: u32,
     encoding: String,
     step: u32,
+    #[serde(skip_serializing)]
     data: String,
 }
 
@@ -230,6 +235,22 @@ fn write(out: &mut Vec<u8>, value: &impl Serialize) {
     serde_json::to_writer(out, value).expect("writing JSON to memory cannot fail");
 }
 
+/// Writes `value` (a struct whose last field, `data`, serde skips) with `"data"` set to the
+/// base64 of `bytes`: the same JSON as serde would write with `data` a base64 string.
+fn write_with_data(out: &mut Vec<u8>, value: &impl Serialize, bytes: &[u8]) {
+    write(out, value);
+    debug_assert_eq!(out.last(), Some(&b'}'));
+    out.pop();
+    out.extend_from_slice(b",\"data\":\"");
+    let start = out.len();
+    let len = base64::encoded_len(bytes.len(), true).expect("a message fits in memory");
+    out.resize(start + len, 0);
+    BASE64
+        .encode_slice(bytes, &mut out[start..])
+        .expect("sized by encoded_len");
+    out.extend_from_slice(b"\"}");
+}
+
 fn read<'a, T: Deserialize<'a>>(data: &'a [u8], what: &str) -> Result<T, String> {
     serde_json::from_slice(data).map_err(|e| format!("expected a {what} JSON message: {e}"))
 }
@@ -290,7 +311,7 @@ pub fn read_pose_in_frame(data: &[u8]) -> Result<Pose2, String> {
 /// Encodes a grid as `foxglove.Grid` with one `INT8` field, `occupancy`.
 pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
     let cells: Vec<u8> = g.data.iter().map(|&c| c as u8).collect();
-    write(
+    write_with_data(
         out,
         &Grid {
             timestamp: stamp.into(),
@@ -308,8 +329,9 @@ pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
                 offset: 0,
                 kind: INT8,
             }],
-            data: BASE64.encode(cells),
+            data: String::new(),
         },
+        &cells,
     );
 }
 
@@ -343,7 +365,7 @@ pub fn read_grid(data: &[u8]) -> Result<OccupancyGrid, String> {
 
 /// Encodes an image as `foxglove.RawImage`.
 pub fn raw_image(out: &mut Vec<u8>, img: &Image, stamp: Stamp, frame: &str) {
-    write(
+    write_with_data(
         out,
         &RawImage {
             timestamp: stamp.into(),
@@ -352,8 +374,9 @@ pub fn raw_image(out: &mut Vec<u8>, img: &Image, stamp: Stamp, frame: &str) {
             height: img.height,
             encoding: img.encoding.clone(),
             step: image_step(img),
-            data: BASE64.encode(&img.data),
+            data: String::new(),
         },
+        &img.data,
     );
 }
 
