@@ -21,17 +21,21 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
         .unwrap();
     let start = common::cpu_time();
     rt.block_on(async {
-        let agent = Agent::start(file, &common::registry()).await.unwrap();
+        let prepared = Agent::prepare(file, &common::registry(), &[])
+            .await
+            .unwrap();
+        // Attached before the modules start, as `petrel run --record` does.
         let recorder = match record {
             Some((path, format)) => {
                 let mut options = RecordOptions::everything(path, format);
                 options.backlog = 1 << 22;
                 let mut r = Recorder::start(options).unwrap();
-                r.attach("robot1", agent.blackboard()).await.unwrap();
+                r.attach("robot1", prepared.blackboard()).await.unwrap();
                 Some(r)
             }
             None => None,
         };
+        let agent = prepared.start().await.unwrap();
         tokio::time::sleep(Duration::from_secs(1)).await;
         agent.stop(DEFAULT_STOP_TIMEOUT).await;
         if let Some(r) = recorder {

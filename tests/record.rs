@@ -165,6 +165,43 @@ fn a_recorded_run_is_listed_and_replayed_in_place_of_a_module() {
 }
 
 #[test]
+fn a_recorded_run_holds_the_first_items_its_modules_push() {
+    let dir = tempfile::tempdir().unwrap();
+    // The first batch goes out 1 ms after the start: only a recorder attached before the
+    // modules start sees it.
+    let config = r#"Agent(name: "p", modules: [
+        (name: "producer", type: "demo.producer", values: {"params/period_ms": 1, "params/batch": 50}),
+    ])"#;
+    std::fs::write(dir.path().join("producer.ron"), config).unwrap();
+    let out = petrel(
+        dir.path(),
+        &[
+            "run",
+            "producer.ron",
+            "--for",
+            "200ms",
+            "--no-remote",
+            "--record",
+            "producer.mcap",
+        ],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let rec = Recording::open(&dir.path().join("producer.mcap"), false).unwrap();
+    let (&id, _) = rec
+        .channels
+        .iter()
+        .find(|(_, c)| c.topic == "/p/producer/out/items")
+        .expect("the items are recorded");
+    let sequences: Vec<u32> = rec.messages_of(id).map(|m| m.sequence).collect();
+    assert!(sequences.len() >= 50, "{} items", sequences.len());
+    assert_eq!(
+        sequences[..50],
+        (0..50).collect::<Vec<u32>>(),
+        "the first batch, from item 0"
+    );
+}
+
+#[test]
 fn bad_recordings_and_mismatched_configs_are_errors_naming_what_is_wrong() {
     let dir = tempfile::tempdir().unwrap();
     let without_counter = DEMO.replace(

@@ -89,6 +89,21 @@ impl Agent {
         types: &ModuleRegistry,
         not_started: &[String],
     ) -> Result<Agent, StartError> {
+        Self::prepare(config, types, not_started)
+            .await?
+            .start()
+            .await
+    }
+
+    /// The first half of [`start_without`](Agent::start_without): the blackboard runs with
+    /// every property, value and link in place, and no module has started yet. What must see
+    /// every write from the first step on (a recorder's taps) attaches to
+    /// [`PreparedAgent::blackboard`]; then [`PreparedAgent::start`] starts the modules.
+    pub async fn prepare(
+        config: &ConfigFile,
+        types: &ModuleRegistry,
+        not_started: &[String],
+    ) -> Result<PreparedAgent, StartError> {
         // A module's panic is then one ERROR event in its span, not a print beside the log.
         crate::panic_report::install();
         let registry = config.build(types)?;
@@ -141,16 +156,9 @@ impl Agent {
             events,
             probe: probe.clone(),
         };
-        let (supervisor, sup_join) = Actor::spawn(None, AgentSupervisor, args)
-            .await
-            .map_err(|e| StartError::Spawn(e.to_string()))?;
-        Ok(Agent {
-            control,
-            probe,
-            name,
+        Ok(PreparedAgent {
+            pending: Some((args, bb_join)),
             blackboard,
-            supervisor,
-            joins: vec![sup_join, bb_join],
         })
     }
 
@@ -235,6 +243,51 @@ impl Agent {
         let summary = self.stop_modules(timeout).await;
         self.shutdown().await;
         summary
+    }
+}
+
+/// An agent whose blackboard runs and whose modules have not started (see
+/// [`Agent::prepare`]). Dropped without [`start`](PreparedAgent::start), it stops its blackboard.
+pub struct PreparedAgent {
+    pending: Option<(SupervisorArgs, JoinHandle<()>)>,
+    blackboard: Blackboard,
+}
+
+impl PreparedAgent {
+    /// The agent's blackboard, already holding every property.
+    pub fn blackboard(&self) -> &Blackboard {
+        &self.blackboard
+    }
+
+    /// Starts the supervisor, which starts each module in config order.
+    pub async fn start(mut self) -> Result<Agent, StartError> {
+        let (args, bb_join) = self.pending.take().expect("started once");
+        let control = args.control.clone();
+        let probe = args.probe.clone();
+        let name = args.agent.to_string();
+        let (supervisor, sup_join) = match Actor::spawn(None, AgentSupervisor, args).await {
+            Ok(spawned) => spawned,
+            Err(e) => {
+                self.blackboard.stop();
+                return Err(StartError::Spawn(e.to_string()));
+            }
+        };
+        Ok(Agent {
+            control,
+            probe,
+            name,
+            blackboard: self.blackboard.clone(),
+            supervisor,
+            joins: vec![sup_join, bb_join],
+        })
+    }
+}
+
+impl Drop for PreparedAgent {
+    fn drop(&mut self) {
+        if self.pending.is_some() {
+            self.blackboard.stop();
+        }
     }
 }
 

@@ -36,10 +36,10 @@ pub mod types;
 pub mod url;
 mod value;
 
-pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT};
+pub use agent::{Agent, AgentExit, ModuleControl, PreparedAgent, StartError, DEFAULT_STOP_TIMEOUT};
 pub use blackboard::{
     AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph, ModuleListing,
-    PropertyListing, Registry,
+    PropertyListing, Registry, WatchedTap,
 };
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{

@@ -7,9 +7,11 @@
 //! ([`replay`]). The mapping is documented in `docs/recording.md`.
 #![warn(missing_docs)]
 
+mod backlog;
 pub mod encode;
 pub mod select;
 pub mod sink;
+mod taps;
 
 pub use encode::{Codec, Format, Kind, LogLevel, LogRecord, SchemaDef, Stamp};
 pub use select::{RecordOptions, Selection, SplitPolicy};

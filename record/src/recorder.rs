@@ -3,140 +3,23 @@
 //! drops the value and counts it (per channel, written in the file's summary), and a queue tap
 //! that lags behind its queue's capacity loses the oldest items, counted the same way.
 
-use parking_lot::{Condvar, Mutex};
 use std::io;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 
-use petrel_actors::team::{QueueTap, Tap, ValueTap};
-use petrel_actors::{AnyValue, Blackboard, BlackboardError, PropertyKind, TypeInfo};
-use tokio::time::Instant;
+use parking_lot::Mutex;
+use petrel_actors::{Blackboard, BlackboardError, TypeInfo};
 
+use crate::backlog::{Backlog, Msg, StampClock};
 use crate::encode::LogRecord;
 use crate::select::RecordOptions;
 use crate::sink::{ChannelSpec, Entry, Sink, SinkReport};
+use crate::taps::{Channels, Out};
 
 /// How often the writer closes its chunk, so a killed run loses at most this much.
 pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
-/// Items a queue tap takes per wake-up.
-const BATCH: usize = 256;
-
-enum Msg {
-    Channel(ChannelSpec, Arc<AtomicU64>),
-    Entry(Entry),
-    Stop,
-}
-
-/// Converts write stamps (tokio instants, paused in tests) to Unix nanoseconds.
-#[derive(Clone, Copy)]
-pub struct StampClock {
-    instant: Instant,
-    unix_ns: u64,
-}
-
-impl StampClock {
-    /// A conversion taken now.
-    pub fn now() -> Self {
-        let unix = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .unwrap_or_default();
-        StampClock {
-            instant: Instant::now(),
-            unix_ns: u64::try_from(unix.as_nanos()).unwrap_or(u64::MAX),
-        }
-    }
-
-    /// `stamp` as Unix ns.
-    pub fn unix_ns(&self, stamp: Instant) -> u64 {
-        let ns = |d: Duration| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX);
-        match self.instant.checked_duration_since(stamp) {
-            Some(ago) => self.unix_ns.saturating_sub(ns(ago)),
-            None => self.unix_ns.saturating_add(ns(stamp - self.instant)),
-        }
-    }
-}
-
-/// Values queued before the writer thread is woken: it takes them in batches, so a busy
-/// agent costs one thread wake-up per batch, not one per value.
-const WAKE_AT: usize = 256;
-/// Longest a value waits for the writer when fewer than [`WAKE_AT`] are queued.
-const LATENCY: Duration = Duration::from_millis(100);
-
-struct Queue {
-    msgs: Mutex<Vec<Msg>>,
-    ready: Condvar,
-    limit: usize,
-}
-
-/// The hand-off to the writer thread: bounded by a count (a large backlog costs memory only
-/// while used), never waited on by the taps.
-#[derive(Clone)]
-struct Backlog(Arc<Queue>);
-
-impl Backlog {
-    fn new(limit: usize) -> Self {
-        Backlog(Arc::new(Queue {
-            msgs: Mutex::new(Vec::new()),
-            ready: Condvar::new(),
-            limit: limit.max(1),
-        }))
-    }
-
-    /// Queues a value unless `limit` already wait; says whether it did.
-    fn try_send(&self, msg: Msg) -> bool {
-        let mut msgs = self.0.msgs.lock();
-        if msgs.len() >= self.0.limit {
-            return false;
-        }
-        msgs.push(msg);
-        if msgs.len() == WAKE_AT {
-            self.0.ready.notify_one();
-        }
-        true
-    }
-
-    /// Queues a control message (a channel, the stop), whatever the backlog, and wakes the writer.
-    fn send(&self, msg: Msg) {
-        self.0.msgs.lock().push(msg);
-        self.0.ready.notify_one();
-    }
-
-    /// Takes what is queued into `out` (emptied first), waiting up to [`LATENCY`] for some.
-    fn take(&self, out: &mut Vec<Msg>) {
-        out.clear();
-        let mut msgs = self.0.msgs.lock();
-        if msgs.len() < WAKE_AT {
-            self.0.ready.wait_for(&mut msgs, LATENCY);
-        }
-        std::mem::swap(&mut *msgs, out);
-    }
-}
-
-/// Sends values to the writer thread without ever waiting.
-#[derive(Clone)]
-struct Out {
-    tx: Backlog,
-    clock: StampClock,
-    channel: usize,
-    dropped: Arc<AtomicU64>,
-}
-
-impl Out {
-    fn send(&self, value: AnyValue, sequence: u64, written: Instant) {
-        let entry = Entry {
-            channel: self.channel,
-            value,
-            sequence,
-            publish_ns: self.clock.unix_ns(written),
-            log_ns: self.clock.unix_ns(Instant::now()),
-        };
-        if !self.tx.try_send(Msg::Entry(entry)) {
-            self.dropped.fetch_add(1, Ordering::Relaxed);
-        }
-    }
-}
 
 /// Records the tracing log: the root's tracing layer hands it each event.
 #[derive(Clone)]
@@ -165,11 +48,8 @@ impl LogSink {
 /// A running recording.
 pub struct Recorder {
     tx: Backlog,
-    clock: StampClock,
     options: RecordOptions,
-    channels: usize,
-    dropped: Vec<Arc<AtomicU64>>,
-    tasks: Vec<tokio::task::JoinHandle<()>>,
+    channels: Arc<Mutex<Channels>>,
     thread: Option<JoinHandle<io::Result<SinkReport>>>,
 }
 
@@ -226,12 +106,9 @@ impl Recorder {
                 sink.finish()
             })?;
         Ok(Recorder {
+            channels: Arc::new(Mutex::new(Channels::new(tx.clone(), StampClock::now()))),
             tx,
-            clock: StampClock::now(),
             options,
-            channels: 0,
-            dropped: Vec::new(),
-            tasks: Vec::new(),
             thread: Some(thread),
         })
     }
@@ -241,27 +118,13 @@ impl Recorder {
         &self.options
     }
 
-    fn add_channel(&mut self, spec: ChannelSpec) -> Out {
-        let dropped = Arc::new(AtomicU64::new(0));
-        self.tx.send(Msg::Channel(spec, dropped.clone()));
-        let out = Out {
-            tx: self.tx.clone(),
-            clock: self.clock,
-            channel: self.channels,
-            dropped: dropped.clone(),
-        };
-        self.channels += 1;
-        self.dropped.push(dropped);
-        out
-    }
-
     /// The log channel (`/rosout` in ROS 2 files, `/log` otherwise).
     pub fn log_sink(&mut self) -> LogSink {
         let topic = match self.options.format {
             crate::Format::Ros2 => "/rosout",
             crate::Format::Foxglove => "/log",
         };
-        let out = self.add_channel(ChannelSpec {
+        let out: Out = self.channels.lock().channel(ChannelSpec {
             topic: topic.into(),
             url: String::new(),
             type_info: TypeInfo::of::<LogRecord>(),
@@ -273,51 +136,58 @@ impl Recorder {
         }
     }
 
-    /// Taps every property of the agent the selection wants (linked inputs are recorded at
-    /// their source; input queues are their source's items); returns how many.
+    /// Records every property of the agent the selection wants (linked inputs are recorded at
+    /// their source; input queues are their source's items), and those of modules added
+    /// while it runs; returns how many are recorded now. Attached before the agent's modules
+    /// start ([`petrel_actors::Agent::prepare`]), it misses none of their writes.
     pub async fn attach(
         &mut self,
         agent: &str,
         blackboard: &Blackboard,
     ) -> Result<usize, BlackboardError> {
-        let listing = blackboard.listing().await?;
-        let queue_in = PropertyKind::QueueIn.to_string();
+        let selection = self.options.selection.clone();
+        let name = agent.to_string();
+        let mut taps = blackboard
+            .watch_taps(move |key| selection.wants(&name, key))
+            .await?;
         let mut tapped = 0;
-        for p in listing.properties {
-            if p.link.is_some()
-                || p.kind == queue_in
-                || !self.options.selection.wants(agent, &p.key)
-            {
-                continue;
+        {
+            let mut channels = self.channels.lock();
+            // What the agent holds now is tapped by the time `watch_taps` answers.
+            while let Ok(tap) = taps.try_recv() {
+                channels.record(agent, tap);
+                tapped += 1;
             }
-            let tap = blackboard.tap(&p.key).await?;
-            let spec = ChannelSpec {
-                topic: crate::select::topic(agent, &p.key),
-                url: format!("petrel://{agent}/{}", p.key),
-                type_info: tap.type_info(),
-                queue: matches!(tap, Tap::Queue(_)),
-            };
-            let out = self.add_channel(spec);
-            let task = match tap {
-                Tap::Value(tap) => tokio::spawn(record_value(tap, out)),
-                Tap::Queue(tap) => tokio::spawn(record_queue(tap, out)),
-            };
-            self.tasks.push(task);
-            tapped += 1;
         }
+        let channels = self.channels.clone();
+        let agent = agent.to_string();
+        let watch = tokio::spawn(async move {
+            while let Some(tap) = taps.recv().await {
+                tracing::info!(agent = %agent, property = %tap.key, "recording a property declared while running");
+                channels.lock().record(&agent, tap);
+            }
+        });
+        self.channels.lock().keep(watch);
         Ok(tapped)
     }
 
     /// Values dropped so far because the writer could not keep up.
     pub fn dropped(&self) -> u64 {
-        self.dropped.iter().map(|d| d.load(Ordering::Relaxed)).sum()
+        let channels = self.channels.lock();
+        channels
+            .dropped
+            .iter()
+            .map(|d| d.load(Ordering::Relaxed))
+            .sum()
     }
 
-    /// Stops the taps, writes what is queued, finishes the file (summary, indexes, drop
-    /// counts) and says what was recorded.
+    /// Stops the taps (each sends what was written up to now first), writes what is queued,
+    /// finishes the file (summary, indexes, drop counts) and says what was recorded.
     pub async fn finish(mut self) -> io::Result<SinkReport> {
-        for task in self.tasks.drain(..) {
-            task.abort();
+        let taps = self.channels.lock().close();
+        for tap in taps {
+            // Each sends what is left and ends; a tap that panicked has nothing more to send.
+            let _ = tap.await;
         }
         self.tx.send(Msg::Stop);
         let thread = self.thread.take().expect("finished once");
@@ -330,40 +200,9 @@ impl Recorder {
 
 impl Drop for Recorder {
     fn drop(&mut self) {
-        for task in &self.tasks {
-            task.abort();
+        for tap in self.channels.lock().close() {
+            tap.abort();
         }
         self.tx.send(Msg::Stop);
-    }
-}
-
-async fn record_value(tap: ValueTap, out: Out) {
-    let mut last = None;
-    loop {
-        let (value, version, written) = tap.read();
-        if last != Some(version) {
-            last = Some(version);
-            out.send(value, version, written);
-        }
-        tap.changed().await;
-    }
-}
-
-async fn record_queue(mut tap: QueueTap, out: Out) {
-    let mut lost = 0;
-    loop {
-        let items = tap.take(BATCH);
-        let full = items.len() == BATCH;
-        for (seq, stamp, value) in items {
-            out.send(value, seq, stamp);
-        }
-        let now_lost = tap.lost().max(0) as u64;
-        if now_lost > lost {
-            out.dropped.fetch_add(now_lost - lost, Ordering::Relaxed);
-            lost = now_lost;
-        }
-        if !full {
-            tap.changed().await;
-        }
     }
 }

@@ -303,3 +303,40 @@ fn files_cut_or_damaged_anywhere_never_panic_a_reader() {
     let not_mcap = Recording::parse(b"hello world, not a recording");
     assert!(not_mcap.problem.unwrap().expected.contains("magic"));
 }
+
+#[test]
+fn foxglove_grids_and_images_carry_their_bytes_as_base64_in_valid_json() {
+    let fields = |kind: &str| -> (serde_json::Value, Vec<u8>) {
+        let (spec, value) = samples()
+            .into_iter()
+            .find(|(s, _)| s.type_info.name() == kind)
+            .unwrap();
+        let codec = Codec::for_value(Format::Foxglove, &spec.type_info, &value);
+        let mut out = Vec::new();
+        codec
+            .encode(&spec.type_info, &value, Default::default(), &mut out)
+            .unwrap();
+        let json: serde_json::Value = serde_json::from_slice(&out).unwrap();
+        let raw = match kind {
+            "OccupancyGrid" => value
+                .downcast_ref::<OccupancyGrid>()
+                .unwrap()
+                .data
+                .iter()
+                .map(|&c| c as u8)
+                .collect(),
+            _ => value.downcast_ref::<Image>().unwrap().data.to_vec(),
+        };
+        (json, raw)
+    };
+    let (grid, cells) = fields("OccupancyGrid");
+    assert_eq!(grid["data"], "/wBkMv8A");
+    assert_eq!(cells, [0xff, 0, 100, 50, 0xff, 0]);
+    assert_eq!(grid["column_count"], 3);
+    assert_eq!(grid["fields"][0]["name"], "occupancy");
+    let (image, pixels) = fields("Image");
+    assert_eq!(image["data"], "AAECAwQFBgcICQoL");
+    assert_eq!(pixels, (0..12).collect::<Vec<u8>>());
+    assert_eq!(image["step"], 6);
+    assert_eq!(image["encoding"], "rgb8");
+}

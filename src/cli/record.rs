@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::ValueEnum;
-use petrel_actors::{Agent, ConfigFile, ModuleConfig};
+use petrel_actors::{ConfigFile, ModuleConfig};
 use petrel_record::info::Info;
 use petrel_record::{Format, RecordOptions, Recorder, Recording};
 
@@ -103,8 +103,8 @@ pub(crate) fn options(
         })
 }
 
-/// Starts recording every agent (and the log, if asked).
-pub(crate) async fn start(options: RecordOptions, agents: &[Agent]) -> Result<Recorder, ExitCode> {
+/// Creates the recording (and records the log, if asked); agents are attached as they start.
+pub(crate) fn start(options: RecordOptions) -> Result<Recorder, ExitCode> {
     let path = options.path.clone();
     let log = options.log;
     let mut recorder = Recorder::start(options).map_err(|e| {
@@ -114,18 +114,36 @@ pub(crate) async fn start(options: RecordOptions, agents: &[Agent]) -> Result<Re
     if log {
         super::record_log::install(Some(recorder.log_sink()));
     }
-    for agent in agents {
-        match recorder.attach(agent.name(), agent.blackboard()).await {
-            Ok(n) => {
-                tracing::info!(agent = agent.name(), properties = n, file = %path.display(), "recording")
-            }
-            Err(e) => {
-                eprintln!("error: cannot record agent `{}`: {e}", agent.name());
-                return Err(ExitCode::FAILURE);
-            }
+    Ok(recorder)
+}
+
+/// Records agent `name` from before its modules start (and the modules added to it later).
+pub(crate) async fn attach(
+    recorder: &mut Recorder,
+    name: &str,
+    blackboard: &petrel_actors::Blackboard,
+) -> Result<(), ExitCode> {
+    match recorder.attach(name, blackboard).await {
+        Ok(n) => {
+            let file = recorder.options().path.display();
+            tracing::info!(agent = name, properties = n, %file, "recording");
+            Ok(())
+        }
+        Err(e) => {
+            eprintln!("error: cannot record agent `{name}`: {e}");
+            Err(ExitCode::FAILURE)
         }
     }
-    Ok(recorder)
+}
+
+/// Ends the recording of a run that did not start, and removes its files.
+pub(crate) async fn discard(recorder: Recorder) {
+    super::record_log::install(None);
+    if let Ok(report) = recorder.finish().await {
+        for file in report.files {
+            let _ = std::fs::remove_file(file);
+        }
+    }
 }
 
 /// Finishes the file and says what it holds.

@@ -9,6 +9,7 @@ use std::task::Poll;
 use petrel_actors::{
     files, outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError,
 };
+use petrel_record::Recorder;
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
@@ -117,9 +118,25 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             return ExitCode::FAILURE;
         }
     };
+    // Before the agents: the recorder taps each agent's properties before its modules start.
+    let mut recorder = match recording {
+        Some(options) => match super::record::start(options) {
+            Ok(r) => Some(r),
+            Err(code) => return code,
+        },
+        None => None,
+    };
     let mut agents = Vec::new();
     let mut teams = Vec::new();
-    let started = start_all(registry, args, &files, &mut agents, &mut teams, &guard).await;
+    let started = start_all(
+        registry,
+        args,
+        &files,
+        (&mut agents, &mut teams),
+        recorder.as_mut(),
+        &guard,
+    )
+    .await;
     let registration = match started {
         Ok(registration) => registration,
         Err(code) => {
@@ -127,10 +144,12 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             for agent in agents {
                 agent.shutdown().await;
             }
+            if let Some(recorder) = recorder {
+                super::record::discard(recorder).await;
+            }
             return code;
         }
     };
-    // Before the recorder, so a console that cannot listen leaves no recording behind.
     let console = match args.console {
         Some(addr) => {
             match super::console::start(addr, args.console_token.clone(), &agents).await {
@@ -142,20 +161,14 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
                     for agent in agents {
                         agent.shutdown().await;
                     }
+                    // A run refused at its start leaves no recording behind.
+                    if let Some(recorder) = recorder {
+                        super::record::discard(recorder).await;
+                    }
                     return ExitCode::from(EXIT_BAD_INPUT);
                 }
             }
         }
-        None => None,
-    };
-    let recorder = match recording {
-        Some(options) => match super::record::start(options, &agents).await {
-            Ok(r) => Some(r),
-            Err(code) => {
-                stop_all(&agents, Vec::new(), args, &guard).await;
-                return code;
-            }
-        },
         None => None,
     };
     if let Some(duration) = args.duration {
@@ -281,13 +294,24 @@ async fn start_all(
     registry: &ModuleRegistry,
     args: &RunArgs,
     files: &[ConfigFile],
-    agents: &mut Vec<Agent>,
-    teams: &mut Vec<Team>,
+    (agents, teams): (&mut Vec<Agent>, &mut Vec<Team>),
+    mut recorder: Option<&mut Recorder>,
     guard: &StopGuard,
 ) -> Result<Option<Registration>, ExitCode> {
     let not_started = args.replay.as_ref().map_or(&[][..], |r| &r.replace[..]);
     for file in files {
-        match Agent::start_without(file, registry, not_started).await {
+        let prepared = match Agent::prepare(file, registry, not_started).await {
+            Ok(prepared) => prepared,
+            Err(StartError::Config(errors)) => return Err(bad_input(&errors)),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return Err(ExitCode::FAILURE);
+            }
+        };
+        if let Some(recorder) = recorder.as_deref_mut() {
+            super::record::attach(recorder, &file.config.name, prepared.blackboard()).await?;
+        }
+        match prepared.start().await {
             Ok(agent) => {
                 guard.watch(agent.name(), agent.step_probe());
                 agents.push(agent);

@@ -22,7 +22,7 @@ use crate::types::PropertyType;
 use crate::value::{AnyValue, TypeInfo};
 
 pub use error::BlackboardError;
-pub use registry::{GraphLink, GraphNode, ModuleGraph, Registry};
+pub use registry::{GraphLink, GraphNode, ModuleGraph, Registry, TapFilter, WatchedTap};
 pub use team::{AgentListing, ModuleListing, PropertyListing};
 
 /// What a (re)starting module instance needs from the blackboard.
@@ -165,6 +165,8 @@ impl Actor for BlackboardActor {
                 let _ = reply.send(Ok(crate::snapshot::write(reg)));
             }
         }
+        // Before the caller hears back: a module added here is tapped before it starts.
+        reg.announce_taps();
         Ok(())
     }
 }

@@ -20,6 +20,10 @@ pub(crate) enum TeamRequest {
     Inbox(String, Reply<RemoteQueue>),
     Listing(Reply<AgentListing>),
     Feed(String, Reply<RemoteFeed>),
+    WatchTaps(
+        super::TapFilter,
+        Reply<tokio::sync::mpsc::UnboundedReceiver<super::WatchedTap>>,
+    ),
 }
 
 /// What an agent holds, for tools that list it (`petrel ls`): its modules and properties.
@@ -90,6 +94,9 @@ pub(super) fn handle(reg: &mut Registry, request: TeamRequest) {
         TeamRequest::Feed(key, reply) => {
             let _ = reply.send(reg.feed(&key));
         }
+        TeamRequest::WatchTaps(wants, reply) => {
+            let _ = reply.send(Ok(reg.watch_taps(wants)));
+        }
     }
 }
 
@@ -128,6 +135,20 @@ impl Blackboard {
     /// Watches a value property or output queue, for a transport that publishes it.
     pub async fn tap(&self, address: &str) -> Result<Tap, BlackboardError> {
         self.call(|r| BlackboardMsg::Team(TeamRequest::Tap(address.to_string(), r)))
+            .await
+    }
+
+    /// Taps every property whose `module/path` key `wants` and that holds its own data (value
+    /// properties other than linked inputs, output queues): those there now, whose taps are
+    /// in the receiver when this returns, and every one declared later (a module added while
+    /// running, runtime statistics), tapped before anything can write it. A recorder that
+    /// watches before the modules start misses no write. The watch ends with the receiver.
+    pub async fn watch_taps(
+        &self,
+        wants: impl Fn(&str) -> bool + Send + 'static,
+    ) -> Result<tokio::sync::mpsc::UnboundedReceiver<super::WatchedTap>, BlackboardError> {
+        let wants: super::TapFilter = Box::new(wants);
+        self.call(|r| BlackboardMsg::Team(TeamRequest::WatchTaps(wants, r)))
             .await
     }
 

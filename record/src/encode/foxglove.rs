@@ -10,7 +10,11 @@ use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
 use petrel_actors::{Image, LaserScan, OccupancyGrid, Pose2};
 use serde::{Deserialize, Serialize};
-use serde_json::json;
+
+mod schema;
+pub use schema::{
+    grid_schema, laser_scan_schema, log_schema, pose_in_frame_schema, raw_image_schema,
+};
 
 use super::ros2::{heading, image_step, quaternion};
 use super::{LogLevel, LogRecord, Stamp};
@@ -112,6 +116,8 @@ struct PackedElementField {
 /// `foxglove.PackedElementField`'s `INT8`.
 const INT8: u8 = 2;
 
+/// `data` is last and written by [`write_with_data`]: base64 never needs JSON escaping, so
+/// it goes straight into the message instead of through a string and serde's escaping.
 #[derive(Serialize, Deserialize)]
 struct Grid {
     timestamp: Time,
@@ -122,9 +128,11 @@ struct Grid {
     row_stride: u32,
     cell_stride: u32,
     fields: Vec<PackedElementField>,
+    #[serde(skip_serializing)]
     data: String,
 }
 
+/// `data` is last and written by [`write_with_data`], as for [`Grid`].
 #[derive(Serialize, Deserialize)]
 struct RawImage {
     timestamp: Time,
@@ -133,6 +141,7 @@ struct RawImage {
     height: u32,
     encoding: String,
     step: u32,
+    #[serde(skip_serializing)]
     data: String,
 }
 
@@ -146,88 +155,24 @@ struct Log {
     line: u32,
 }
 
-fn time_schema() -> serde_json::Value {
-    json!({"type": "object", "properties": {
-        "sec": {"type": "integer", "minimum": 0},
-        "nsec": {"type": "integer", "minimum": 0, "maximum": 999_999_999}}})
-}
-
-fn pose_schema() -> serde_json::Value {
-    let xyz = json!({"type": "object", "properties": {
-        "x": {"type": "number"}, "y": {"type": "number"}, "z": {"type": "number"}}});
-    json!({"type": "object", "properties": {
-        "position": xyz,
-        "orientation": {"type": "object", "properties": {
-            "x": {"type": "number"}, "y": {"type": "number"},
-            "z": {"type": "number"}, "w": {"type": "number"}}},
-        "theta": {"type": "number", "description": "petrel: exact heading, radians"}}})
-}
-
-fn schema(title: &str, properties: serde_json::Value) -> Vec<u8> {
-    let text = json!({"title": title, "type": "object", "properties": properties});
-    serde_json::to_vec_pretty(&text).expect("a JSON value serializes")
-}
-
-/// `foxglove.LaserScan`'s JSON schema.
-pub fn laser_scan_schema() -> Vec<u8> {
-    let numbers = json!({"type": "array", "items": {"type": "number"}});
-    schema(
-        "foxglove.LaserScan",
-        json!({"timestamp": time_schema(), "frame_id": {"type": "string"}, "pose": pose_schema(),
-            "start_angle": {"type": "number"}, "end_angle": {"type": "number"},
-            "ranges": numbers, "intensities": numbers,
-            "range_max": {"type": "number", "description": "petrel: maximum range, m"}}),
-    )
-}
-
-/// `foxglove.PoseInFrame`'s JSON schema.
-pub fn pose_in_frame_schema() -> Vec<u8> {
-    schema(
-        "foxglove.PoseInFrame",
-        json!({"timestamp": time_schema(), "frame_id": {"type": "string"}, "pose": pose_schema()}),
-    )
-}
-
-/// `foxglove.Grid`'s JSON schema.
-pub fn grid_schema() -> Vec<u8> {
-    let field = json!({"type": "object", "properties": {
-        "name": {"type": "string"}, "offset": {"type": "integer"}, "type": {"type": "integer"}}});
-    schema(
-        "foxglove.Grid",
-        json!({"timestamp": time_schema(), "frame_id": {"type": "string"}, "pose": pose_schema(),
-            "column_count": {"type": "integer"},
-            "cell_size": {"type": "object", "properties": {
-                "x": {"type": "number"}, "y": {"type": "number"}}},
-            "row_stride": {"type": "integer"}, "cell_stride": {"type": "integer"},
-            "fields": {"type": "array", "items": field},
-            "data": {"type": "string", "contentEncoding": "base64"}}),
-    )
-}
-
-/// `foxglove.RawImage`'s JSON schema.
-pub fn raw_image_schema() -> Vec<u8> {
-    schema(
-        "foxglove.RawImage",
-        json!({"timestamp": time_schema(), "frame_id": {"type": "string"},
-            "width": {"type": "integer"}, "height": {"type": "integer"},
-            "encoding": {"type": "string"}, "step": {"type": "integer"},
-            "data": {"type": "string", "contentEncoding": "base64"}}),
-    )
-}
-
-/// `foxglove.Log`'s JSON schema.
-pub fn log_schema() -> Vec<u8> {
-    schema(
-        "foxglove.Log",
-        json!({"timestamp": time_schema(),
-            "level": {"type": "integer", "description": "0 unknown, 1 debug, 2 info, 3 warning, 4 error, 5 fatal"},
-            "message": {"type": "string"}, "name": {"type": "string"},
-            "file": {"type": "string"}, "line": {"type": "integer"}}),
-    )
-}
-
 fn write(out: &mut Vec<u8>, value: &impl Serialize) {
     serde_json::to_writer(out, value).expect("writing JSON to memory cannot fail");
+}
+
+/// Writes `value` (a struct whose last field, `data`, serde skips) with `"data"` set to the
+/// base64 of `bytes`: the same JSON as serde would write with `data` a base64 string.
+fn write_with_data(out: &mut Vec<u8>, value: &impl Serialize, bytes: &[u8]) {
+    write(out, value);
+    debug_assert_eq!(out.last(), Some(&b'}'));
+    out.pop();
+    out.extend_from_slice(b",\"data\":\"");
+    let start = out.len();
+    let len = base64::encoded_len(bytes.len(), true).expect("a message fits in memory");
+    out.resize(start + len, 0);
+    BASE64
+        .encode_slice(bytes, &mut out[start..])
+        .expect("sized by encoded_len");
+    out.extend_from_slice(b"\"}");
 }
 
 fn read<'a, T: Deserialize<'a>>(data: &'a [u8], what: &str) -> Result<T, String> {
@@ -290,7 +235,7 @@ pub fn read_pose_in_frame(data: &[u8]) -> Result<Pose2, String> {
 /// Encodes a grid as `foxglove.Grid` with one `INT8` field, `occupancy`.
 pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
     let cells: Vec<u8> = g.data.iter().map(|&c| c as u8).collect();
-    write(
+    write_with_data(
         out,
         &Grid {
             timestamp: stamp.into(),
@@ -308,8 +253,9 @@ pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
                 offset: 0,
                 kind: INT8,
             }],
-            data: BASE64.encode(cells),
+            data: String::new(),
         },
+        &cells,
     );
 }
 
@@ -343,7 +289,7 @@ pub fn read_grid(data: &[u8]) -> Result<OccupancyGrid, String> {
 
 /// Encodes an image as `foxglove.RawImage`.
 pub fn raw_image(out: &mut Vec<u8>, img: &Image, stamp: Stamp, frame: &str) {
-    write(
+    write_with_data(
         out,
         &RawImage {
             timestamp: stamp.into(),
@@ -352,8 +298,9 @@ pub fn raw_image(out: &mut Vec<u8>, img: &Image, stamp: Stamp, frame: &str) {
             height: img.height,
             encoding: img.encoding.clone(),
             step: image_step(img),
-            data: BASE64.encode(&img.data),
+            data: String::new(),
         },
+        &img.data,
     );
 }
 

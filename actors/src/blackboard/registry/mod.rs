@@ -17,11 +17,13 @@ mod module_graph;
 pub use module_graph::{GraphLink, GraphNode, ModuleGraph};
 mod remote;
 mod settings;
+mod watch;
 use crate::queue::{dropped_path, QueueCore};
 use crate::team::{LinkTarget, RemoteLinks};
 use crate::url::PropertyUrl;
 use crate::value::{AnyValue, TypeInfo};
 use links::LinkGraph;
+pub use watch::{TapFilter, WatchedTap};
 
 pub(crate) struct Entry {
     pub decl: PropertyDecl,
@@ -67,6 +69,8 @@ pub struct Registry {
     /// outbox was tapped (each is tapped once).
     pending_outboxes: Vec<crate::team::Outbox>,
     tapped_outboxes: std::collections::HashSet<String>,
+    /// Recorders' watches: properties to tap as they are declared.
+    tap_watches: Vec<watch::TapWatch>,
 }
 
 /// The most items an output queue may be configured to hold (items are shared, so this
@@ -87,6 +91,7 @@ impl Registry {
             settings: Default::default(),
             pending_outboxes: Vec::new(),
             tapped_outboxes: Default::default(),
+            tap_watches: Vec::new(),
         }
     }
 
