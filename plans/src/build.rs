@@ -50,11 +50,31 @@ pub(crate) struct RawTransition {
     pub position: Option<Position>,
 }
 
+/// One end of an arc: a node id as a file names it, or a node by number (the nets the text
+/// compiler makes: no id strings to format and look up, which a 100,000-action plan feels).
+#[derive(Debug, Clone)]
+pub(crate) enum ArcEnd {
+    Id(Box<str>),
+    Place(usize),
+    Transition(usize),
+}
+
+impl std::fmt::Display for ArcEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ArcEnd::Id(id) => write!(f, "{id}"),
+            ArcEnd::Place(i) => write!(f, "place #{i}"),
+            ArcEnd::Transition(i) => write!(f, "transition #{i}"),
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub(crate) struct RawArc {
-    pub id: String,
-    pub source: String,
-    pub target: String,
+    /// The file's id for the arc (for messages); nets made in memory leave it out.
+    pub id: Option<Box<str>>,
+    pub source: ArcEnd,
+    pub target: ArcEnd,
     pub weight: u32,
 }
 
@@ -109,12 +129,16 @@ impl Builder<'_> {
     }
 
     fn build(mut self, raw: RawNet) -> Result<Plan, PlanError> {
-        let mut ids: HashMap<&str, Node> = HashMap::new();
-        let mut places = Vec::with_capacity(raw.places.len());
-        for (i, p) in raw.places.iter().enumerate() {
-            if ids.insert(&p.id, Node::Place(i)).is_some() {
-                return Err(self.pnml_err(format!("place '{}'", p.id), "duplicate node id".into()));
-            }
+        let RawNet {
+            name,
+            places: raw_places,
+            transitions: raw_transitions,
+            arcs,
+            comments,
+        } = raw;
+        // Ids and labels move into the plan: a copy of each would double a big plan's strings.
+        let mut places = Vec::with_capacity(raw_places.len());
+        for p in raw_places {
             let l = parse_place_label(&p.label).map_err(|message| PlanError::Label {
                 file: self.file.to_string(),
                 kind: "place",
@@ -124,8 +148,8 @@ impl Builder<'_> {
             })?;
             let exec = l.exec.map(|n| self.exec(&n));
             places.push(Place {
-                id: p.id.clone(),
-                label: p.label.clone(),
+                id: p.id,
+                label: p.label,
                 initial: p.initial,
                 exec,
                 goal: l.goal,
@@ -133,53 +157,22 @@ impl Builder<'_> {
                 position: p.position,
             });
         }
-        let mut transitions = Vec::with_capacity(raw.transitions.len());
-        for (i, t) in raw.transitions.iter().enumerate() {
-            if ids.insert(&t.id, Node::Transition(i)).is_some() {
-                return Err(
-                    self.pnml_err(format!("transition '{}'", t.id), "duplicate node id".into())
-                );
-            }
-            transitions.push(Transition {
-                id: t.id.clone(),
-                label: t.label.clone(),
+        let mut transitions: Vec<Transition> = raw_transitions
+            .into_iter()
+            .map(|t| Transition {
+                id: t.id,
+                label: t.label,
                 inputs: vec![],
                 outputs: vec![],
                 guard: Cond::True,
                 explicit_guard: false,
                 calls: vec![],
                 position: t.position,
-            });
-        }
-        for a in &raw.arcs {
-            let find = |id: &str, end: &str| {
-                ids.get(id).ok_or_else(|| {
-                    self.pnml_err(
-                        format!("arc '{}'", a.id),
-                        format!("{end} '{id}' is not a place or transition id"),
-                    )
-                })
-            };
-            let (s, t) = (find(&a.source, "source")?, find(&a.target, "target")?);
-            let (tr, edge, input) = match (s, t) {
-                (Node::Place(p), Node::Transition(t)) => (*t, Edge { place: *p, weight: a.weight }, true),
-                (Node::Transition(t), Node::Place(p)) => (*t, Edge { place: *p, weight: a.weight }, false),
-                (Node::Place(_), Node::Place(_)) => {
-                    return Err(self.pnml_err(
-                        format!("arc '{}'", a.id),
-                        format!("joins two places ('{}' -> '{}'); an arc must join a place and a transition", a.source, a.target),
-                    ))
-                }
-                (Node::Transition(_), Node::Transition(_)) => {
-                    return Err(self.pnml_err(
-                        format!("arc '{}'", a.id),
-                        format!(
-                            "joins two transitions ('{}' -> '{}'); an arc must join a place and a transition",
-                            a.source, a.target
-                        ),
-                    ))
-                }
-            };
+            })
+            .collect();
+        let edges = self.edges(&places, &transitions, &arcs)?;
+        drop(arcs);
+        for (tr, edge, input) in edges {
             let side = if input {
                 &mut transitions[tr].inputs
             } else {
@@ -191,10 +184,6 @@ impl Builder<'_> {
                 None => side.push(edge),
             }
         }
-        // Nothing more is read from the raw nodes: free them before the guards, calls and
-        // step arrays are built, which lowers the peak for big nets.
-        drop(ids);
-        let RawNet { name, comments, .. } = raw;
         for t in &mut transitions {
             self.resolve_label(t, &places)?;
         }
@@ -223,6 +212,79 @@ impl Builder<'_> {
             comments,
             sources: Default::default(),
         })
+    }
+
+    /// Each arc as (transition, edge, whether it is an input), with its ends checked: ids
+    /// unique and known, one end a place and the other a transition.
+    fn edges(
+        &self,
+        places: &[Place],
+        transitions: &[Transition],
+        arcs: &[RawArc],
+    ) -> Result<Vec<(usize, Edge, bool)>, PlanError> {
+        let mut ids: HashMap<&str, Node> = HashMap::new();
+        for (i, p) in places.iter().enumerate() {
+            if ids.insert(&p.id, Node::Place(i)).is_some() {
+                return Err(self.pnml_err(format!("place '{}'", p.id), "duplicate node id".into()));
+            }
+        }
+        for (i, t) in transitions.iter().enumerate() {
+            if ids.insert(&t.id, Node::Transition(i)).is_some() {
+                return Err(
+                    self.pnml_err(format!("transition '{}'", t.id), "duplicate node id".into())
+                );
+            }
+        }
+        let mut edges = Vec::with_capacity(arcs.len());
+        for (k, a) in arcs.iter().enumerate() {
+            let arc = || match &a.id {
+                Some(id) => format!("arc '{id}'"),
+                None => format!("arc #{k}"),
+            };
+            let find = |end: &ArcEnd, which: &str| -> Result<Node, PlanError> {
+                let node = match end {
+                    ArcEnd::Id(id) => ids.get(&**id).map(|n| match n {
+                        Node::Place(i) => Node::Place(*i),
+                        Node::Transition(i) => Node::Transition(*i),
+                    }),
+                    ArcEnd::Place(i) => (*i < places.len()).then_some(Node::Place(*i)),
+                    ArcEnd::Transition(i) => {
+                        (*i < transitions.len()).then_some(Node::Transition(*i))
+                    }
+                };
+                node.ok_or_else(|| {
+                    self.pnml_err(
+                        arc(),
+                        format!("{which} '{end}' is not a place or transition id"),
+                    )
+                })
+            };
+            let (s, t) = (find(&a.source, "source")?, find(&a.target, "target")?);
+            let edge = |p: usize| Edge {
+                place: p,
+                weight: a.weight,
+            };
+            edges.push(match (s, t) {
+                (Node::Place(p), Node::Transition(t)) => (t, edge(p), true),
+                (Node::Transition(t), Node::Place(p)) => (t, edge(p), false),
+                (Node::Place(_), Node::Place(_)) => {
+                    return Err(self.pnml_err(
+                        arc(),
+                        format!("joins two places ('{}' -> '{}'); an arc must join a place and a transition", a.source, a.target),
+                    ))
+                }
+                (Node::Transition(_), Node::Transition(_)) => {
+                    return Err(self.pnml_err(
+                        arc(),
+                        format!(
+                            "joins two transitions ('{}' -> '{}'); an arc must join a place and a transition",
+                            a.source, a.target
+                        ),
+                    ))
+                }
+            });
+        }
+        Ok(edges)
     }
 
     fn resolve_label(&mut self, t: &mut Transition, places: &[Place]) -> Result<(), PlanError> {

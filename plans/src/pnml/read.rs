@@ -9,7 +9,7 @@
 
 use roxmltree::{Document, Node};
 
-use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
+use crate::build::{ArcEnd, RawArc, RawNet, RawPlace, RawTransition};
 use crate::error::PlanError;
 use crate::model::{Comment, Plan, Position};
 
@@ -144,9 +144,9 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
                     None => 1,
                 };
                 raw.arcs.push(RawArc {
-                    id: id(),
-                    source,
-                    target,
+                    id: Some(id().into()),
+                    source: ArcEnd::Id(source.into()),
+                    target: ArcEnd::Id(target.into()),
                     weight,
                 });
             }

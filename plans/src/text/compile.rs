@@ -6,7 +6,7 @@ use super::layout::layout;
 use super::parse::{Item, Parser};
 use super::rules::{parse_rules, Rule, RuleEnd};
 use super::syntax_error;
-use crate::build::{RawArc, RawNet, RawPlace, RawTransition};
+use crate::build::{ArcEnd, RawArc, RawNet, RawPlace, RawTransition};
 use crate::condition::Cond;
 use crate::error::PlanError;
 use crate::model::Plan;
@@ -51,10 +51,9 @@ impl Net<'_> {
         i
     }
 
-    fn arc(&mut self, source: String, target: String) {
-        let id = format!("a{}", self.raw.arcs.len());
+    fn arc(&mut self, source: ArcEnd, target: ArcEnd) {
         self.raw.arcs.push(RawArc {
-            id,
+            id: None,
             source,
             target,
             weight: 1,
@@ -65,15 +64,15 @@ impl Net<'_> {
         let i = self.raw.transitions.len();
         let id = format!("t{i}");
         self.raw.transitions.push(RawTransition {
-            id: id.clone(),
+            id,
             label: label.to_string(),
             position: None,
         });
         for &p in ins {
-            self.arc(format!("p{p}"), id.clone());
+            self.arc(ArcEnd::Place(p), ArcEnd::Transition(i));
         }
         for &p in outs {
-            self.arc(id.clone(), format!("p{p}"));
+            self.arc(ArcEnd::Transition(i), ArcEnd::Place(p));
         }
         i
     }
@@ -366,7 +365,7 @@ pub fn compile_text(
                 format!("no {label} in the plan"),
             ));
         };
-        net.arc(format!("t{t}"), format!("p{p}"));
+        net.arc(ArcEnd::Transition(t), ArcEnd::Place(p));
     }
     for rule in &rules {
         for occ in 0..net.occurrences.len() {

@@ -4,24 +4,34 @@
 
 use std::collections::{HashMap, VecDeque};
 
-use crate::build::RawNet;
+use crate::build::{ArcEnd, RawNet};
 use crate::model::Position;
 
 pub(crate) fn layout(net: &mut RawNet) {
     // Nodes by number: places, then transitions; arcs as successor lists.
     let np = net.places.len();
     let n = np + net.transitions.len();
-    let ids: HashMap<&str, usize> = net
-        .places
-        .iter()
-        .map(|p| p.id.as_str())
-        .chain(net.transitions.iter().map(|t| t.id.as_str()))
-        .enumerate()
-        .map(|(i, id)| (id, i))
-        .collect();
+    // Ids are looked up only for arcs that name them (the compiler's arcs are numbered).
+    let mut ids: Option<HashMap<&str, usize>> = None;
+    let mut node = |end: &ArcEnd| match end {
+        ArcEnd::Place(i) => Some(*i),
+        ArcEnd::Transition(i) => Some(np + i),
+        ArcEnd::Id(id) => ids
+            .get_or_insert_with(|| {
+                let places = net.places.iter().map(|p| p.id.as_str());
+                let transitions = net.transitions.iter().map(|t| t.id.as_str());
+                places
+                    .chain(transitions)
+                    .enumerate()
+                    .map(|(i, id)| (id, i))
+                    .collect()
+            })
+            .get(&**id)
+            .copied(),
+    };
     let mut succ: Vec<Vec<usize>> = vec![Vec::new(); n];
     for a in &net.arcs {
-        if let (Some(&s), Some(&t)) = (ids.get(a.source.as_str()), ids.get(a.target.as_str())) {
+        if let (Some(s), Some(t)) = (node(&a.source), node(&a.target)) {
             succ[s].push(t);
         }
     }
