@@ -184,6 +184,11 @@ impl Builder<'_> {
                 None => side.push(edge),
             }
         }
+        // A first push reserves room for four edges; most transitions keep one or two.
+        for t in &mut transitions {
+            t.inputs.shrink_to_fit();
+            t.outputs.shrink_to_fit();
+        }
         for t in &mut transitions {
             self.resolve_label(t, &places)?;
         }
