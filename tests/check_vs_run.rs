@@ -7,7 +7,8 @@
 mod bounded;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+use bounded::{petrel, text};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Expect {
@@ -35,18 +36,6 @@ fn corpus() -> Vec<(PathBuf, Expect)> {
         .collect();
     cases.sort_by(|a, b| a.0.cmp(&b.0));
     cases
-}
-
-fn petrel(args: &[&str]) -> Output {
-    bounded::output_within_deadline(
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args(args)
-            .env("RUST_LOG", "warn"),
-    )
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// The first `error:` line a command printed.

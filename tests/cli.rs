@@ -7,17 +7,7 @@ mod running;
 
 use std::process::{Command, Output};
 
-fn petrel(args: &[&str]) -> Output {
-    bounded::output_within_deadline(
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args(args)
-            .env("RUST_LOG", "warn"),
-    )
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
+use bounded::{petrel, text};
 
 /// Writes config `text` as `name` in a fresh temporary directory (alive as long as the returned
 /// guard) and returns its path.

@@ -6,6 +6,8 @@ mod bounded;
 
 use std::process::{Command, Output};
 
+use bounded::text;
+
 /// Runs `petrel run CONFIG --for 1s` at log level `level`, with `extra` arguments.
 fn run_for_1s(config: &std::path::Path, level: &str, extra: &[&str]) -> Output {
     let mut args = vec![
@@ -21,10 +23,6 @@ fn run_for_1s(config: &std::path::Path, level: &str, extra: &[&str]) -> Output {
             .args(&args)
             .env("RUST_LOG", level),
     )
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// Writes `files` (name, text) into a fresh temporary directory; returns it and the first path.

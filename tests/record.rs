@@ -7,6 +7,7 @@ mod bounded;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use bounded::text;
 use petrel::record::Recording;
 
 fn petrel(dir: &Path, args: &[&str]) -> Output {
@@ -16,10 +17,6 @@ fn petrel(dir: &Path, args: &[&str]) -> Output {
             .current_dir(dir)
             .env("RUST_LOG", "warn"),
     )
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 fn shipped(name: &str) -> String {

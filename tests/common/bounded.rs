@@ -43,3 +43,19 @@ pub fn wait_within_deadline(child: Child, what: &str) -> Output {
         }
     }
 }
+
+/// Runs the `petrel` binary of this package with `args` (log level `warn`) and a deadline.
+#[allow(dead_code)] // Not every test binary that includes this file runs the CLI this way.
+pub fn petrel(args: &[&str]) -> Output {
+    output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .env("RUST_LOG", "warn"),
+    )
+}
+
+/// A process's output as text (lossy: a test shows what it got, whatever it is).
+#[allow(dead_code)]
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
