@@ -228,12 +228,21 @@ impl Builder<'_> {
         arcs: &[RawArc],
     ) -> Result<Vec<(usize, Edge, bool)>, PlanError> {
         let mut ids: HashMap<&str, Node> = HashMap::new();
-        for (i, p) in places.iter().enumerate() {
+        // A net made in memory numbers its arcs' ends and its ids are unique by construction:
+        // a map of half a million ids would be the biggest thing in a long plan's check.
+        let named = |e: &ArcEnd| matches!(e, ArcEnd::Id(_));
+        let numbered =
+            !arcs.is_empty() && !arcs.iter().any(|a| named(&a.source) || named(&a.target));
+        let (places_named, transitions_named) = match numbered {
+            true => (&places[..0], &transitions[..0]),
+            false => (places, transitions),
+        };
+        for (i, p) in places_named.iter().enumerate() {
             if ids.insert(&p.id, Node::Place(i)).is_some() {
                 return Err(self.pnml_err(format!("place '{}'", p.id), "duplicate node id".into()));
             }
         }
-        for (i, t) in transitions.iter().enumerate() {
+        for (i, t) in transitions_named.iter().enumerate() {
             if ids.insert(&t.id, Node::Transition(i)).is_some() {
                 return Err(
                     self.pnml_err(format!("transition '{}'", t.id), "duplicate node id".into())
