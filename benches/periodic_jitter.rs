@@ -80,9 +80,19 @@ fn config(busy: usize) -> String {
     format!(r#"Agent(name: "bench", modules: [{modules}])"#)
 }
 
-/// Runs the periodic module beside `busy` busy modules for `length`; returns |period − 1 ms|
-/// of every period, sorted, in µs, and the steps the busy modules made.
-fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> (Vec<f64>, u64) {
+/// What one run measured.
+struct Run {
+    /// |period − 1 ms| of every period, sorted, in µs.
+    jitter: Vec<f64>,
+    /// Steps the busy modules made, the stop included.
+    busy_steps: u64,
+    /// How long stopping the agent took.
+    stop: Duration,
+}
+
+/// Runs the periodic module beside `busy` busy modules for `length`, then stops the agent
+/// (1 s stop timeout: a module not stopped by then is killed and named in the summary).
+fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> Run {
     let mut registry = common::registry();
     registry.register::<Periodic>().register::<Busy>();
     let file = ConfigFile::parse("jitter.ron", &config(busy)).unwrap();
@@ -90,7 +100,9 @@ fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> (Vec<f64>
     STEPS.lock().unwrap().clear();
     std::thread::sleep(length);
     let steps = std::mem::take(&mut *STEPS.lock().unwrap());
+    let stopping = Instant::now();
     let summary = rt.block_on(agent.stop(Duration::from_secs(1)));
+    let stop = stopping.elapsed();
     let busy_steps: u64 = summary
         .modules
         .iter()
@@ -104,7 +116,19 @@ fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> (Vec<f64>
         .map(|w| ((w[1] - w[0]).as_secs_f64() - PERIOD.as_secs_f64()).abs() * 1e6)
         .collect();
     jitter.sort_by(f64::total_cmp);
-    (jitter, busy_steps)
+    let killed = summary
+        .modules
+        .iter()
+        .filter(|m| m.status == "killed")
+        .count();
+    if killed > 0 {
+        println!("periodic_jitter: {killed} module(s) killed at the stop timeout");
+    }
+    Run {
+        jitter,
+        busy_steps,
+        stop,
+    }
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -125,13 +149,18 @@ fn main() {
     let length = Duration::from_secs_f64(secs);
     let rt = common::runtime();
     for (name, busy) in [("alone", 0), ("with_20_busy", 20)] {
-        let (jitter, busy_steps) = run(&rt, busy, length);
+        let Run {
+            jitter,
+            busy_steps,
+            stop,
+        } = run(&rt, busy, length);
         println!(
-            "periodic_jitter/{name}: {} periods in {secs} s ({busy_steps} busy steps); |period - 1 ms| p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs (goal p99 <= 100 µs)",
+            "periodic_jitter/{name}: {} periods in {secs} s; |period - 1 ms| p50 {:.0} µs, p99 {:.0} µs, max {:.0} µs (goal p99 <= 100 µs); stop took {:.0} ms ({busy_steps} busy steps, the stop included)",
             jitter.len(),
             percentile(&jitter, 0.5),
             percentile(&jitter, 0.99),
             jitter.last().copied().unwrap_or(f64::NAN),
+            stop.as_secs_f64() * 1e3,
         );
     }
 }
