@@ -33,7 +33,16 @@ async fn wait_for<T: PropertyType + std::fmt::Debug>(
     address: &str,
     holds: impl Fn(&T) -> bool,
 ) {
-    let h = handle::<T>(agent, address).await;
+    wait_until(&handle::<T>(agent, address).await, address, holds).await;
+}
+
+/// Waits until `holds` is true of the value `h` sees (`address` names it in the failure);
+/// fails the test after [`DEADLINE`]. Needs no blackboard request, unlike [`wait_for`].
+async fn wait_until<T: PropertyType + std::fmt::Debug>(
+    h: &PropertyHandle<T>,
+    address: &str,
+    holds: impl Fn(&T) -> bool,
+) {
     let waited = tokio::time::timeout(DEADLINE, async {
         while !holds(&h.get()) {
             h.changed().await;
@@ -177,20 +186,25 @@ async fn a_blocking_step_does_not_hold_up_the_other_modules() {
         ])"#
     ))
     .await;
+    // Every handle is made before `b` blocks: the blackboard actor's task may be queued on the
+    // worker `b` holds (tokio's LIFO slot cannot be stolen), so no request to it is made until
+    // `b` is released. Reads and writes through handles go straight to the cells.
     let go = handle::<i64>(&agent, "b/in/go").await;
+    let blocked = handle::<bool>(&agent, "b/out/blocked").await;
+    let released = handle::<String>(&agent, "b/out/released").await;
     let echo_in = handle::<f64>(&agent, "e/in/value").await;
+    let echo_out = handle::<f64>(&agent, "e/out/value").await;
     let count = handle::<i64>(&agent, "c/state/count").await;
     go.set(1);
-    wait_for::<bool>(&agent, "b/out/blocked", |b| *b).await;
+    wait_until(&blocked, "b/out/blocked", |b| *b).await;
     // While `b` holds its thread: the echo answers and the periodic module keeps counting.
     let counted = count.value();
     echo_in.set(7.0);
-    wait_for::<f64>(&agent, "e/out/value", |v| *v == 7.0).await;
-    wait_for::<i64>(&agent, "c/state/count", |c| *c >= counted + 5).await;
-    let released = handle::<String>(&agent, "b/out/released").await;
+    wait_until(&echo_out, "e/out/value", |v| *v == 7.0).await;
+    wait_until(&count, "c/state/count", |c| *c >= counted + 5).await;
     assert_eq!(*released.get(), "", "b is still inside its step");
     Gate::named(gate_name).open();
-    wait_for::<String>(&agent, "b/out/released", |r| r == "opened").await;
+    wait_until(&released, "b/out/released", |r| r == "opened").await;
     assert_all_stopped(&stop(agent).await);
 }
 
