@@ -160,12 +160,14 @@ impl Gate {
     }
 }
 
-/// `test.blocker`: when `in/go` changes (not at its first step), writes `out/blocked`, then
-/// blocks its thread (a long computation, a blocking read) at the gate `params/gate` until the
-/// test opens it, for `params/deadline_ms` at most; then writes `out/released`: `opened` or
-/// `deadline`.
+/// `test.blocker`: when `in/go` holds a value it has not handled yet (0 at first), writes
+/// `out/blocked`, then blocks its thread (a long computation, a blocking read) at the gate
+/// `params/gate` until the test opens it, for `params/deadline_ms` at most; then writes
+/// `out/released`: `opened` or `deadline`. It looks at the value, not at why it steps: a write
+/// made before it subscribed is seen by its first step, not signalled.
 pub struct Blocker {
     go: Input<i64>,
+    handled: i64,
     gate: Input<String>,
     deadline_ms: Input<i64>,
     blocked: Output<bool>,
@@ -178,6 +180,7 @@ impl Module for Blocker {
     fn declare(ports: &mut Ports) -> Self {
         Blocker {
             go: ports.input("in/go", 0, "blocks when it changes"),
+            handled: 0,
             gate: ports.param("params/gate", String::new(), "the gate's name"),
             deadline_ms: ports.param("params/deadline_ms", 20_000, "longest block"),
             blocked: ports.output("out/blocked", false, "inside the blocking step"),
@@ -187,10 +190,11 @@ impl Module for Blocker {
     fn schedule(&self) -> Schedule {
         Schedule::new().on_change(&self.go)
     }
-    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        if ctx.cause().first() {
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        if self.go.value() == self.handled {
             return Ok(());
         }
+        self.handled = self.go.value();
         self.blocked.set(true);
         let gate = Gate::named(&self.gate.get());
         let opened = gate.wait(Duration::from_millis(self.deadline_ms.value() as u64));
