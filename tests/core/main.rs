@@ -6,6 +6,8 @@ mod contexts;
 mod custom_module;
 mod failures;
 mod links;
+mod ordering;
+mod ordering_modules;
 mod queues;
 mod scheduling;
 mod snapshot;
