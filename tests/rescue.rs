@@ -15,7 +15,7 @@ const GUARD: Duration = Duration::from_secs(300);
 
 /// Loads `configs/rescue/<name>`, writes the PNG into `dir` and adds the context manager its
 /// `contexts:` field names (the CLI adds it; these tests start the agent themselves).
-fn config(name: &str, dir: &Path) -> ConfigFile {
+fn config(name: &str, dir: &Path, extra: &str) -> ConfigFile {
     let mut file = ConfigFile::load(Path::new("configs/rescue").join(name))
         .unwrap_or_else(|e| panic!("{name} should load:\n{e}"));
     let rules = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/rescue/robot.rules.ron");
@@ -23,6 +23,7 @@ fn config(name: &str, dir: &Path) -> ConfigFile {
         r#"Agent(name: "rescue1", modules: [
             (name: "recorder", type: "sim.recorder", values: {{"params/png": {:?}}}),
             (name: "contexts", type: "context.manager", values: {{"params/rules": {:?}}}),
+            {extra}
         ])"#,
         dir.join("rescue.png").display().to_string(),
         rules.display().to_string()
@@ -44,11 +45,18 @@ struct Outcome {
     collisions: i64,
     max_pose_error: f64,
     restarts: u64,
+    /// Starts of each mission action (from its `state/memory`).
+    starts: std::collections::BTreeMap<String, u32>,
 }
 
 async fn rescue(name: &str) -> Outcome {
+    rescue_with(name, "").await
+}
+
+/// [`rescue`] with `extra` module entries overlaid on the config.
+async fn rescue_with(name: &str, extra: &str) -> Outcome {
     let dir = tempfile::tempdir().unwrap();
-    let file = config(name, dir.path());
+    let file = config(name, dir.path(), extra);
     let agent = Agent::start(&file, petrel::Petrel::new().registry())
         .await
         .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
@@ -61,6 +69,15 @@ async fn rescue(name: &str) -> Outcome {
     let collisions = *bb.get::<i64>("robot/out/collisions").await.unwrap();
     let max_pose_error = *bb.get::<f64>("recorder/out/poseErrorMax").await.unwrap();
     let plan_result = bb.get::<String>("mission/out/result").await.unwrap();
+    let memory = bb
+        .get::<petrel::plans::mission::MissionMemory>("mission/state/memory")
+        .await
+        .unwrap();
+    let starts = memory
+        .actions
+        .iter()
+        .map(|(name, stats)| (name.clone(), stats.starts))
+        .collect();
     let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
     let mut matched = 0;
     let mut worst = 0.0f64;
@@ -96,6 +113,7 @@ async fn rescue(name: &str) -> Outcome {
         collisions,
         max_pose_error,
         restarts,
+        starts,
     }
 }
 
@@ -137,6 +155,27 @@ async fn the_rescue_finishes_with_faults_injected() {
         "faults were injected and healed: {}",
         o.restarts
     );
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_rescue_recovers_when_localization_is_lost() {
+    // The localizer's simulated errors instead of scan matching: lost from 60 s to 64 s of
+    // simulated time (its estimate drifts away), then it converges again.
+    let lost = r#"(name: "localizer", type: "nav.localizer", values: {
+        "params/scan_matching": false, "params/lost_episodes": [60.0, 64.0],
+        "params/lost_drift_speed": 0.1, "params/recovery_time": 1.0}),"#;
+    let o = rescue_with("robot.ron", lost).await;
+    assert_eq!(o.plan_result, "goal", "the plan reached its goal");
+    assert_eq!(o.exit_code, 0);
+    let recovers = o.starts.get("recover").copied().unwrap_or(0);
+    assert!(
+        recovers >= 1,
+        "being lost started `recover`: {:?}",
+        o.starts
+    );
+    assert_eq!(o.found, o.victims, "every victim found");
+    assert_eq!(o.false_victims, 0);
+    assert_eq!(o.collisions, 0);
 }
 
 /// The shipped mission plan against scripted worlds (`petrel plan simulate`'s simulator):
