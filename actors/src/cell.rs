@@ -92,6 +92,11 @@ impl Signal {
         self.causes.swap(0, Ordering::Acquire)
     }
 
+    /// Whether step causes wait to be taken: the module will step again at once.
+    pub fn pending(&self) -> bool {
+        self.causes.load(Ordering::Acquire) & cause::STEPS != 0
+    }
+
     /// The longest chain that led to the data raised since the last call (`hops` 0 when no
     /// step wrote it), and starts again.
     pub fn take_hop(&self) -> Hop {

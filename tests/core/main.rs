@@ -5,6 +5,7 @@ mod config_errors;
 mod contexts;
 mod custom_module;
 mod failures;
+mod fairness;
 mod links;
 mod ordering;
 mod ordering_modules;

@@ -1,0 +1,124 @@
+//! Fairness between long steps: modules whose steps take long and that always have work
+//! waiting let a periodic module step between their time slices, instead of holding a worker
+//! for tokio's whole cooperative budget (128 steps). Counted in steps, never timed: how many
+//! busy steps run between two steps of the periodic module.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use petrel::actors::{Agent, Context, Input, Module, Output, Ports, Schedule};
+
+use crate::support::config;
+
+/// Busy steps so far, by every `test.spinner` of this test.
+static BUSY_STEPS: AtomicU64 = AtomicU64::new(0);
+
+/// The busy-step count at each step of the `test.ticker`.
+static SEEN: Mutex<Vec<u64>> = Mutex::new(Vec::new());
+
+/// `test.spinner`: its input is its own output, so it always has work waiting; each step holds
+/// its thread for 200 µs (as a long computation does).
+struct Spinner {
+    input: Input<f64>,
+    out: Output<f64>,
+}
+
+impl Module for Spinner {
+    const TYPE: &'static str = "test.spinner";
+    const DESCRIPTION: &'static str = "Spins 200 µs a step and wakes itself.";
+    fn declare(ports: &mut Ports) -> Self {
+        Spinner {
+            input: ports.input("in/value", 0.0, "its own output"),
+            out: ports.output("out/value", 0.0, "steps so far"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let until = Instant::now() + Duration::from_micros(200);
+        while Instant::now() < until {
+            std::hint::spin_loop();
+        }
+        BUSY_STEPS.fetch_add(1, Ordering::Relaxed);
+        self.out.set(self.out.value() + 1.0);
+        Ok(())
+    }
+}
+
+/// `test.ticker`: steps every millisecond and notes how many busy steps ran so far.
+struct Ticker {
+    count: Output<i64>,
+}
+
+impl Module for Ticker {
+    const TYPE: &'static str = "test.ticker";
+    const DESCRIPTION: &'static str = "Notes the busy-step count every millisecond.";
+    fn declare(ports: &mut Ports) -> Self {
+        Ticker {
+            count: ports.output("out/count", 0, "periodic steps so far"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::every(Duration::from_millis(1))
+    }
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.cause().period() {
+            SEEN.lock()
+                .unwrap()
+                .push(BUSY_STEPS.load(Ordering::Relaxed));
+            self.count.set(self.count.value() + 1);
+        }
+        Ok(())
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn long_steps_with_work_waiting_let_a_periodic_module_step_between_their_slices() {
+    let mut registry = crate::support::registry();
+    registry.register::<Spinner>().register::<Ticker>();
+    let spinners: Vec<String> = (0..10)
+        .map(|i| {
+            format!(
+                r#"(name: "s{i}", type: "test.spinner", links: {{"in/value": "s{i}/out/value"}}),"#
+            )
+        })
+        .collect();
+    let text = format!(
+        r#"Agent(name: "r", modules: [(name: "tick", type: "test.ticker"), {}])"#,
+        spinners.join("\n")
+    );
+    let agent = Agent::start(&config(&text), &registry).await.unwrap();
+    let count = agent
+        .blackboard()
+        .handle::<i64>("tick/out/count")
+        .await
+        .unwrap();
+    // 40 periodic steps (bounded: the test fails rather than waits past its deadline).
+    let waited = tokio::time::timeout(Duration::from_secs(30), async {
+        while *count.get() < 40 {
+            count.changed().await;
+        }
+    })
+    .await;
+    let summary = agent.stop(Duration::from_secs(10)).await;
+    let seen = SEEN.lock().unwrap().clone();
+    assert!(
+        waited.is_ok(),
+        "the periodic module stepped {} times: {seen:?}",
+        seen.len()
+    );
+    // Each spinner yields after a 1 ms slice (about five 200 µs steps), so the periodic module
+    // waits behind at most ten spinners' slices: about 60 busy steps, 200 with a wide margin.
+    // With only the cooperative budget it waited behind 128 steps of each: about 1,300.
+    let worst = seen.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+    assert!(
+        worst <= 200,
+        "{worst} busy steps ran between two periodic steps: {seen:?}"
+    );
+    assert!(
+        summary.modules.iter().all(|m| m.failures == 0),
+        "{summary:?}"
+    );
+}
