@@ -62,6 +62,54 @@ async fn a_sequence_runs_its_actions_in_order_and_the_goal_ends_the_run_with_0()
 }
 
 #[tokio::test(start_paused = true)]
+async fn each_step_pushes_what_it_fired_in_order_with_the_marking_it_left() {
+    use petrel::actors::team::Tap;
+    use petrel::plans::mission::PlanFiring;
+    let plans = Plans::new(&[("seq.plan", "a; b")]);
+    let text_config = agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true, "params/actions": {{
+            "a": (enable: ["c1"], finished: "c1/out/value >= 3"),
+            "b": (enable: ["c2"], finished: "c2/out/value >= 2"),
+        }}"#,
+        plans.path("seq.plan")
+    ));
+    let file = petrel::actors::ConfigFile::parse("test.ron", &text_config).unwrap();
+    let prepared = petrel::actors::Agent::prepare(&file, petrel::Petrel::new().registry(), &[])
+        .await
+        .unwrap();
+    // Tapped before any module steps, so the first firing is seen too.
+    let Ok(Tap::Queue(mut tap)) = prepared.blackboard().tap("m/out/firings").await else {
+        panic!("m/out/firings is a queue");
+    };
+    let agent = prepared.start().await.unwrap();
+    finished(&agent).await;
+    let fired = *agent.blackboard().get::<i64>("m/out/fired").await.unwrap();
+    let steps: Vec<PlanFiring> = tap
+        .take(usize::MAX)
+        .into_iter()
+        .map(|(_, _, v)| v.downcast_ref::<PlanFiring>().unwrap().clone())
+        .collect();
+    let all: Vec<&str> = steps
+        .iter()
+        .flat_map(|s| s.transitions.iter().map(String::as_str))
+        .collect();
+    assert_eq!(all.len() as i64, fired, "every firing, once: {steps:?}");
+    assert_eq!(&all[..2], ["a.start", "a.end"], "{all:?}");
+    assert_eq!(all[2], "b.start", "{all:?}");
+    assert!(all.contains(&"b.end"), "{all:?}");
+    assert_eq!(
+        steps[0].marking, "a.exec",
+        "the first step leaves a running"
+    );
+    assert_eq!(steps.last().unwrap().marking, "goal");
+    assert!(
+        steps.windows(2).all(|w| w[0].time_s <= w[1].time_s),
+        "in time order: {steps:?}"
+    );
+    stop(agent).await;
+}
+
+#[tokio::test(start_paused = true)]
 async fn a_fork_runs_branches_together_and_the_join_waits_for_both() {
     let plans = Plans::new(&[("fork.plan", "{ a } || { b }; c")]);
     let agent = start(&agent_with_mission(&format!(

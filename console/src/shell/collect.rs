@@ -6,7 +6,7 @@ use tokio::time::Instant;
 
 use parking_lot::Mutex;
 use petrel_actors::team::{QueueTap, Tap, ValueTap};
-use petrel_actors::{Blackboard, TypeInfo};
+use petrel_actors::{AnyHandle, Blackboard, TypeInfo};
 use serde_json::{json, Value};
 use tokio::task::JoinHandle;
 
@@ -50,6 +50,27 @@ pub(crate) async fn start(
         }
     }
     for plan in &source.plans {
+        // A mission that says what it fired (`out/firings`) is read as it is; older ones are
+        // followed through their marking.
+        if let Some((tap, type_info)) = queue_tap(bb, &format!("{}/out/firings", plan.module)).await
+        {
+            history
+                .lock()
+                .firings
+                .insert(plan.module.clone(), Recent::new(HISTORY));
+            let fired = bb
+                .expr_handle(&format!("{}/out/fired", plan.module))
+                .await
+                .ok();
+            let (module, history) = (plan.module.clone(), history.clone());
+            tasks.push(tokio::spawn(read_queue(tap, type_info, move |item| {
+                let firing = firing_of(&item, started, fired.as_ref());
+                if let Some(recent) = history.lock().firings.get_mut(&module) {
+                    recent.push(firing);
+                }
+            })));
+            continue;
+        }
         if let Ok(Tap::Value(tap)) = bb.tap(&format!("{}/out/marking", plan.module)).await {
             history
                 .lock()
@@ -65,6 +86,21 @@ pub(crate) async fn start(
         }
     }
     tasks
+}
+
+/// A firing as a mission pushed it to `out/firings` (JSON: transitions, marking).
+fn firing_of(item: &Value, started: Instant, fired: Option<&AnyHandle>) -> Firing {
+    let transitions = item["transitions"].as_array().map_or(Vec::new(), |a| {
+        a.iter()
+            .filter_map(|t| t.as_str().map(str::to_string))
+            .collect()
+    });
+    Firing {
+        time_s: started.elapsed().as_secs_f64(),
+        fired: fired.and_then(|h| h.get::<i64>()).map_or(0, |n| *n),
+        marking: item["marking"].as_str().unwrap_or_default().to_string(),
+        transitions,
+    }
 }
 
 /// A tap on the output queue `key`, with its item type.

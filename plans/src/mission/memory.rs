@@ -28,6 +28,22 @@ impl PropertyType for MissionMemory {
     const TYPE_NAME: &'static str = "pnp.memory";
 }
 
+/// One mission step's firings, as pushed to `out/firings`: what fired, in firing order, and the
+/// marking it left (for consoles and recordings, which need not infer firings from markings).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct PlanFiring {
+    /// The mission's clock (s) when they fired.
+    pub time_s: f64,
+    /// The transitions fired, by label (by id for a jump without one), in order.
+    pub transitions: Vec<String>,
+    /// The marking after them, as `out/marking` shows it.
+    pub marking: String,
+}
+
+impl PropertyType for PlanFiring {
+    const TYPE_NAME: &'static str = "pnp.firing";
+}
+
 /// An action in progress.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]

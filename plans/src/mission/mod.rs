@@ -66,7 +66,7 @@ pub use config::{
     config_form, match_action, ActionBinding, ActionBindings, ActionName, ConditionBindings, Flags,
     Places,
 };
-pub use memory::{ActionStats, MissionMemory, RunningAction};
+pub use memory::{ActionStats, MissionMemory, PlanFiring, RunningAction};
 pub use module::Mission;
 pub use prepare::check_mission;
 

@@ -14,7 +14,7 @@ use tokio::time::Instant;
 
 use super::bind::{plan_names, Relink};
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
-use super::memory::MissionMemory;
+use super::memory::{MissionMemory, PlanFiring};
 use super::prepare::{prepare, Problems, Setup};
 use super::run::{marking, Run, MAX_ROUNDS};
 use super::team::{is_serve, TeamIo, RUN};
@@ -35,6 +35,7 @@ pub struct Mission {
     executor: Param<String>,
     flags: Input<Flags>,
     outbox: QueueWriter<Message>,
+    firings: QueueWriter<PlanFiring>,
     inbox: QueueReader<Message>,
     /// Declared so configs can link it; read through a handle once linked (see `Clock`).
     _clock: Input<f64>,
@@ -65,6 +66,7 @@ impl Module for Mission {
             mode: ports.param("params/mode", RUN.to_string(), "run: run the plan, sending other robots' `robot#` actions to their agents; serve: run no plan, carry out this agent's `agent#` actions for the plan a coordinator runs"),
             executor: ports.param("params/executor", "mission".to_string(), "the module (a mission.pnp in serve mode) that carries out `robot#` actions on each robot's agent"),
             outbox: ports.queue_out("out/outbox", 256, "team plan messages to robots or to the coordinator"),
+            firings: ports.queue_out("out/firings", 64, "what each step fired, in order, and the marking it left (not pushed while the plan fires in a circle: the loop report names it)"),
             inbox: ports.queue_in("in/inbox", "team plan messages from the coordinator or from robots"),
             flags: ports.input("in/conditions", Flags::default(), "values of condition atoms that params/conditions does not bind"),
             _clock: ports.input("in/clock", 0.0, "the agent's clock in seconds (link it to a simulator's out/simTime); unlinked: wall time"),
@@ -142,10 +144,14 @@ impl Module for Mission {
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
+        let mut fired_labels = Vec::new();
         for round in 1.. {
             let report = run.round(now, secs, &self.flags.get());
             relink(ctx, &mut run.bound.relinks).await;
             fired += report.fired.len();
+            if !run.loops.looping() {
+                fired_labels.extend(run.labels(&report));
+            }
             if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
                 break;
             }
@@ -161,12 +167,20 @@ impl Module for Mission {
         }
         if fired > 0 {
             run.save(&self.memory);
-            publish(&self.marking, marking(&run.plan, &run.state));
+            let shown = marking(&run.plan, &run.state);
             publish(
                 &self.running,
                 run.state.running_actions(&run.plan).join(", "),
             );
             self.fired.set(self.fired.value() + fired as i64);
+            if !fired_labels.is_empty() {
+                self.firings.push(PlanFiring {
+                    time_s: secs,
+                    transitions: fired_labels,
+                    marking: shown.clone(),
+                });
+            }
+            publish(&self.marking, shown);
         }
         let status = run.state.status(&run.plan);
         if status != PlanStatus::Running {

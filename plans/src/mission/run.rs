@@ -70,7 +70,8 @@ impl Run {
         report
     }
 
-    fn labels(&self, report: &crate::exec::StepReport) -> Vec<String> {
+    /// The transitions `report` fired, as the log and `out/firings` show them.
+    pub fn labels(&self, report: &crate::exec::StepReport) -> Vec<String> {
         report
             .fired
             .iter()
