@@ -7,7 +7,6 @@ mod common;
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use tokio::sync::watch;
 
 const LENGTH: usize = 17;
 
@@ -57,20 +56,7 @@ fn bench(c: &mut Criterion) {
     });
     rt.block_on(agent.stop(Duration::from_secs(1)));
 
-    let (head, mut tail) = rt.block_on(async {
-        let (head, mut rx) = watch::channel(0.0_f64);
-        for _ in 0..LENGTH {
-            let (tx, next) = watch::channel(0.0_f64);
-            tokio::spawn(async move {
-                while rx.changed().await.is_ok() {
-                    let v = *rx.borrow_and_update();
-                    let _ = tx.send(v);
-                }
-            });
-            rx = next;
-        }
-        (head, rx)
-    });
+    let (head, mut tail) = rt.block_on(async { common::watch_chain(LENGTH) });
     group.bench_function("tokio_watch_chain_floor", |b| {
         b.iter_custom(|iters| {
             rt.block_on(async {

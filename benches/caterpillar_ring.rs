@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use tokio::sync::{mpsc, oneshot, watch};
+use tokio::sync::{mpsc, oneshot};
 
 /// Modules passing the value on between the trigger's write and its wake-up.
 const PASSERS: usize = 17;
@@ -44,18 +44,7 @@ type Driver = mpsc::UnboundedSender<(u64, oneshot::Sender<()>)>;
 /// 18 tasks in a ring of `watch` channels: the trigger task and 17 passers. Spawned on the
 /// runtime whose context this is called in.
 fn spawn_watch_ring() -> Driver {
-    let (ping_tx, mut rx) = watch::channel(0.0_f64);
-    for _ in 0..PASSERS {
-        let (tx, next) = watch::channel(0.0_f64);
-        tokio::spawn(async move {
-            while rx.changed().await.is_ok() {
-                let v = *rx.borrow_and_update();
-                let _ = tx.send(v);
-            }
-        });
-        rx = next;
-    }
-    let mut pong_rx = rx;
+    let (ping_tx, mut pong_rx) = common::watch_chain(PASSERS);
     let (driver, mut requests) = mpsc::unbounded_channel::<(u64, oneshot::Sender<()>)>();
     tokio::spawn(async move {
         let mut v = 0.0;

@@ -432,3 +432,27 @@ impl Module for Trigger {
         Ok(())
     }
 }
+
+/// `len` tokio tasks chained by `watch` channels, each passing on what it reads: the floor of
+/// a chain built on task wake-ups. Returns the chain's head and the end's receiver; spawned on
+/// the runtime whose context this is called in.
+#[allow(dead_code)] // Not every bench measures a chain.
+pub fn watch_chain(
+    len: usize,
+) -> (
+    tokio::sync::watch::Sender<f64>,
+    tokio::sync::watch::Receiver<f64>,
+) {
+    let (head, mut rx) = tokio::sync::watch::channel(0.0_f64);
+    for _ in 0..len {
+        let (tx, next) = tokio::sync::watch::channel(0.0_f64);
+        tokio::spawn(async move {
+            while rx.changed().await.is_ok() {
+                let v = *rx.borrow_and_update();
+                let _ = tx.send(v);
+            }
+        });
+        rx = next;
+    }
+    (head, rx)
+}
