@@ -1,6 +1,7 @@
 //! The shipped rescue team (configs/rescue/team) in one `petrel run`: a world agent with three
 //! robot bodies, three robot agents linked to them over the team, a coordinator running the
-//! team plan. Each robot searches its third of the floor; the run ends at the plan's goal.
+//! team plan and the shared search (merged maps, frontiers allocated to the robots). The run
+//! ends at the plan's goal with every victim of the floor found.
 
 use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
@@ -40,6 +41,9 @@ fn team_configs(dir: &Path, team: &str) -> Vec<String> {
     std::fs::create_dir(dir.join("team")).unwrap();
     std::fs::copy(shipped.join("rescue.txt"), dir.join("rescue.txt")).unwrap();
     std::fs::copy(shipped.join("team/team.plan"), dir.join("team/team.plan")).unwrap();
+    std::fs::create_dir(dir.join("team/rules")).unwrap();
+    let rules = "team/rules/robot.rules.ron";
+    std::fs::copy(shipped.join(rules), dir.join(rules)).unwrap();
     let ports: Vec<(u16, u16)> = (7460..=7464).map(|p| (p, free_port())).collect();
     AGENTS
         .iter()
@@ -90,17 +94,20 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
         stdout.contains("robots' trajectories") && stdout.contains("  robot_3: #"),
         "{stdout}"
     );
-    // Each robot carried out its own search, to the end, once.
-    for search in [
-        "robot_1#search_west",
-        "robot_2#search_middle",
-        "robot_3#search_east",
-    ] {
+    // Each robot carried out its search, to the end, once, exploring frontiers of the merged
+    // map the coordinator gave it.
+    assert!(stdout.contains("team search: done at t = "), "{stdout}");
+    for robot in ["robot_1", "robot_2", "robot_3"] {
         assert!(
-            stdout.contains(&format!("{search}: 1 start, 1 end, 0 failures")),
-            "{search}:\n{stdout}"
+            stdout.contains(&format!("{robot}#search: 1 start, 1 end, 0 failures")),
+            "{robot}:\n{stdout}"
+        );
+        assert!(
+            !stdout.contains(&format!("  {robot}: 0 frontier(s)")),
+            "{robot} explored nothing:\n{stdout}"
         );
     }
+    assert_every_victim_found(&stdout);
     // Victims found by any robot are merged into the coordinator's list, with who found them.
     assert!(
         stdout.contains("[victims] victim 1 at ("),
@@ -139,7 +146,7 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
     let log = BufReader::new(victim.stderr.take().unwrap());
     let mut seen = Vec::new();
     let started = log.lines().map_while(Result::ok).any(|l| {
-        let hit = l.contains("robot_1#search_west call=start");
+        let hit = l.contains("robot_1#search call=start");
         seen.push(l);
         hit
     });
@@ -163,12 +170,43 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
         stdout.contains("robot_1: #1f77b4, left the team at t = "),
         "{stdout}"
     );
-    // robot_1's search failed when it left the team, and robot_3 searched the west after the east.
-    for line in [
-        "robot_1#search_west: 1 start, 0 ends, 1 failure,",
-        "robot_3#search_west: 1 start, 1 end, 0 failures",
-        "robot_3#search_east: 1 start, 1 end, 0 failures",
-    ] {
-        assert!(stdout.contains(line), "{line}:\n{stdout}");
+    // robot_1's search failed when it left the team; the coordinator's search saw it leave,
+    // and the others searched on to the end.
+    assert!(
+        stdout.contains("robot_1#search: 1 start, 0 ends, 1 failure,")
+            && stdout.contains("robot_1 left the team")
+            && stdout.contains("robot_2#search: 1 start, 1 end, 0 failures")
+            && stdout.contains("robot_3#search: 1 start, 1 end, 0 failures"),
+        "{stdout}"
+    );
+    assert_every_victim_found(&stdout);
+}
+
+/// The victims of ../configs/rescue/rescue.txt (its `V` markers, metres).
+const VICTIMS: [(f64, f64); 6] = [
+    (1.7, 4.3),
+    (3.3, 8.1),
+    (6.5, 1.3),
+    (8.3, 10.5),
+    (13.9, 1.3),
+    (13.7, 8.1),
+];
+
+/// Every victim of the floor is on the coordinator's list (`  N (x, y) found by ...`).
+fn assert_every_victim_found(stdout: &str) {
+    let found: Vec<(f64, f64)> = stdout
+        .lines()
+        .filter(|l| l.contains(") found by robot_"))
+        .filter_map(|l| {
+            let inside = l.split_once('(')?.1.split_once(')')?.0;
+            let (x, y) = inside.split_once(", ")?;
+            Some((x.parse().ok()?, y.parse().ok()?))
+        })
+        .collect();
+    for (x, y) in VICTIMS {
+        assert!(
+            found.iter().any(|(fx, fy)| (fx - x).hypot(fy - y) < 1.0),
+            "the victim at ({x}, {y}) was not found; the team's list: {found:?}\n{stdout}"
+        );
     }
 }

@@ -21,6 +21,8 @@ mod mapper;
 mod path_planner;
 mod recorder;
 mod sequencer;
+mod team_member;
+mod team_search;
 mod team_victims;
 mod victim_detector;
 mod victim_mapper;
@@ -36,6 +38,8 @@ pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use team_member::{MemberNames, TeamMember};
+pub use team_search::TeamSearch;
 pub use team_victims::TeamVictimsModule;
 pub use victim_detector::VictimDetector;
 pub use victim_mapper::VictimMapper;
@@ -60,6 +64,8 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<VictimDetector>()
         .register::<VictimMapper>()
         .register::<TeamVictimsModule>()
+        .register::<TeamMember>()
+        .register::<TeamSearch>()
         .register::<Recorder>();
 }
 
