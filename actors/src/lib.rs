@@ -34,7 +34,7 @@ pub mod types;
 pub mod url;
 mod value;
 
-pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT};
+pub use agent::{Agent, AgentExit, ModuleControl, StartError, DEFAULT_STOP_TIMEOUT, EXIT_DIED};
 pub use blackboard::{
     AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph, ModuleListing,
     PropertyListing, Registry,

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use std::task::Poll;
 
 use petrel_actors::{
-    files, outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError,
+    files, outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError, EXIT_DIED,
 };
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
@@ -161,11 +161,27 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     if let Some(duration) = args.duration {
         guard.run_for(duration);
     }
-    let (mut why, mut code) = tokio::select! {
-        exit = first_exit(&agents) => (exit.reason, exit.code),
-        asked = guard.requested() => (asked.reason, asked.code),
-        _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
+    let mut dead = vec![false; agents.len()];
+    let mut reload = Box::pin(reload_on_hangup(hangups, &agents));
+    let (mut why, mut code) = loop {
+        tokio::select! {
+            (i, exit) = first_exit(&agents, &dead) => {
+                if exit.code != EXIT_DIED {
+                    break (exit.reason, exit.code);
+                }
+                if dead.iter().filter(|d| !**d).count() == 1 {
+                    // The last agent of the process: the process dies with it.
+                    eprintln!("agent `{}` died: {}", agents[i].name(), exit.reason);
+                    std::process::exit(EXIT_DIED.into());
+                }
+                die(&agents[i], &exit.reason, &mut teams, args).await;
+                dead[i] = true;
+            }
+            asked = guard.requested() => break (asked.reason, asked.code),
+            _ = &mut reload => unreachable!("reloading never ends"),
+        }
     };
+    drop(reload);
     if args.duration.is_some() && code == 0 && why.starts_with("ran for") {
         let pending = pending_missions(&agents, &files).await;
         if !pending.is_empty() {
@@ -326,19 +342,36 @@ async fn stop_all(
     summaries
 }
 
-/// The first agent that asks for the run to end.
-async fn first_exit(agents: &[Agent]) -> AgentExit {
-    let mut waits: Vec<Pin<Box<dyn Future<Output = AgentExit> + Send + '_>>> =
-        agents.iter().map(|a| Box::pin(a.finished()) as _).collect();
+/// The first agent still alive that asks for the run to end, and which it is.
+async fn first_exit(agents: &[Agent], dead: &[bool]) -> (usize, AgentExit) {
+    let mut waits: Vec<(usize, Pin<Box<dyn Future<Output = AgentExit> + Send + '_>>)> = agents
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !dead[*i])
+        .map(|(i, a)| (i, Box::pin(a.finished()) as _))
+        .collect();
     std::future::poll_fn(|cx| {
-        for wait in waits.iter_mut() {
+        for (i, wait) in waits.iter_mut() {
             if let Poll::Ready(exit) = wait.as_mut().poll(cx) {
-                return Poll::Ready(exit);
+                return Poll::Ready((*i, exit));
             }
         }
         Poll::Pending
     })
     .await
+}
+
+/// An agent of the run dies (a module asked with [`EXIT_DIED`]), as its process would under
+/// `kill -9`: alone in the process, the process ends at once; among others, its team
+/// membership is dropped without a goodbye (the others see its token go, as when a process
+/// dies) and its modules are stopped, and the run goes on without it.
+async fn die(agent: &Agent, reason: &str, teams: &mut Vec<Team>, args: &RunArgs) {
+    tracing::warn!(agent = agent.name(), "agent dies: {reason}");
+    outln!("agent `{}` died: {reason}", agent.name());
+    if let Some(i) = teams.iter().position(|t| t.agent() == agent.name()) {
+        drop(teams.remove(i));
+    }
+    agent.stop_modules(args.stop_timeout).await;
 }
 
 /// SIGHUPs received (on Unix; elsewhere, none ever arrive).

@@ -16,6 +16,7 @@
 mod avoidance;
 mod body;
 mod explorer;
+mod fault;
 mod localizer;
 mod mapper;
 mod path_planner;
@@ -33,6 +34,7 @@ mod world_tracks;
 pub use avoidance::ObstacleAvoidance;
 pub use body::SimBody;
 pub use explorer::ExplorerModule;
+pub use fault::SimFault;
 pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
@@ -55,6 +57,7 @@ pub fn register(registry: &mut ModuleRegistry) {
     registry
         .register::<SimWorld>()
         .register::<SimBody>()
+        .register::<SimFault>()
         .register::<LocalizerModule>()
         .register::<MapperModule>()
         .register::<PathPlanner>()
