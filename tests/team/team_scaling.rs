@@ -7,8 +7,11 @@
 //! release build and copy the table it prints into BENCHMARKS.md:
 //!
 //! ```sh
-//! cargo test --release --test team team_scaling -- --ignored --nocapture
+//! cargo build --release --bin petrel
+//! PETREL_BIN=$PWD/target/release/petrel cargo test --test team team_scaling -- --ignored --nocapture
 //! ```
+//!
+//! (`PETREL_BIN` picks the binary measured; without it, the one built with the test.)
 //!
 //! It also writes docs/team-scaling.png (drawn with the `image` crate, no plotting library).
 
@@ -157,9 +160,11 @@ fn socket_bytes(pid: u32) -> HashMap<String, u64> {
     for line in text.lines() {
         if !line.starts_with(char::is_whitespace) {
             let ours = line.contains(&format!("pid={pid},"));
+            // Local and peer address: the queue sizes before them change as the run goes.
             current = ours.then(|| {
                 line.split_whitespace()
-                    .take(5)
+                    .skip(3)
+                    .take(2)
                     .collect::<Vec<_>>()
                     .join(" ")
             });
@@ -190,7 +195,8 @@ fn run(n: usize) -> Figures {
     let configs = write_team(dir.path(), n);
     let cpu_before = children_cpu();
     let started = Instant::now();
-    let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+    let bin = std::env::var("PETREL_BIN").unwrap_or(env!("CARGO_BIN_EXE_petrel").into());
+    let child = Command::new(bin)
         .current_dir(dir.path())
         .arg("run")
         .args(&configs)

@@ -116,7 +116,14 @@ impl Module for TeamSearch {
             .expect("stepping only after a successful init");
         let present = present(state);
         for left in state.log.membership(&present, t) {
-            petrel_actors::outln!("[{}] t = {t:6.1} s  {left} left the team", ctx.module());
+            let held = match state.allocator.claim_of(&left) {
+                Some(p) => format!("its frontier ({:.2}, {:.2}) is free", p.0.x, p.0.y),
+                None => "it held no frontier".to_string(),
+            };
+            petrel_actors::outln!(
+                "[{}] t = {t:6.1} s  {left} left the team; {held}",
+                ctx.module()
+            );
         }
         if self.done.value() || t - state.last_plan < self.replan_s.value() {
             return Ok(());
