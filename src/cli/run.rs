@@ -342,9 +342,12 @@ async fn stop_all(
     summaries
 }
 
+/// An agent's wait for the end of its run.
+type ExitWait<'a> = Pin<Box<dyn Future<Output = AgentExit> + Send + 'a>>;
+
 /// The first agent still alive that asks for the run to end, and which it is.
 async fn first_exit(agents: &[Agent], dead: &[bool]) -> (usize, AgentExit) {
-    let mut waits: Vec<(usize, Pin<Box<dyn Future<Output = AgentExit> + Send + '_>>)> = agents
+    let mut waits: Vec<(usize, ExitWait<'_>)> = agents
         .iter()
         .enumerate()
         .filter(|(i, _)| !dead[*i])
