@@ -1,18 +1,16 @@
 //! `petrel run`: start one agent or several (a team in one process), wait for Ctrl-C, `--for`
 //! or an agent asking to end, stop cleanly, summarise.
 
-use std::future::Future;
-use std::pin::Pin;
 use std::process::ExitCode;
-use std::task::Poll;
 
 use petrel_actors::{
-    files, outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError, EXIT_DIED,
+    files, outln, status, Agent, ConfigFile, ModuleRegistry, StartError, EXIT_DIED,
 };
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
 use super::check::{check_all, check_team};
+use super::exits::{die, first_exit};
 use super::stop_guard::StopGuard;
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
@@ -340,41 +338,6 @@ async fn stop_all(
         team.leave().await;
     }
     summaries
-}
-
-/// An agent's wait for the end of its run.
-type ExitWait<'a> = Pin<Box<dyn Future<Output = AgentExit> + Send + 'a>>;
-
-/// The first agent still alive that asks for the run to end, and which it is.
-async fn first_exit(agents: &[Agent], dead: &[bool]) -> (usize, AgentExit) {
-    let mut waits: Vec<(usize, ExitWait<'_>)> = agents
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| !dead[*i])
-        .map(|(i, a)| (i, Box::pin(a.finished()) as _))
-        .collect();
-    std::future::poll_fn(|cx| {
-        for (i, wait) in waits.iter_mut() {
-            if let Poll::Ready(exit) = wait.as_mut().poll(cx) {
-                return Poll::Ready((*i, exit));
-            }
-        }
-        Poll::Pending
-    })
-    .await
-}
-
-/// An agent of the run dies (a module asked with [`EXIT_DIED`]), as its process would under
-/// `kill -9`: alone in the process, the process ends at once; among others, its team
-/// membership is dropped without a goodbye (the others see its token go, as when a process
-/// dies) and its modules are stopped, and the run goes on without it.
-async fn die(agent: &Agent, reason: &str, teams: &mut Vec<Team>, args: &RunArgs) {
-    tracing::warn!(agent = agent.name(), "agent dies: {reason}");
-    outln!("agent `{}` died: {reason}", agent.name());
-    if let Some(i) = teams.iter().position(|t| t.agent() == agent.name()) {
-        drop(teams.remove(i));
-    }
-    agent.stop_modules(args.stop_timeout).await;
 }
 
 /// SIGHUPs received (on Unix; elsewhere, none ever arrive).

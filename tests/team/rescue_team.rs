@@ -12,10 +12,22 @@ use crate::support::*;
 
 /// The world runs at half the shipped speed here (2x real time): in a debug build on a loaded
 /// 2-core machine the robots' vision falls behind the camera at 4x, frames are dropped and a
-/// victim glimpsed while turning goes unconfirmed. The search then takes about 100 to 180
-/// simulated seconds (50 to 90 s of wall time alone, more on a loaded machine): each run is
-/// given 300 s (`--for`), the test 360 s before it kills it and fails.
-const DEADLINE: Duration = Duration::from_secs(360);
+/// victim glimpsed while turning goes unconfirmed. For the same reason the rescue teams of
+/// these tests run one at a time ([`ONE_TEAM_AT_A_TIME`]). The search takes about 250
+/// simulated seconds (about 130 s of wall time alone, more on a loaded machine): each run is
+/// given 400 s (`--for`), the test 480 s before it kills it and fails.
+const DEADLINE: Duration = Duration::from_secs(480);
+
+/// Held by each test while its team runs: three simulated teams at once starve each other's
+/// worlds of CPU, and their simulated time falls behind.
+static ONE_TEAM_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The lock of [`ONE_TEAM_AT_A_TIME`] (a test that failed holding it does not poison the rest).
+fn alone() -> std::sync::MutexGuard<'static, ()> {
+    ONE_TEAM_AT_A_TIME
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// Waits for `child` on its own thread, an explicit deadline (no polling); kills it after.
 fn wait(child: Child) -> Output {
@@ -76,13 +88,14 @@ fn team_configs(dir: &Path, team: &str, agents: &[&str]) -> Vec<String> {
 
 #[test]
 fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-team"), &AGENTS);
     let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
         .current_dir(dir.path())
         .arg("run")
         .args(&configs)
-        .args(["--for", "300s"])
+        .args(["--for", "400s"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -134,13 +147,14 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
 
 #[test]
 fn a_robot_whose_agent_dies_at_a_set_time_hands_its_frontier_on_and_every_victim_is_found() {
+    let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-dies"), &FAULT_AGENTS);
     let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
         .current_dir(dir.path())
         .arg("run")
         .args(&configs)
-        .args(["--for", "300s"])
+        .args(["--for", "400s"])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -173,6 +187,7 @@ fn a_robot_whose_agent_dies_at_a_set_time_hands_its_frontier_on_and_every_victim
 
 #[test]
 fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_goal() {
+    let _alone = alone();
     use std::io::{BufRead, BufReader};
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-fault"), &AGENTS);
@@ -184,7 +199,7 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
             .current_dir(dir.path())
             .arg("run")
             .args(configs)
-            .args(["--for", "300s"])
+            .args(["--for", "400s"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(stderr)

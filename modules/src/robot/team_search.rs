@@ -31,6 +31,7 @@ pub struct TeamSearch {
     clearance: Input<f64>,
     min_frontier_cells: Input<i64>,
     blacklist_radius: Input<f64>,
+    timeout_s: Input<f64>,
     map: Output<OccupancyGrid>,
     frontiers: Output<i64>,
     done: Output<bool>,
@@ -71,6 +72,7 @@ impl Module for TeamSearch {
             clearance: ports.param_in("params/clearance", 0.3, Range::new(0.0, 5.0), "distance a robot's centre keeps from walls, m (frontiers closer are unreachable)"),
             min_frontier_cells: ports.param_in("params/min_frontier_cells", 4, Range::new(1.0, 1e6), "smaller frontiers are ignored, cells"),
             blacklist_radius: ports.param_in("params/blacklist_radius", 0.6, Range::new(0.01, 100.0), "frontiers this close to a target a robot gave up are skipped, m"),
+            timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time at which the search ends even with frontiers left (frontiers no robot manages to see), s; 0 = never"),
             map: ports.output("out/map", OccupancyGrid::default(), "the merged map of the team"),
             frontiers: ports.output("out/frontiers", 0, "frontiers of the merged map reachable by a robot, at the last allocation"),
             done: ports.output("out/done", false, "the search is over: no robot can reach a frontier of the merged map"),
@@ -184,7 +186,16 @@ impl Module for TeamSearch {
                 m.target.write(Arc::new(target), now);
             }
         }
-        if !waiting && !candidates.is_empty() && reachable == 0 {
+        let timeout = self.timeout_s.value();
+        if timeout > 0.0 && t >= timeout && reachable > 0 {
+            self.done.set(true);
+            state.log.done(t);
+            tracing::warn!(
+                frontiers = reachable,
+                "the team search ends at its time limit with frontiers left"
+            );
+            petrel_actors::outln!("[{}] t = {t:6.1} s  search ended at its time limit (params/timeout_s): {reachable} frontier(s) left", ctx.module());
+        } else if !waiting && !candidates.is_empty() && reachable == 0 {
             self.done.set(true);
             state.log.done(t);
             petrel_actors::outln!(
