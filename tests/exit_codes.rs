@@ -52,6 +52,11 @@ const FILES: &[(&str, &str)] = &[
                       (name: "chaos", type: "demo.chaos", values: {"params/targets": "c", "params/faults": "error", "params/mean_interval_ms": 20, "params/seed": 7})])"#,
     ),
     (
+        "dies.ron",
+        r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter", values: {"params/period_ms": 10}),
+                                      (name: "fault", type: "sim.fault", values: {"params/die_at_s": 3.0}, links: {"in/clock": "c/out/value"})])"#,
+    ),
+    (
         "badtype.ron",
         r#"Agent(name: "r1", modules: [(name: "c", type: "demo.nope")])"#,
     ),
@@ -106,6 +111,11 @@ const CASES: &[(&[&str], i32, &str)] = &[
         &["run", "slow.ron", "--for", "300ms", "--no-remote"],
         4,
         "--for ended with the mission running",
+    ),
+    (
+        &["run", "dies.ron", "--for", "20s", "--no-remote"],
+        137,
+        "the process's only agent died (sim.fault), as under kill -9",
     ),
     (&["check", "goal.ron"], 0, "no errors"),
     (&["check", "badtype.ron"], 2, "errors"),

@@ -19,6 +19,8 @@ const CONFIGS: &[&str] = &[
     "configs/examples/patrol.ron",
     "configs/rescue/team/world.ron",
     "configs/rescue/team/coordinator.ron",
+    // A team robot, with the fault scenario's sim.fault.
+    "configs/rescue/team/fault/robot_1.ron",
 ];
 
 /// Wall-clock time a case may take before the test binary is ended with the case named.
@@ -195,7 +197,7 @@ fn demo_and_mission_modules_refuse_or_survive_hostile_values() {
 }
 
 #[test]
-fn team_world_and_coordinator_refuse_or_survive_hostile_values() {
+fn team_world_coordinator_and_robot_refuse_or_survive_hostile_values() {
     let mut problems = Vec::new();
     for config in &CONFIGS[7..] {
         problems.extend(cases_of(config));

@@ -30,6 +30,13 @@ pub enum StartError {
     Spawn(String),
 }
 
+/// The exit code a module gives [`Context::stop_agent`](crate::Context::stop_agent) to make
+/// its agent die, as `kill -9` of its process would (128 + 9, what a shell reports for such a
+/// process): `petrel run` drops a dying agent's team membership without a goodbye and stops
+/// its modules, and the other agents of the run go on; an agent alone in its process ends the
+/// process at once with this code. Fault scenarios (`sim.fault`) use it.
+pub const EXIT_DIED: u8 = 137;
+
 /// Why an agent's run should end, as requested by one of its modules or its supervisor.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct AgentExit {

@@ -36,7 +36,9 @@ pub mod types;
 pub mod url;
 mod value;
 
-pub use agent::{Agent, AgentExit, ModuleControl, PreparedAgent, StartError, DEFAULT_STOP_TIMEOUT};
+pub use agent::{
+    Agent, AgentExit, ModuleControl, PreparedAgent, StartError, DEFAULT_STOP_TIMEOUT, EXIT_DIED,
+};
 pub use blackboard::{
     AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph, ModuleListing,
     PropertyListing, Registry, WatchedTap,

@@ -6,6 +6,7 @@ pub(crate) use check::check_all;
 mod chrome;
 pub mod console;
 mod console_log;
+mod exits;
 mod follow;
 mod graph;
 mod listing;

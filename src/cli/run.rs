@@ -1,19 +1,17 @@
 //! `petrel run`: start one agent or several (a team in one process), wait for Ctrl-C, `--for`
 //! or an agent asking to end, stop cleanly, summarise.
 
-use std::future::Future;
-use std::pin::Pin;
 use std::process::ExitCode;
-use std::task::Poll;
 
 use petrel_actors::{
-    files, outln, status, Agent, AgentExit, ConfigFile, ModuleRegistry, StartError,
+    files, outln, status, Agent, ConfigFile, ModuleRegistry, StartError, EXIT_DIED,
 };
 use petrel_record::Recorder;
 use petrel_team::discovery::Registration;
 use petrel_team::Team;
 
 use super::check::{check_all, check_team};
+use super::exits::{die, first_exit};
 use super::stop_guard::StopGuard;
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
@@ -174,11 +172,27 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     if let Some(duration) = args.duration {
         guard.run_for(duration);
     }
-    let (mut why, mut code) = tokio::select! {
-        exit = first_exit(&agents) => (exit.reason, exit.code),
-        asked = guard.requested() => (asked.reason, asked.code),
-        _ = reload_on_hangup(hangups, &agents) => unreachable!("reloading never ends"),
+    let mut dead = vec![false; agents.len()];
+    let mut reload = Box::pin(reload_on_hangup(hangups, &agents));
+    let (mut why, mut code) = loop {
+        tokio::select! {
+            (i, exit) = first_exit(&agents, &dead) => {
+                if exit.code != EXIT_DIED {
+                    break (exit.reason, exit.code);
+                }
+                if dead.iter().filter(|d| !**d).count() == 1 {
+                    // The last agent of the process: the process dies with it.
+                    eprintln!("agent `{}` died: {}", agents[i].name(), exit.reason);
+                    std::process::exit(EXIT_DIED.into());
+                }
+                die(&agents[i], &exit.reason, &mut teams, args).await;
+                dead[i] = true;
+            }
+            asked = guard.requested() => break (asked.reason, asked.code),
+            _ = &mut reload => unreachable!("reloading never ends"),
+        }
     };
+    drop(reload);
     if args.duration.is_some() && code == 0 && why.starts_with("ran for") {
         let pending = pending_missions(&agents, &files).await;
         if !pending.is_empty() {
@@ -348,21 +362,6 @@ async fn stop_all(
         team.leave().await;
     }
     summaries
-}
-
-/// The first agent that asks for the run to end.
-async fn first_exit(agents: &[Agent]) -> AgentExit {
-    let mut waits: Vec<Pin<Box<dyn Future<Output = AgentExit> + Send + '_>>> =
-        agents.iter().map(|a| Box::pin(a.finished()) as _).collect();
-    std::future::poll_fn(|cx| {
-        for wait in waits.iter_mut() {
-            if let Poll::Ready(exit) = wait.as_mut().poll(cx) {
-                return Poll::Ready(exit);
-            }
-        }
-        Poll::Pending
-    })
-    .await
 }
 
 /// SIGHUPs received (on Unix; elsewhere, none ever arrive).

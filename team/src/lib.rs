@@ -253,6 +253,11 @@ impl Team {
         serde_json::from_slice(&json).map_err(|e| TeamError::Refused(e.to_string()))
     }
 
+    /// The agent this membership is of.
+    pub fn agent(&self) -> &str {
+        &self.ctx.agent
+    }
+
     /// Leaves the team: others see this agent leave at once (not after the lease).
     pub async fn leave(mut self) {
         self.stop();

@@ -15,6 +15,8 @@ mod rescue_team;
 mod rogue;
 mod router;
 mod scale;
+mod scaling_plot;
 mod support;
+mod team_scaling;
 mod tools;
 mod writes;

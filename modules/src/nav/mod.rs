@@ -5,6 +5,7 @@
 
 #![warn(missing_docs)]
 
+pub mod allocate;
 pub mod astar;
 pub mod avoidance;
 pub mod costmap;
@@ -15,7 +16,10 @@ pub mod mapper;
 pub mod planner;
 pub mod scan_matcher;
 pub mod sequencer;
+pub mod team_log;
+pub mod team_map;
 
+pub use allocate::{Allocator, Change};
 pub use avoidance::{Avoidance, AvoidanceParams};
 pub use costmap::CostParams;
 pub use frontier::{explore, known_area, Exploration, Frontier, FrontierParams};
@@ -25,3 +29,5 @@ pub use mapper::{Mapper, MapperParams};
 pub use planner::{Planner, PlannerOutput, PlannerParams};
 pub use scan_matcher::{ScanLocalizer, ScanMatcher, ScanMatcherParams, ScanOutcome};
 pub use sequencer::{GoalSequencer, SequencerOutput};
+pub use team_log::{Reassignment, TeamLog};
+pub use team_map::merge_maps;

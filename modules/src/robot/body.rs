@@ -24,6 +24,8 @@ pub struct SimBody {
     _collisions: Output<i64>,
     _sim_time: Output<f64>,
     _vibration: Output<f64>,
+    _exposure: Input<f64>,
+    _gain: Input<f64>,
 }
 
 impl Module for SimBody {
@@ -43,6 +45,10 @@ impl Module for SimBody {
             _collisions: ports.output("out/collisions", 0, "collision events so far (walls and other robots)"),
             _sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             _vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1"),
+            // A driver's camera settings: the robot that drives this body may link them to what
+            // its vision asks for (longer exposure and more gain in the dark).
+            _exposure: ports.input("in/camera/exposure_ms", 0.0, "this robot's camera exposure, ms (0, 200]; 0 = the world's params/camera/exposure_ms"),
+            _gain: ports.input("in/camera/gain", 0.0, "this robot's camera gain [1, 16]; 0 = the world's params/camera/gain"),
         }
     }
 

@@ -1,5 +1,6 @@
 //! `nav.explorer`: frontier-based exploration; hands the path planner one frontier at a time.
 
+use petrel_actors::types::Path2;
 use petrel_actors::{
     Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Range, Schedule,
 };
@@ -32,7 +33,11 @@ pub struct ExplorerModule {
     end_run: Input<bool>,
     timeout_s: Input<f64>,
     area: Input<Vec<f64>>,
+    team: Input<bool>,
+    assigned: Input<Vec<f64>>,
+    team_done: Input<bool>,
     target: Output<Pose2>,
+    given_up: Output<Path2>,
     done: Output<bool>,
     frontiers: Output<i64>,
     explored: Output<f64>,
@@ -73,6 +78,10 @@ impl Module for ExplorerModule {
             end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
             timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time after which exploration fails, s (0 = none)"),
             area: ports.param("params/area", Vec::new(), "explore only frontiers in `[x0, y0, x1, y1]` (a robot's share of a team's search); empty = everywhere. Read at every step: a new area starts exploring again"),
+            team: ports.param("params/team", false, "follow a team's search: go to the frontier `in/assigned` names (a coordinator's nav.team_search allocates it on the team's merged map) instead of choosing one on this robot's map; done when `in/teamDone` is"),
+            assigned: ports.input("in/assigned", Vec::new(), "with params/team: the frontier to explore, `[x, y]`; empty = none for now"),
+            team_done: ports.input("in/teamDone", false, "with params/team: the team's search is over"),
+            given_up: ports.output("out/givenUp", Path2::default(), "targets reached or given up (never chosen again; a team's search reads them)"),
             target: ports.output("out/targetPose", Pose2::default(), "the frontier to explore next"),
             done: ports.output("out/done", false, "no reachable frontier is left"),
             frontiers: ports.output("out/frontiers", 0, "reachable frontiers at the last evaluation"),
@@ -90,6 +99,8 @@ impl Module for ExplorerModule {
             .on_change(&self.failed)
             .on_change(&self.sim_time)
             .on_change(&self.area)
+            .on_change(&self.assigned)
+            .on_change(&self.team_done)
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
@@ -122,6 +133,9 @@ impl Module for ExplorerModule {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if self.team.value() {
+            return self.step_team(ctx);
+        }
         let t = self.sim_time.value();
         let area = self.area()?;
         let state = self
@@ -166,12 +180,14 @@ impl Module for ExplorerModule {
             // not pick it (or its neighbours) again.
             let (p, _) = state.current.take().expect("settled");
             state.blacklist.push(p);
+            self.given_up.set(state.blacklist.clone().into());
             force = true;
         } else if settled && self.arrived.value() {
             // Arrived and a frontier is still here: the laser cannot see it from this pose
             // (behind the robot, under a table); going there again would change nothing.
             let (p, _) = state.current.take().expect("settled");
             state.blacklist.push(p);
+            self.given_up.set(state.blacklist.clone().into());
             force = true;
         }
         if !force && t - state.last_plan < self.replan_s.value() {
@@ -214,6 +230,66 @@ impl Module for ExplorerModule {
 }
 
 impl ExplorerModule {
+    /// A step following a team's search: the target is the frontier the coordinator
+    /// assigned; reaching it, failing to or running out of time gives it up (`out/givenUp`,
+    /// which the coordinator reads), and the search is done when the team's is.
+    fn step_team(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let t = self.sim_time.value();
+        let assigned = match self.assigned.get().as_slice() {
+            [] => None,
+            &[x, y] if x.is_finite() && y.is_finite() => Some(Point2::new(x, y)),
+            other => anyhow::bail!(
+                "invalid input `in/assigned`: expected `[x, y]` or `[]`, got {other:?}"
+            ),
+        };
+        let state = self
+            .state
+            .as_mut()
+            .expect("stepping only after a successful init");
+        if state.over {
+            return Ok(());
+        }
+        if self.team_done.value() {
+            state.over = true;
+            self.done.set(true);
+            petrel_actors::outln!(
+                "[{}] t = {t:6.1} s  the team's search is done",
+                ctx.module()
+            );
+            return Ok(());
+        }
+        if t - state.last_step > PAUSE_S {
+            // Back from a pause (or the first step): whatever flags the planner shows are old.
+            state.current = None;
+        }
+        state.last_step = t;
+        if let Some((p, since)) = state.current {
+            let settled = t - since >= FLAG_GRACE_S;
+            let overdue = t - since > self.give_up_s.value();
+            if settled && (self.failed.value() || self.arrived.value() || overdue) {
+                state.current = None;
+                state.blacklist.push(p);
+                self.given_up.set(state.blacklist.clone().into());
+            }
+        }
+        let radius = state.params.blacklist_radius;
+        let fresh =
+            assigned.filter(|p| state.blacklist.iter().all(|b| (b.0 - p.0).norm() > radius));
+        match (fresh, state.current) {
+            (Some(p), Some((q, _))) if p == q => {}
+            (Some(p), _) => {
+                state.current = Some((p, t));
+                self.target.set(Pose2::new(p.0.x, p.0.y, 0.0));
+            }
+            (None, _) => state.current = None,
+        }
+        if t - state.last_plan >= self.replan_s.value() {
+            state.last_plan = t;
+            self.explored.set(known_area(&self.map.get()));
+        }
+        Ok(())
+    }
+
     /// `params/area` as the core takes it.
     fn area(&self) -> anyhow::Result<Option<[f64; 4]>> {
         let area = match self.area.get().as_slice() {

@@ -16,11 +16,14 @@
 mod avoidance;
 mod body;
 mod explorer;
+mod fault;
 mod localizer;
 mod mapper;
 mod path_planner;
 mod recorder;
 mod sequencer;
+mod team_member;
+mod team_search;
 mod team_victims;
 mod victim_detector;
 mod victim_mapper;
@@ -31,11 +34,14 @@ mod world_tracks;
 pub use avoidance::ObstacleAvoidance;
 pub use body::SimBody;
 pub use explorer::ExplorerModule;
+pub use fault::SimFault;
 pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
+pub use team_member::{MemberNames, TeamMember};
+pub use team_search::TeamSearch;
 pub use team_victims::TeamVictimsModule;
 pub use victim_detector::VictimDetector;
 pub use victim_mapper::VictimMapper;
@@ -51,6 +57,7 @@ pub fn register(registry: &mut ModuleRegistry) {
     registry
         .register::<SimWorld>()
         .register::<SimBody>()
+        .register::<SimFault>()
         .register::<LocalizerModule>()
         .register::<MapperModule>()
         .register::<PathPlanner>()
@@ -60,6 +67,8 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<VictimDetector>()
         .register::<VictimMapper>()
         .register::<TeamVictimsModule>()
+        .register::<TeamMember>()
+        .register::<TeamSearch>()
         .register::<Recorder>();
 }
 

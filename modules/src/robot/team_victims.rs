@@ -12,6 +12,7 @@ use crate::vision::{Report, TeamVictims};
 pub struct TeamVictimsModule {
     inbox: QueueReader<Message>,
     merge_radius: Input<f64>,
+    clock: Input<f64>,
     victims: Output<Path2>,
     found: Output<i64>,
     core: Option<TeamVictims>,
@@ -33,6 +34,11 @@ impl Module for TeamVictimsModule {
                 1.0,
                 Range::new(0.01, 100.0),
                 "reports this close are one victim, m",
+            ),
+            clock: ports.input(
+                "in/clock",
+                -1.0,
+                "simulated time, s, to say when each victim was found (link it to the world's out/simTime); negative (unlinked): not said",
             ),
             victims: ports.output(
                 "out/victims",
@@ -67,8 +73,13 @@ impl Module for TeamVictimsModule {
                 continue;
             };
             if let Report::New(i) = core.report(robot, p) {
+                let t = self.clock.value();
+                let when = match t >= 0.0 {
+                    true => format!(" at t = {t:.1} s"),
+                    false => String::new(),
+                };
                 petrel_actors::outln!(
-                    "[{}] victim {} at ({:.2}, {:.2}), found by {robot}",
+                    "[{}] victim {} at ({:.2}, {:.2}), found by {robot}{when}",
                     ctx.module(),
                     i + 1,
                     p.0.x,

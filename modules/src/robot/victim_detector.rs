@@ -12,6 +12,8 @@ pub struct VictimDetector {
     deblur: Input<f64>,
     roi: Input<Vec<f64>>,
     fov_deg: Input<f64>,
+    _exposure: Input<f64>,
+    _gain: Input<f64>,
     detections: Output<Detections>,
     seen: Output<bool>,
     brightness: Output<f64>,
@@ -31,6 +33,11 @@ impl Module for VictimDetector {
             deblur: ports.param_in("params/deblur", 0.0, Range::new(0.0, 4.0), "sharpening amount before detection, [0, 4], 0 = off (costs CPU); read every frame"),
             roi: ports.param("params/roi", vec![0.0, 0.5, 1.0, 1.0], "region searched, fractions `[x0, y0, x1, y1]` of the image, top-left origin"),
             fov_deg: ports.param_in("params/fov_deg", 60.0, Range::new(1.0, 179.0), "the camera's horizontal field of view, degrees"),
+            // What this detector needs from its camera: a driver whose settings are linked here
+            // follows them (a team robot's body in the world agent does; the detector itself
+            // only reads the images).
+            _exposure: ports.param_in("params/camera/exposure_ms", 10.0, Range::new(0.01, 200.0), "the camera exposure this detector asks of the driver, ms (0, 200] (context rules raise it in the dark)"),
+            _gain: ports.param_in("params/camera/gain", 1.0, Range::new(1.0, 16.0), "the camera gain this detector asks of the driver, [1, 16]"),
             detections: ports.output("out/detections", Detections::default(), "victims in the latest frame: bearing (rad, left positive), range (m), confidence"),
             seen: ports.output("out/victimSeen", false, "the latest frame holds a victim"),
             brightness: ports.output("out/brightness", 0.5, "mean grey level of the latest frame, 0..1"),

@@ -364,9 +364,10 @@ impl Module for SimWorld {
                 };
                 body.publish(out, vibration, now);
                 let due = out.odometry.stamp + 1e-9 >= body.next_frame;
-                let Some(cfg) = camera_config.as_ref().filter(|_| due) else {
+                let Some(world_cfg) = camera_config.as_ref().filter(|_| due) else {
                     continue;
                 };
+                let cfg = &body.camera(world_cfg)?;
                 body.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();
                 let motion = CameraMotion {
                     speed: out.speed,

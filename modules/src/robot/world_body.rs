@@ -13,6 +13,7 @@ use tokio::time::Instant;
 
 use petrel_actors::{FilePath, Pose2};
 
+use crate::sim::camera::CameraConfig;
 use crate::sim::{RobotId, RobotOutput};
 
 /// `params/bodies` of `sim.world`: the names of the `sim.body` modules it hosts, in order.
@@ -42,6 +43,8 @@ pub(super) struct BodyIo {
     vibration: RemoteValue,
     last_vibration: f64,
     sim_time: RemoteValue,
+    /// The camera settings of this body (`sim.body`'s `in/camera/...`), 0 = the world's.
+    camera_settings: Option<(String, PropertyHandle<f64>, PropertyHandle<f64>)>,
     /// The camera's own noise stream and the simulated time of its next frame.
     pub camera_rng: crate::seeded::SeededRng,
     pub next_frame: f64,
@@ -91,6 +94,14 @@ impl BodyIo {
             vibration: value(bb, &at("out/vibration")).await?,
             last_vibration: f64::NAN,
             sim_time: value(bb, &at("out/simTime")).await?,
+            // A single-robot world has none: its own params are the camera's settings.
+            camera_settings: match (
+                bb.handle::<f64>(&at("in/camera/exposure_ms")).await,
+                bb.handle::<f64>(&at("in/camera/gain")).await,
+            ) {
+                (Ok(e), Ok(g)) => Some((name.to_string(), e, g)),
+                _ => None,
+            },
             camera_rng: crate::seeded::seeded(camera_seed),
             next_frame: 0.0,
         })
@@ -127,6 +138,29 @@ impl BodyIo {
             self.last_vibration = vibration;
             self.vibration.write(any(vibration), now);
         }
+    }
+
+    /// The camera of this body: the world's, with the body's own exposure and gain where set.
+    pub fn camera(&self, world: &CameraConfig) -> anyhow::Result<CameraConfig> {
+        let Some((name, exposure, gain)) = &self.camera_settings else {
+            return Ok(world.clone());
+        };
+        let mut cfg = world.clone();
+        let (e, g) = (exposure.value(), gain.value());
+        if e != 0.0 {
+            cfg.exposure_ms = e;
+        }
+        if g != 0.0 {
+            cfg.gain = g;
+        }
+        cfg.validate().map_err(|e| {
+            anyhow::anyhow!(
+                "invalid camera setting of body `{name}` (`{name}/in/camera/...`): {}: {}",
+                e.param,
+                e.message
+            )
+        })?;
+        Ok(cfg)
     }
 
     /// Publishes a camera frame.

@@ -1,0 +1,271 @@
+//! `nav.team_search`: the coordinator's side of a team's search. It merges the robots' maps
+//! ([`merge_maps`]), finds the frontiers each present robot can reach on the merged map
+//! ([`explore`]) and hands them out, one per robot, nearest unclaimed first ([`Allocator`]).
+//! Each robot is a `nav.team_member` module of this agent, named as the robot's agent: a
+//! robot that leaves the team (`_team/members`) loses its frontier to the others.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use anyhow::bail;
+use petrel_actors::team::{RemoteFeed, RemoteValue, TeamMembers};
+use petrel_actors::types::Path2;
+use petrel_actors::{
+    AnyHandle, Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, PropertyHandle,
+    Range, Schedule, Unrecoverable,
+};
+
+use super::count;
+use super::team_member::MemberNames;
+use crate::nav::{explore, merge_maps, Allocator, Change, Exploration, FrontierParams, TeamLog};
+
+/// The module type `params/members` must name.
+const MEMBER_TYPE: &str = "nav.team_member";
+
+/// `nav.team_search`: see the module docs.
+pub struct TeamSearch {
+    members: Input<MemberNames>,
+    clock: Input<f64>,
+    replan_s: Input<f64>,
+    keep_radius: Input<f64>,
+    clearance: Input<f64>,
+    min_frontier_cells: Input<i64>,
+    blacklist_radius: Input<f64>,
+    timeout_s: Input<f64>,
+    map: Output<OccupancyGrid>,
+    frontiers: Output<i64>,
+    done: Output<bool>,
+    reassigned: Output<i64>,
+    state: Option<State>,
+}
+
+/// One robot's ports on the coordinator.
+struct Member {
+    name: String,
+    map: PropertyHandle<OccupancyGrid>,
+    pose: PropertyHandle<Pose2>,
+    given_up: PropertyHandle<Path2>,
+    target: RemoteValue,
+    told: Vec<f64>,
+}
+
+struct State {
+    members: Vec<Member>,
+    team: Option<AnyHandle>,
+    params: FrontierParams,
+    allocator: Allocator,
+    log: TeamLog,
+    last_plan: f64,
+}
+
+impl Module for TeamSearch {
+    const TYPE: &'static str = "nav.team_search";
+    const DESCRIPTION: &'static str =
+        "A team's shared search: merges its robots' maps, allocates the merged map's frontiers to the robots (nearest unclaimed, none shared), reassigns a departed robot's frontier.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        TeamSearch {
+            members: ports.param("params/members", MemberNames::default(), "the nav.team_member modules of this agent, one per robot, each named as its robot's agent"),
+            clock: ports.input("in/clock", 0.0, "simulated time, s (link it to the world's out/simTime)"),
+            replan_s: ports.param_in("params/replan_s", 1.0, Range::new(0.05, 1e4), "merge and allocate this often, simulated s"),
+            keep_radius: ports.param_in("params/keep_radius", 1.0, Range::new(0.0, 100.0), "a robot keeps its frontier while one stays this close to it; frontiers this close are one, m"),
+            clearance: ports.param_in("params/clearance", 0.3, Range::new(0.0, 5.0), "distance a robot's centre keeps from walls, m (frontiers closer are unreachable)"),
+            min_frontier_cells: ports.param_in("params/min_frontier_cells", 4, Range::new(1.0, 1e6), "smaller frontiers are ignored, cells"),
+            blacklist_radius: ports.param_in("params/blacklist_radius", 0.6, Range::new(0.01, 100.0), "frontiers this close to a target a robot gave up are skipped, m"),
+            timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time at which the search ends even with frontiers left (frontiers no robot manages to see), s; 0 = never"),
+            map: ports.output("out/map", OccupancyGrid::default(), "the merged map of the team"),
+            frontiers: ports.output("out/frontiers", 0, "frontiers of the merged map reachable by a robot, at the last allocation"),
+            done: ports.output("out/done", false, "the search is over: no robot can reach a frontier of the merged map"),
+            reassigned: ports.output("out/reassigned", 0, "frontiers of departed robots given to others"),
+            state: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.clock)
+    }
+
+    async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let names = self.members.get().0.clone();
+        // Naming the wrong modules will not get better with a restart.
+        let members = bind_members(ctx, &names)
+            .await
+            .map_err(|e| Unrecoverable(format!("{e:#}")))?;
+        let params = FrontierParams {
+            clearance: self.clearance.value(),
+            min_frontier_cells: count("min_frontier_cells", self.min_frontier_cells.value())?,
+            blacklist_radius: self.blacklist_radius.value(),
+            ..FrontierParams::default()
+        };
+        params.validate().map_err(|e| super::param_error(e, &[]))?;
+        self.state = Some(State {
+            members,
+            // Outside a team every member counts as present.
+            team: ctx.blackboard().any_handle("_team/members").await.ok(),
+            params,
+            allocator: Allocator::new(self.keep_radius.value()),
+            log: TeamLog::new(names.iter().cloned(), self.keep_radius.value()),
+            last_plan: f64::NEG_INFINITY,
+        });
+        Ok(())
+    }
+
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let t = self.clock.value();
+        let state = self
+            .state
+            .as_mut()
+            .expect("stepping only after a successful init");
+        let present = present(state);
+        for left in state.log.membership(&present, t) {
+            let held = match state.allocator.claim_of(&left) {
+                Some(p) => format!("its frontier ({:.2}, {:.2}) is free", p.0.x, p.0.y),
+                None => "it held no frontier".to_string(),
+            };
+            petrel_actors::outln!(
+                "[{}] t = {t:6.1} s  {left} left the team; {held}",
+                ctx.module()
+            );
+        }
+        if self.done.value() || t - state.last_plan < self.replan_s.value() {
+            return Ok(());
+        }
+        state.last_plan = t;
+        let maps: Vec<Arc<OccupancyGrid>> = state.members.iter().map(|m| m.map.get()).collect();
+        let refs: Vec<&OccupancyGrid> = maps.iter().map(|m| m.as_ref()).collect();
+        let Some((merged, _)) = merge_maps(&refs, state.params.occupied_threshold) else {
+            return Ok(());
+        };
+        let blacklist: Vec<Point2> = state
+            .members
+            .iter()
+            .flat_map(|m| m.given_up.get().points().to_vec())
+            .collect();
+        let mut candidates = BTreeMap::new();
+        let mut waiting = false;
+        for m in state.members.iter().filter(|m| present.contains(&m.name)) {
+            // A target the robot gave up is never its claim again.
+            if let Some(claim) = state.allocator.claim_of(&m.name) {
+                let near = |b: &Point2| (b.0 - claim.0).norm() <= state.params.blacklist_radius;
+                if m.given_up.get().points().iter().any(near) {
+                    state.allocator.release(&m.name);
+                }
+            }
+            match explore(&merged, m.pose.value(), &blacklist, &state.params) {
+                Exploration::Waiting => waiting = true,
+                Exploration::Done => {
+                    candidates.insert(m.name.clone(), Vec::new());
+                }
+                Exploration::Frontiers(list) => {
+                    candidates.insert(m.name.clone(), list);
+                }
+            }
+        }
+        let reachable = distinct(&candidates, self.keep_radius.value());
+        self.frontiers.set(reachable as i64);
+        self.map.set(merged);
+        for change in state.allocator.allocate(&candidates) {
+            if let Change::Assigned { robot, target } = &change {
+                if let Some(line) = state.log.assigned(robot, *target, t) {
+                    petrel_actors::outln!("[{}] t = {t:6.1} s  {line}", ctx.module());
+                    self.reassigned.set(self.reassigned.value() + 1);
+                }
+            }
+            if let Change::Released { robot, target } = &change {
+                state.log.released(robot, *target, !present.contains(robot));
+            }
+        }
+        let now = ctx.now();
+        for m in &mut state.members {
+            let target = state
+                .allocator
+                .claim_of(&m.name)
+                .map_or(Vec::new(), |p| vec![p.0.x, p.0.y]);
+            if target != m.told {
+                m.told = target.clone();
+                m.target.write(Arc::new(target), now);
+            }
+        }
+        let timeout = self.timeout_s.value();
+        if timeout > 0.0 && t >= timeout && reachable > 0 {
+            self.done.set(true);
+            state.log.done(t);
+            tracing::warn!(
+                frontiers = reachable,
+                "the team search ends at its time limit with frontiers left"
+            );
+            petrel_actors::outln!("[{}] t = {t:6.1} s  search ended at its time limit (params/timeout_s): {reachable} frontier(s) left", ctx.module());
+        } else if !waiting && !candidates.is_empty() && reachable == 0 {
+            self.done.set(true);
+            state.log.done(t);
+            petrel_actors::outln!(
+                "[{}] t = {t:6.1} s  search done: no frontier left on the merged map",
+                ctx.module()
+            );
+        }
+        Ok(())
+    }
+
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        if let Some(state) = &self.state {
+            petrel_actors::outln!("\n{}", state.log.summary());
+        }
+        Ok(())
+    }
+}
+
+/// The members of the team now (every one when the agent is not in a team).
+fn present(state: &State) -> Vec<String> {
+    let all = || state.members.iter().map(|m| m.name.clone()).collect();
+    let Some(team) = &state.team else {
+        return all();
+    };
+    match team.value().downcast_ref::<TeamMembers>() {
+        Some(members) => members.0.iter().map(|m| m.agent.clone()).collect(),
+        None => all(),
+    }
+}
+
+/// Frontiers reachable by some robot, those within `radius` of each other counted once.
+fn distinct(candidates: &BTreeMap<String, Vec<crate::nav::Frontier>>, radius: f64) -> usize {
+    let mut seen: Vec<Point2> = Vec::new();
+    for f in candidates.values().flatten() {
+        if !seen.iter().any(|p| (p.0 - f.target.0).norm() <= radius) {
+            seen.push(f.target);
+        }
+    }
+    seen.len()
+}
+
+/// Binds the ports of each `nav.team_member` named in `params/members`.
+async fn bind_members(ctx: &Context, names: &[String]) -> anyhow::Result<Vec<Member>> {
+    let bb = ctx.blackboard();
+    let listing = bb.listing().await?;
+    let mut members = Vec::new();
+    for (i, name) in names.iter().enumerate() {
+        if names[..i].contains(name) {
+            bail!("invalid parameter `params/members`: `{name}` is named twice; expected each robot once");
+        }
+        match listing.modules.iter().find(|m| &m.name == name) {
+            Some(m) if m.type_name == MEMBER_TYPE => {}
+            Some(m) => bail!("invalid parameter `params/members`: `{name}` is a {}, expected a {MEMBER_TYPE} module", m.type_name),
+            None => bail!("invalid parameter `params/members`: this agent has no module `{name}`; expected the names of {MEMBER_TYPE} modules"),
+        }
+        let at = |path: &str| format!("{name}/{path}");
+        let RemoteFeed::Value(target) = bb.feed(&at("out/target")).await? else {
+            bail!("`{name}/out/target` is a queue, expected a value");
+        };
+        members.push(Member {
+            name: name.clone(),
+            map: bb.handle(&at("in/map")).await?,
+            pose: bb.handle(&at("in/pose")).await?,
+            given_up: bb.handle(&at("in/givenUp")).await?,
+            target,
+            told: Vec::new(),
+        });
+    }
+    if members.is_empty() {
+        bail!("invalid parameter `params/members`: empty; expected the names of {MEMBER_TYPE} modules");
+    }
+    Ok(members)
+}
