@@ -4,7 +4,7 @@
 //! ends at the plan's goal with every victim of the floor found.
 
 use std::path::Path;
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Output, Stdio};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -91,16 +91,8 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
     let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-team"), &AGENTS);
-    let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .current_dir(dir.path())
-        .arg("run")
-        .args(&configs)
-        .args(["--for", "400s"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("petrel starts");
+    let bin = env!("CARGO_BIN_EXE_petrel");
+    let child = spawn_run(bin, dir.path(), &configs, "400s", Stdio::piped());
     let out = wait(child);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -150,16 +142,8 @@ fn a_robot_whose_agent_dies_at_a_set_time_hands_its_frontier_on_and_every_victim
     let _alone = alone();
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-dies"), &FAULT_AGENTS);
-    let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
-        .current_dir(dir.path())
-        .arg("run")
-        .args(&configs)
-        .args(["--for", "400s"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("petrel starts");
+    let bin = env!("CARGO_BIN_EXE_petrel");
+    let child = spawn_run(bin, dir.path(), &configs, "400s", Stdio::null());
     let out = wait(child);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -195,16 +179,13 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
     let (robot_1, others): (Vec<_>, Vec<_>) =
         configs.iter().partition(|c| c.ends_with("robot_1.ron"));
     let run = |configs: &[&String], stderr: Stdio| {
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .current_dir(dir.path())
-            .arg("run")
-            .args(configs)
-            .args(["--for", "400s"])
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(stderr)
-            .spawn()
-            .expect("petrel starts")
+        spawn_run(
+            env!("CARGO_BIN_EXE_petrel"),
+            dir.path(),
+            configs,
+            "400s",
+            stderr,
+        )
     };
     let mut team = run(&others, Stdio::piped());
     let mut victim = run(&robot_1, Stdio::piped());

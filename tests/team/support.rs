@@ -267,3 +267,24 @@ pub async fn wait_for<T: PropertyType>(
         }
     }
 }
+
+/// Starts `bin run CONFIGS --for RUN_FOR` in `dir`, standard output piped and standard error
+/// as asked: a whole team as one process, the way the rescue-team tests and measurements run it.
+pub fn spawn_run<S: AsRef<std::ffi::OsStr>>(
+    bin: &str,
+    dir: &std::path::Path,
+    configs: &[S],
+    run_for: &str,
+    stderr: std::process::Stdio,
+) -> std::process::Child {
+    std::process::Command::new(bin)
+        .current_dir(dir)
+        .arg("run")
+        .args(configs)
+        .args(["--for", run_for])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(stderr)
+        .spawn()
+        .expect("petrel starts")
+}

@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::support::{free_port, team_name};
+use crate::support::{free_port, spawn_run, team_name};
 
 /// Robots per run.
 const SIZES: [usize; 4] = [1, 2, 4, 8];
@@ -196,16 +196,7 @@ fn run(n: usize) -> Figures {
     let cpu_before = children_cpu();
     let started = Instant::now();
     let bin = std::env::var("PETREL_BIN").unwrap_or(env!("CARGO_BIN_EXE_petrel").into());
-    let child = Command::new(bin)
-        .current_dir(dir.path())
-        .arg("run")
-        .args(&configs)
-        .args(["--for", "1200s"])
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("petrel starts");
+    let child = spawn_run(&bin, dir.path(), &configs, "1200s", Stdio::null());
     let pid = child.id();
     // The kernel forgets a socket's counters when it closes: keep the last seen of each.
     let seen = Arc::new(Mutex::new(HashMap::<String, u64>::new()));
