@@ -86,6 +86,7 @@ struct Builder<'a> {
     conditions: Vec<String>,
 }
 
+#[derive(Clone, Copy)]
 enum Node {
     Place(usize),
     Transition(usize),
@@ -257,10 +258,7 @@ impl Builder<'_> {
             };
             let find = |end: &ArcEnd, which: &str| -> Result<Node, PlanError> {
                 let node = match end {
-                    ArcEnd::Id(id) => ids.get(&**id).map(|n| match n {
-                        Node::Place(i) => Node::Place(*i),
-                        Node::Transition(i) => Node::Transition(*i),
-                    }),
+                    ArcEnd::Id(id) => ids.get(&**id).copied(),
                     ArcEnd::Place(i) => (*i < places.len()).then_some(Node::Place(*i)),
                     ArcEnd::Transition(i) => {
                         (*i < transitions.len()).then_some(Node::Transition(*i))

@@ -146,12 +146,10 @@ impl Module for Mission {
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
         let mut fired_labels = Vec::new();
         for round in 1.. {
-            let report = run.round(now, secs, &self.flags.get());
+            let (report, labels) = run.round(now, secs, &self.flags.get());
             relink(ctx, &mut run.bound.relinks).await;
             fired += report.fired.len();
-            if !run.loops.looping() {
-                fired_labels.extend(run.labels(&report));
-            }
+            fired_labels.extend(labels);
             if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
                 break;
             }

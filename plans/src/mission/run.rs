@@ -39,8 +39,14 @@ pub(super) const MAX_ROUNDS: usize = 64;
 
 impl Run {
     /// One plan step at clock time `secs`: bring expressions up to date with changed
-    /// properties, then step.
-    pub fn round(&mut self, now: Instant, secs: f64, flags: &Flags) -> crate::exec::StepReport {
+    /// properties, then step. Returns the step's report and the labels of what it fired (none
+    /// while the plan fires in a circle: the loop report names it).
+    pub fn round(
+        &mut self,
+        now: Instant,
+        secs: f64,
+        flags: &Flags,
+    ) -> (crate::exec::StepReport, Vec<String>) {
         self.refresh(now);
         let mut env = MissionEnv {
             bound: &mut self.bound,
@@ -59,19 +65,19 @@ impl Run {
             self.note_loop(&report);
         }
         // A looping plan's firings were reported as one cycle: a line each would flood the log.
-        if !report.fired.is_empty()
-            && !self.loops.looping()
-            && tracing::enabled!(tracing::Level::INFO)
-        {
-            let fired = self.labels(&report);
+        let fired = match report.fired.is_empty() || self.loops.looping() {
+            true => Vec::new(),
+            false => self.labels(&report),
+        };
+        if !fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
             let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
             tracing::info!(?fired, ?calls, "plan step");
         }
-        report
+        (report, fired)
     }
 
     /// The transitions `report` fired, as the log and `out/firings` show them.
-    pub fn labels(&self, report: &crate::exec::StepReport) -> Vec<String> {
+    fn labels(&self, report: &crate::exec::StepReport) -> Vec<String> {
         report
             .fired
             .iter()
