@@ -68,12 +68,18 @@ async fn a_coordinator_dispatches_robot_actions_and_reads_robot_conditions() {
     .await;
     let running = t.boss.handle::<String>("mission/out/running").await;
     wait_for(&running, "r1's search running", |r| r == "r1#search_west").await;
-    // r2 reports its door open before r1 is done: the plan takes the `enter` branch.
+    // r2 reports its door open before r1 is done: the plan takes the `enter` branch. The
+    // report and r1's end travel from different agents, so wait until the coordinator heard it.
     t.r2.agent
         .blackboard()
         .set("probe/in/value", 9.0)
         .await
         .unwrap();
+    let heard = t.boss.handle::<String>("mission/out/robot_conditions").await;
+    wait_for(&heard, "r2's door open at the coordinator", |c| {
+        c == "r2#doorOpen=true"
+    })
+    .await;
     t.r1.agent
         .blackboard()
         .set("probe/in/value", 1.0)

@@ -41,6 +41,7 @@ pub struct Mission {
     _clock: Input<f64>,
     marking: Output<String>,
     running: Output<String>,
+    robot_conditions: Output<String>,
     result: Output<String>,
     fired: Output<i64>,
     wake: State<i64>,
@@ -72,6 +73,7 @@ impl Module for Mission {
             _clock: ports.input("in/clock", 0.0, "the agent's clock in seconds (link it to a simulator's out/simTime); unlinked: wall time"),
             marking: ports.output("out/marking", String::new(), "marked places, `label` or `label*n`, comma-separated"),
             running: ports.output("out/running", String::new(), "running actions, comma-separated"),
+            robot_conditions: ports.output("out/robot_conditions", String::new(), "other robots' conditions as the plan last heard them: `robot#cond=true`, `=false`, or `=?` (not heard yet, or the robot left), comma-separated"),
             result: ports.output("out/result", "running".to_string(), "running, goal or fail"),
             fired: ports.output("out/fired", 0, "transitions fired so far"),
             wake: ports.state("state/wake", 0, "bumped to make the mission step again: a held/age deadline passed, or many steps fired in a row"),
@@ -135,7 +137,9 @@ impl Module for Mission {
             }
             return Ok(());
         }
-        if !run.team.take_news(&self.inbox) {
+        let may_step = run.team.take_news(&self.inbox);
+        publish(&self.robot_conditions, run.team.dispatch.conditions_shown());
+        if !may_step {
             // Waiting for robots' conditions: the watches must still go out (and be answered).
             run.answer_watches(now, secs, &self.flags.get());
             run.team.send(&self.outbox);

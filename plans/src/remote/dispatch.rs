@@ -194,6 +194,20 @@ impl Dispatch {
         self.conditions.get(full).and_then(|c| c.2)
     }
 
+    /// The other robots' conditions as this plan sees them, `robot#cond=true`, `=false`,
+    /// or `=?` before the first value and after the robot left; comma-separated, sorted.
+    pub fn conditions_shown(&self) -> String {
+        let shown: Vec<String> = self
+            .conditions
+            .iter()
+            .map(|(full, (_, _, v))| match v {
+                Some(v) => format!("{full}={v}"),
+                None => format!("{full}=?"),
+            })
+            .collect();
+        shown.join(", ")
+    }
+
     /// A message from `from` (`agent/module`). Answers from robots the plan does not name, or
     /// about runs that are over, are ignored; a body that is not a team message is an error.
     pub fn receive(&mut self, from: &str, body: &str) -> Result<(), String> {

@@ -88,6 +88,7 @@ fn answers_finish_or_fail_the_run_they_name_and_stale_ones_are_dropped() {
 fn a_robot_leaving_fails_its_running_actions_and_forgets_its_conditions() {
     let mut d = Dispatch::new("boss", "ex", ["r1#go", "r1#look", "r2#go"], ["r1#seen"]);
     d.members(["r1", "r2"]);
+    assert_eq!(d.conditions_shown(), "r1#seen=?");
     d.call("r1#go", CallKind::Start);
     d.call("r2#go", CallKind::Start);
     let values = TeamMsg::Conditions {
@@ -95,6 +96,7 @@ fn a_robot_leaving_fails_its_running_actions_and_forgets_its_conditions() {
     };
     d.receive("r1/ex", &values.encode()).unwrap();
     assert_eq!(d.condition("r1#seen"), Some(true));
+    assert_eq!(d.conditions_shown(), "r1#seen=true");
     let gone = d.members(["r2"]);
     assert_eq!(
         gone,
@@ -105,6 +107,7 @@ fn a_robot_leaving_fails_its_running_actions_and_forgets_its_conditions() {
     );
     assert!(d.failed("r1#go") && !d.failed("r1#look") && !d.failed("r2#go"));
     assert_eq!(d.condition("r1#seen"), None);
+    assert_eq!(d.conditions_shown(), "r1#seen=?");
     // Starting an action of a robot that is gone fails it at once; nothing is sent.
     d.take_outgoing();
     d.call("r1#look", CallKind::Start);
