@@ -33,6 +33,17 @@ pub(crate) struct RawNet {
     pub transitions: Vec<RawTransition>,
     pub arcs: Vec<RawArc>,
     pub comments: Vec<Comment>,
+    /// The ids arcs name ([`ArcEnd::Named`], [`RawArc::id`]): a file's arcs refer to nodes by
+    /// id; the text compiler's arcs number them and leave this empty.
+    pub names: Vec<Box<str>>,
+}
+
+impl RawNet {
+    /// Keeps `id` for an arc to name; its number in [`RawNet::names`].
+    pub fn name(&mut self, id: &str) -> u32 {
+        self.names.push(id.into());
+        (self.names.len() - 1) as u32
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -50,29 +61,33 @@ pub(crate) struct RawTransition {
     pub position: Option<Position>,
 }
 
-/// One end of an arc: a node id as a file names it, or a node by number (the nets the text
-/// compiler makes: no id strings to format and look up, which a 100,000-action plan feels).
-#[derive(Debug, Clone)]
+/// One end of an arc: a node id as a file names it (its number in [`RawNet::names`]), or a
+/// node by number (the nets the text compiler makes: no id strings to format and look up,
+/// which a 100,000-action plan feels). Eight bytes, so an arc is 28: a long plan has twice
+/// as many arcs as nodes.
+#[derive(Debug, Clone, Copy)]
 pub(crate) enum ArcEnd {
-    Id(Box<str>),
-    Place(usize),
-    Transition(usize),
+    Named(u32),
+    Place(u32),
+    Transition(u32),
 }
 
-impl std::fmt::Display for ArcEnd {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl ArcEnd {
+    /// The end as a message names it.
+    fn text(self, names: &[Box<str>]) -> String {
         match self {
-            ArcEnd::Id(id) => write!(f, "{id}"),
-            ArcEnd::Place(i) => write!(f, "place #{i}"),
-            ArcEnd::Transition(i) => write!(f, "transition #{i}"),
+            ArcEnd::Named(n) => names[n as usize].to_string(),
+            ArcEnd::Place(i) => format!("place #{i}"),
+            ArcEnd::Transition(i) => format!("transition #{i}"),
         }
     }
 }
 
 #[derive(Debug, Clone)]
 pub(crate) struct RawArc {
-    /// The file's id for the arc (for messages); nets made in memory leave it out.
-    pub id: Option<Box<str>>,
+    /// The file's id for the arc (its number in [`RawNet::names`], for messages); nets made
+    /// in memory leave it out.
+    pub id: Option<u32>,
     pub source: ArcEnd,
     pub target: ArcEnd,
     pub weight: u32,
@@ -84,6 +99,15 @@ struct Builder<'a> {
     cond_ix: HashMap<String, usize>,
     executables: Vec<Executable>,
     conditions: Vec<String>,
+}
+
+/// An arc with its ends resolved: 16 bytes, as a long plan has many.
+struct Link {
+    transition: u32,
+    place: u32,
+    weight: u32,
+    /// From the place into the transition.
+    input: bool,
 }
 
 #[derive(Clone, Copy)]
@@ -136,6 +160,7 @@ impl Builder<'_> {
             transitions: raw_transitions,
             arcs,
             comments,
+            names,
         } = raw;
         // Ids and labels move into the plan: a copy of each would double a big plan's strings.
         let mut places = Vec::with_capacity(raw_places.len());
@@ -171,24 +196,39 @@ impl Builder<'_> {
                 position: t.position,
             })
             .collect();
-        let edges = self.edges(&places, &transitions, &arcs)?;
+        let edges = self.edges(&places, &transitions, &arcs, &names)?;
         drop(arcs);
-        for (tr, edge, input) in edges {
-            let side = if input {
-                &mut transitions[tr].inputs
+        drop(names);
+        // Each side sized before it is filled: growing and shrinking half a million small
+        // lists leaves the allocator holding the holes.
+        let mut sides = vec![(0u32, 0u32); transitions.len()];
+        for l in &edges {
+            let side = &mut sides[l.transition as usize];
+            match l.input {
+                true => side.0 += 1,
+                false => side.1 += 1,
+            }
+        }
+        for (t, (ins, outs)) in transitions.iter_mut().zip(sides) {
+            t.inputs.reserve_exact(ins as usize);
+            t.outputs.reserve_exact(outs as usize);
+        }
+        for l in edges {
+            let t = &mut transitions[l.transition as usize];
+            let side = if l.input {
+                &mut t.inputs
             } else {
-                &mut transitions[tr].outputs
+                &mut t.outputs
+            };
+            let edge = Edge {
+                place: l.place as usize,
+                weight: l.weight,
             };
             // Parallel arcs between the same pair add up, as in a multiset.
             match side.iter_mut().find(|e| e.place == edge.place) {
                 Some(e) => e.weight = e.weight.saturating_add(edge.weight),
                 None => side.push(edge),
             }
-        }
-        // A first push reserves room for four edges; most transitions keep one or two.
-        for t in &mut transitions {
-            t.inputs.shrink_to_fit();
-            t.outputs.shrink_to_fit();
         }
         for t in &mut transitions {
             self.resolve_label(t, &places)?;
@@ -220,18 +260,19 @@ impl Builder<'_> {
         })
     }
 
-    /// Each arc as (transition, edge, whether it is an input), with its ends checked: ids
-    /// unique and known, one end a place and the other a transition.
+    /// Each arc as a [`Link`], with its ends checked: ids unique and known, one end a place
+    /// and the other a transition.
     fn edges(
         &self,
         places: &[Place],
         transitions: &[Transition],
         arcs: &[RawArc],
-    ) -> Result<Vec<(usize, Edge, bool)>, PlanError> {
+        names: &[Box<str>],
+    ) -> Result<Vec<Link>, PlanError> {
         let mut ids: HashMap<&str, Node> = HashMap::new();
         // A net made in memory numbers its arcs' ends and its ids are unique by construction:
         // a map of half a million ids would be the biggest thing in a long plan's check.
-        let named = |e: &ArcEnd| matches!(e, ArcEnd::Id(_));
+        let named = |e: &ArcEnd| matches!(e, ArcEnd::Named(_));
         let numbered =
             !arcs.is_empty() && !arcs.iter().any(|a| named(&a.source) || named(&a.target));
         let (places_named, transitions_named) = match numbered {
@@ -252,37 +293,46 @@ impl Builder<'_> {
         }
         let mut edges = Vec::with_capacity(arcs.len());
         for (k, a) in arcs.iter().enumerate() {
-            let arc = || match &a.id {
-                Some(id) => format!("arc '{id}'"),
+            let arc = || match a.id {
+                Some(id) => format!("arc '{}'", names[id as usize]),
                 None => format!("arc #{k}"),
             };
-            let find = |end: &ArcEnd, which: &str| -> Result<Node, PlanError> {
+            let find = |end: ArcEnd, which: &str| -> Result<Node, PlanError> {
                 let node = match end {
-                    ArcEnd::Id(id) => ids.get(&**id).copied(),
-                    ArcEnd::Place(i) => (*i < places.len()).then_some(Node::Place(*i)),
+                    ArcEnd::Named(n) => ids.get(&*names[n as usize]).copied(),
+                    ArcEnd::Place(i) => {
+                        let i = i as usize;
+                        (i < places.len()).then_some(Node::Place(i))
+                    }
                     ArcEnd::Transition(i) => {
-                        (*i < transitions.len()).then_some(Node::Transition(*i))
+                        let i = i as usize;
+                        (i < transitions.len()).then_some(Node::Transition(i))
                     }
                 };
                 node.ok_or_else(|| {
                     self.pnml_err(
                         arc(),
-                        format!("{which} '{end}' is not a place or transition id"),
+                        format!(
+                            "{which} '{}' is not a place or transition id",
+                            end.text(names)
+                        ),
                     )
                 })
             };
-            let (s, t) = (find(&a.source, "source")?, find(&a.target, "target")?);
-            let edge = |p: usize| Edge {
-                place: p,
+            let (s, t) = (find(a.source, "source")?, find(a.target, "target")?);
+            let link = |transition: usize, place: usize, input: bool| Link {
+                transition: transition as u32,
+                place: place as u32,
                 weight: a.weight,
+                input,
             };
             edges.push(match (s, t) {
-                (Node::Place(p), Node::Transition(t)) => (t, edge(p), true),
-                (Node::Transition(t), Node::Place(p)) => (t, edge(p), false),
+                (Node::Place(p), Node::Transition(t)) => link(t, p, true),
+                (Node::Transition(t), Node::Place(p)) => link(t, p, false),
                 (Node::Place(_), Node::Place(_)) => {
                     return Err(self.pnml_err(
                         arc(),
-                        format!("joins two places ('{}' -> '{}'); an arc must join a place and a transition", a.source, a.target),
+                        format!("joins two places ('{}' -> '{}'); an arc must join a place and a transition", a.source.text(names), a.target.text(names)),
                     ))
                 }
                 (Node::Transition(_), Node::Transition(_)) => {
@@ -290,7 +340,8 @@ impl Builder<'_> {
                         arc(),
                         format!(
                             "joins two transitions ('{}' -> '{}'); an arc must join a place and a transition",
-                            a.source, a.target
+                            a.source.text(names),
+                            a.target.text(names)
                         ),
                     ))
                 }

@@ -131,10 +131,44 @@ pub struct Plan {
 pub(crate) struct Sources {
     /// The plan file.
     pub file: String,
-    /// Line of each action's first occurrence in the plan file.
-    pub action_lines: std::collections::HashMap<String, u32>,
-    /// Per transition index, what the user wrote that made it (an action, a rule).
-    pub origins: std::collections::HashMap<usize, std::sync::Arc<str>>,
+    /// Line of each action's first occurrence in the plan file (the key is shared with
+    /// [`Origin::Action`]: one copy of each name).
+    pub action_lines: std::collections::HashMap<Arc<str>, u32>,
+    /// What the user wrote that made each transition, by runs of consecutive transitions
+    /// (first, past the last, origin), in increasing order: a map entry per transition would
+    /// weigh more than the transition.
+    pub origins: Vec<(u32, u32, Origin)>,
+}
+
+/// What the user wrote that made a run of transitions.
+#[derive(Debug, Clone)]
+pub(crate) enum Origin {
+    /// Action `name` written at this line of the plan file.
+    Action { name: Arc<str>, line: u32 },
+    /// An execution rule, already said ("the rule at r.er:2 for `a`").
+    Rule(Arc<str>),
+}
+
+impl Sources {
+    /// Marks transitions `first..past` as made by `origin`; runs come in increasing order.
+    pub fn mark(&mut self, first: usize, past: usize, origin: Origin) {
+        debug_assert!(self.origins.last().is_none_or(|r| r.1 as usize <= first));
+        if first < past {
+            self.origins.push((first as u32, past as u32, origin));
+        }
+    }
+
+    /// The origin of transition `t`, as a message says it.
+    fn origin(&self, t: usize) -> Option<String> {
+        let t = u32::try_from(t).ok()?;
+        let i = self.origins.partition_point(|r| r.1 <= t);
+        let (first, _, origin) = self.origins.get(i).filter(|r| r.0 <= t)?;
+        debug_assert!(*first <= t);
+        Some(match origin {
+            Origin::Action { name, line } => format!("action `{name}` at {}:{line}", self.file),
+            Origin::Rule(text) => text.to_string(),
+        })
+    }
 }
 
 impl Plan {
@@ -201,8 +235,8 @@ impl Plan {
     }
 
     /// What the user wrote that made transition `t` (text plans): "the rule at r.er:2 (...)".
-    pub fn origin(&self, t: usize) -> Option<&str> {
-        self.sources.origins.get(&t).map(|o| &**o)
+    pub fn origin(&self, t: usize) -> Option<String> {
+        self.sources.origin(t)
     }
 
     pub(crate) fn set_subplan(&mut self, exec: usize, plan: Arc<Plan>) {

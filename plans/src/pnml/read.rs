@@ -143,12 +143,13 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
                         })?,
                     None => 1,
                 };
-                raw.arcs.push(RawArc {
-                    id: Some(id().into()),
-                    source: ArcEnd::Id(source.into()),
-                    target: ArcEnd::Id(target.into()),
+                let arc = RawArc {
+                    id: Some(raw.name(&id())),
+                    source: ArcEnd::Named(raw.name(&source)),
+                    target: ArcEnd::Named(raw.name(&target)),
                     weight,
-                });
+                };
+                raw.arcs.push(arc);
             }
             "comment" => {
                 let text = value(n, &["text", "value"]).unwrap_or_default();

@@ -13,7 +13,7 @@ use crate::model::Plan;
 
 /// Where a plan action sits, for execution rules.
 struct Occurrence {
-    name: String,
+    name: std::sync::Arc<str>,
     before: usize,
     exec: usize,
     after: usize,
@@ -69,10 +69,10 @@ impl Net<'_> {
             position: None,
         });
         for &p in ins {
-            self.arc(ArcEnd::Place(p), ArcEnd::Transition(i));
+            self.arc(ArcEnd::Place(p as u32), ArcEnd::Transition(i as u32));
         }
         for &p in outs {
-            self.arc(ArcEnd::Transition(i), ArcEnd::Place(p));
+            self.arc(ArcEnd::Transition(i as u32), ArcEnd::Place(p as u32));
         }
         i
     }
@@ -179,9 +179,9 @@ impl Net<'_> {
                 rules,
                 at,
             } => {
-                self.written(name, *at);
-                let (exec, after) = self.action(cur, name);
-                self.own_last(2, name, *at);
+                let (name, line) = self.written(name, *at);
+                let (exec, after) = self.action(cur, &name);
+                self.own_last(2, &name, line);
                 self.occurrence(name, cur, exec, after, rules);
                 Some(after)
             }
@@ -191,12 +191,12 @@ impl Net<'_> {
                 rules,
                 at,
             } => {
-                self.written(name, *at);
+                let (name, line) = self.written(name, *at);
                 let (pa, pw) = (self.place(""), self.place(""));
                 self.trans("[]", &[cur], &[pa, pw]);
-                let (exec, end_a) = self.action(pa, name);
-                self.own_last(2, name, *at);
-                self.occurrence(name, pa, exec, end_a, rules);
+                let (exec, end_a) = self.action(pa, &name);
+                self.own_last(2, &name, line);
+                self.occurrence(name.clone(), pa, exec, end_a, rules);
                 let wait = format!("wait_{secs}");
                 let (wexec, end_w) = self.action(pw, &wait);
                 let next = self.place("");
@@ -225,9 +225,16 @@ impl Net<'_> {
         }
     }
 
-    fn occurrence(&mut self, name: &str, before: usize, exec: usize, after: usize, rules: &[Rule]) {
+    fn occurrence(
+        &mut self,
+        name: std::sync::Arc<str>,
+        before: usize,
+        exec: usize,
+        after: usize,
+        rules: &[Rule],
+    ) {
         self.occurrences.push(Occurrence {
-            name: name.to_string(),
+            name,
             before,
             exec,
             after,
@@ -236,24 +243,30 @@ impl Net<'_> {
         self.inline.extend(rules.iter().map(|r| (i, r.clone())));
     }
 
-    /// Records where action `name` is written (its first occurrence) and that the transitions
-    /// made next are its own.
-    fn written(&mut self, name: &str, at: usize) {
+    /// Records where action `name` is written (its first occurrence); returns the one shared
+    /// copy of its name and the line of this occurrence.
+    fn written(&mut self, name: &str, at: usize) -> (std::sync::Arc<str>, u32) {
         let line = self.lines.line(at) as u32;
-        self.sources
-            .action_lines
-            .entry(name.to_string())
-            .or_insert(line);
+        let lines = &mut self.sources.action_lines;
+        let name = match lines.get_key_value(name) {
+            Some((shared, _)) => shared.clone(),
+            None => {
+                let shared: std::sync::Arc<str> = name.into();
+                lines.insert(shared.clone(), line);
+                shared
+            }
+        };
+        (name, line)
     }
 
-    /// Marks the last `n` transitions made as action `name`'s (written at byte `at`).
-    fn own_last(&mut self, n: usize, name: &str, at: usize) {
-        let line = self.lines.line(at);
-        let origin: std::sync::Arc<str> = format!("action `{name}` at {}:{line}", self.file).into();
+    /// Marks the last `n` transitions made as action `name`'s (written at `line`).
+    fn own_last(&mut self, n: usize, name: &std::sync::Arc<str>, line: u32) {
         let len = self.raw.transitions.len();
-        for t in len.saturating_sub(n)..len {
-            self.sources.origins.insert(t, origin.clone());
-        }
+        let origin = crate::model::Origin::Action {
+            name: name.clone(),
+            line,
+        };
+        self.sources.mark(len.saturating_sub(n), len, origin);
     }
 
     fn fail_place(&mut self) -> usize {
@@ -297,11 +310,9 @@ impl Net<'_> {
         };
         let last = self.trans(" ", &[cur], &[target]);
         // Every transition of the recovery is the rule's, for messages.
-        let origin: std::sync::Arc<str> =
-            format!("the rule at {} for `{name}`", rule.origin).into();
-        for t in first..=last {
-            self.sources.origins.insert(t, origin.clone());
-        }
+        let origin = format!("the rule at {} for `{name}`", rule.origin);
+        let origin = crate::model::Origin::Rule(origin.into());
+        self.sources.mark(first, last + 1, origin);
     }
 }
 
@@ -365,7 +376,7 @@ pub fn compile_text(
                 format!("no {label} in the plan"),
             ));
         };
-        net.arc(ArcEnd::Transition(t), ArcEnd::Place(p));
+        net.arc(ArcEnd::Transition(t as u32), ArcEnd::Place(p as u32));
     }
     for rule in &rules {
         for occ in 0..net.occurrences.len() {
