@@ -39,6 +39,9 @@ pub(crate) fn write(registry: &Registry) -> String {
         let mut capacities = Vec::new();
         for (key, entry) in registry.entries().filter(|(k, _)| k.starts_with(&prefix)) {
             let path = &key[prefix.len()..];
+            if let Some(capacity) = Registry::input_capacity(entry) {
+                capacities.push(format!("{path:?}: {capacity}"));
+            }
             if let Some(remote) = &entry.remote {
                 links.push(format!("{path:?}: {}", remote.to_ron()));
                 continue;

@@ -33,10 +33,15 @@ async fn a_remote_value_feeds_an_input_like_a_local_link() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_remote_queue_keeps_order_and_loses_nothing() {
+    // Room for every item the test waits for and more: a queue drops its oldest items for a
+    // reader that falls behind (counted, as a gap), and on a loaded machine the exporting task
+    // (or the consumer) may not run for a while. This test is about the transport: order and no loss on the wire.
     let a_modules = r#"(name: "producer", type: "demo.producer",
-        values: {"params/period_ms": 2, "params/batch": 5, "enabled": false}),"#;
+        values: {"params/period_ms": 2, "params/batch": 5, "enabled": false},
+        capacities: {"out/items": 100000}),"#;
     let b_modules = r#"(name: "consumer", type: "demo.consumer",
-        links: {"in/items": (from: "petrel://a/producer/out/items", mode: on_change, reliability: reliable)}),"#;
+        links: {"in/items": (from: "petrel://a/producer/out/items", mode: on_change, reliability: reliable)},
+        capacities: {"in/items": 100000}),"#;
     let (a, b) = pair("queue", ("", a_modules), ("", b_modules)).await;
     // The consumer counts gaps from item 0: produce only once the stream is open.
     let status = b
@@ -117,7 +122,9 @@ async fn a_snapshot_keeps_the_team_and_remote_links_with_their_settings() {
         r#"remote_write: ["scale/params/*"]"#,
         r#"
         (name: "scale", type: "demo.scale",
-         links: {"in/value": (from: "petrel://a/count/out/value", mode: periodic(ms: 200), reliability: best_effort)}),"#,
+         links: {"in/value": (from: "petrel://a/count/out/value", mode: periodic(ms: 200), reliability: best_effort)}),
+        (name: "consumer", type: "demo.consumer",
+         links: {"in/items": "petrel://a/producer/out/items"}, capacities: {"in/items": 1024}),"#,
     );
     let file = petrel::actors::ConfigFile::parse("b.ron", &text).unwrap();
     let agent = petrel::actors::Agent::start(&file, &registry())
@@ -134,6 +141,13 @@ async fn a_snapshot_keeps_the_team_and_remote_links_with_their_settings() {
     assert_eq!(
         (qos.mode, qos.reliability),
         (Mode::Periodic { ms: 200 }, Reliability::BestEffort)
+    );
+    // The queue the team feeds the consumer's input keeps its configured size.
+    let consumer = &again.config.modules[1];
+    assert_eq!(
+        consumer.capacities.get("in/items"),
+        Some(&1024),
+        "{snapshot}"
     );
     again
         .build(&registry())

@@ -20,14 +20,24 @@ struct Run {
 struct Watcher {
     conditions: Vec<String>,
     sent: BTreeMap<String, bool>,
+    /// Its agent is not in the team now: nothing is sent until it is back.
+    away: bool,
 }
 
 /// A robot's executor core (see the module docs): which actions run for whom, and what to
 /// send back.
+///
+/// Two agents need not see a departure alike: under load one side's lease can lapse and come
+/// back while the other never noticed. So an agent seen leaving keeps its watches (paused,
+/// and sent every value again when it is back: it missed the changes), and the runs it had
+/// started here, which stopped when it left, are answered as failed when it is back: its plan
+/// may still wait for them.
 #[derive(Debug, Clone, Default)]
 pub struct Serve {
     runs: BTreeMap<String, Run>,
     watchers: BTreeMap<String, Watcher>,
+    /// Runs stopped because their coordinator left, by action: answered when it is back.
+    orphans: Vec<(String, Run)>,
     outgoing: Vec<Outgoing>,
 }
 
@@ -65,7 +75,7 @@ impl Serve {
             TeamMsg::Watch { conditions } => {
                 let w = Watcher {
                     conditions,
-                    sent: BTreeMap::new(),
+                    ..Watcher::default()
                 };
                 self.watchers.insert(from.to_string(), w);
                 Ok(None)
@@ -77,9 +87,9 @@ impl Serve {
         }
     }
 
-    /// Whether some agent watches conditions of this one.
+    /// Whether some agent in the team watches conditions of this one.
     pub fn has_watchers(&self) -> bool {
-        !self.watchers.is_empty()
+        self.watchers.values().any(|w| !w.away)
     }
 
     /// The actions running now, for whom.
@@ -109,7 +119,7 @@ impl Serve {
                 self.outgoing.push(Outgoing { to, body });
             }
         }
-        for (to, w) in &mut self.watchers {
+        for (to, w) in self.watchers.iter_mut().filter(|(_, w)| !w.away) {
             let mut values = BTreeMap::new();
             for c in &w.conditions {
                 let v = condition(c).unwrap_or(false);
@@ -129,21 +139,54 @@ impl Serve {
     }
 
     /// The team's members changed: actions started by an agent no longer present are
-    /// dropped and returned (to be stopped: nobody will end them), and its watches end.
+    /// dropped and returned (to be stopped: nobody will end them), and its watches pause.
+    /// An agent back in the team gets every value it watches, and a failed answer for each
+    /// run that stopped while it was away.
     pub fn members<'a>(&mut self, present: impl IntoIterator<Item = &'a str>) -> Vec<String> {
         let present: BTreeSet<&str> = present.into_iter().collect();
         let gone = |from: &str| !present.contains(from.split('/').next().unwrap_or(from));
-        self.watchers.retain(|from, _| !gone(from));
-        let orphans: Vec<String> = self
+        for (from, w) in &mut self.watchers {
+            match (gone(from), w.away) {
+                (true, false) => w.away = true,
+                (false, true) => {
+                    w.away = false;
+                    w.sent.clear();
+                }
+                _ => {}
+            }
+        }
+        let (back, away): (Vec<_>, Vec<_>) = std::mem::take(&mut self.orphans)
+            .into_iter()
+            .partition(|(_, r)| !gone(&r.from));
+        self.orphans = away;
+        for (action, r) in back {
+            let done = TeamMsg::Done {
+                action,
+                run: r.run,
+                failed: true,
+            };
+            self.outgoing.push(Outgoing {
+                to: r.from,
+                body: done.encode(),
+            });
+        }
+        let stopped: Vec<String> = self
             .runs
             .iter()
             .filter(|(_, r)| gone(&r.from))
             .map(|(a, _)| a.clone())
             .collect();
-        for a in &orphans {
-            self.runs.remove(a);
+        for a in &stopped {
+            if let Some(r) = self.runs.remove(a) {
+                if !r.answered {
+                    // One answer per action and coordinator: an older run of it is moot.
+                    self.orphans
+                        .retain(|(o, run)| !(o == a && run.from == r.from));
+                    self.orphans.push((a.clone(), r));
+                }
+            }
         }
-        orphans
+        stopped
     }
 
     /// The messages to send, in order.

@@ -193,6 +193,51 @@ fn an_executor_drops_the_actions_of_a_coordinator_that_left() {
     assert_eq!(s.running().collect::<Vec<_>>(), [("look", "boss2/m")]);
 }
 
+#[test]
+fn an_agent_seen_leaving_and_back_gets_its_watched_values_again_and_its_stopped_runs_failed() {
+    let mut s = Serve::new();
+    s.receive("boss/m", &call("go", "start", 4).encode())
+        .unwrap();
+    let watch = TeamMsg::Watch {
+        conditions: vec!["seen".into()],
+    };
+    s.receive("boss/m", &watch.encode()).unwrap();
+    s.poll(|_| (false, false), |_| Some(false));
+    s.take_outgoing();
+    // Only this side saw boss go (its lease lapsed under load): the run stops here, and the
+    // change of `seen` while boss is away is sent to nobody.
+    assert_eq!(s.members(["r1"]), ["go"]);
+    s.poll(|_| (false, false), |_| Some(true));
+    assert!(s.take_outgoing().is_empty() && !s.has_watchers());
+    // boss never saw itself leave, so it sends no new watch: it is sent what it missed.
+    assert!(s.members(["r1", "boss"]).is_empty());
+    s.poll(|_| (false, false), |_| Some(true));
+    assert_eq!(
+        bodies(&s.take_outgoing()),
+        [
+            (
+                "boss/m".to_string(),
+                TeamMsg::Done {
+                    action: "go".into(),
+                    run: 4,
+                    failed: true
+                }
+            ),
+            (
+                "boss/m".to_string(),
+                TeamMsg::Conditions {
+                    values: [("seen".to_string(), true)].into()
+                }
+            ),
+        ]
+    );
+    // Answered once: another flap sends only the values again.
+    s.members(["r1"]);
+    s.members(["r1", "boss"]);
+    s.poll(|_| (false, false), |_| Some(true));
+    assert_eq!(bodies(&s.take_outgoing()).len(), 1);
+}
+
 /// A team plan stepped against a [`Dispatch`], with robots whose executors are [`Serve`]s
 /// and whose actions finish when the test says: the whole exchange, without a network.
 mod plan_over_a_team {

@@ -504,25 +504,38 @@ impl Registry {
     /// Sets the capacity of an output queue: 1 to [`MAX_QUEUE_CAPACITY`] items.
     pub fn set_capacity(&mut self, address: &str, capacity: usize) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
-        match &self.entries[&key].handle {
-            Handle::QueueOut(_) if !(1..=MAX_QUEUE_CAPACITY).contains(&capacity) => {
-                Err(BlackboardError::OutOfRange {
+        let entry = &self.entries[&key];
+        // An input's own queue holds what another agent (a remote link) or a replay feeds it;
+        // a local link reads the output queue, whose capacity is the one that counts then.
+        let core = match (&entry.handle, &entry.own_queue) {
+            (Handle::QueueOut(core), _) => core,
+            (Handle::QueueIn(_), Some(own)) => own,
+            _ => {
+                return Err(BlackboardError::BadValue {
                     key,
-                    value: capacity.to_string(),
-                    range: format!("a capacity in 1..={MAX_QUEUE_CAPACITY}"),
-                    doc: "items an output queue holds until every reader has taken them; 0 could hold nothing".into(),
+                    expected: "a queue",
+                    reason: "only queues have a capacity".into(),
                 })
             }
-            Handle::QueueOut(core) => {
-                core.set_capacity(capacity);
-                Ok(())
-            }
-            _ => Err(BlackboardError::BadValue {
+        };
+        if !(1..=MAX_QUEUE_CAPACITY).contains(&capacity) {
+            return Err(BlackboardError::OutOfRange {
                 key,
-                expected: "an output queue",
-                reason: "only output queues have a capacity".into(),
-            }),
+                value: capacity.to_string(),
+                range: format!("a capacity in 1..={MAX_QUEUE_CAPACITY}"),
+                doc: "items a queue holds until every reader has taken them; 0 could hold nothing"
+                    .into(),
+            });
         }
+        core.set_capacity(capacity);
+        Ok(())
+    }
+
+    /// The capacity of queue input `entry`'s own queue (what a remote link or a replay feeds
+    /// it), when a config changed it from the default.
+    pub(crate) fn input_capacity(entry: &Entry) -> Option<usize> {
+        let own = entry.own_queue.as_ref()?;
+        (own.capacity() != crate::queue::DEFAULT_CAPACITY).then(|| own.capacity())
     }
 
     /// Every property with its current own value (not its link target's), links, and queue
