@@ -30,6 +30,15 @@ pub(crate) async fn start(
         source.plans = plans_of(agent).await;
         sources.push(source);
     }
+    serve(addr, token, sources).await
+}
+
+/// Starts the console on `addr` for `sources`, printing where it is (and a generated token).
+pub(crate) async fn serve(
+    addr: SocketAddr,
+    token: Option<String>,
+    sources: Vec<AgentSource>,
+) -> Result<Console, String> {
     let logs = LogTail::default();
     *LOG_TAIL.write().unwrap_or_else(|e| e.into_inner()) = Some(logs.clone());
     let console = Console::start(ConsoleOptions { addr, token }, sources, logs)
@@ -58,7 +67,7 @@ async fn plans_of(agent: &Agent) -> Vec<PlanGraph> {
     let Ok(listing) = agent.blackboard().listing().await else {
         return Vec::new();
     };
-    let mut plans = Vec::new();
+    let mut files = Vec::new();
     for m in listing
         .modules
         .iter()
@@ -71,12 +80,22 @@ async fn plans_of(agent: &Agent) -> Vec<PlanGraph> {
         let rules = bb
             .get::<FilePath>(&format!("{}/params/rules", m.name))
             .await
-            .ok()
-            .filter(|r| !r.0.as_os_str().is_empty());
+            .ok();
+        files.push((m.name.clone(), (*path).clone(), rules.map(|r| (*r).clone())));
+    }
+    plans_from(files)
+}
+
+/// The plans of mission modules, from (module, plan file, rules file) (a plan that does not
+/// load is left out: the mission module reports why).
+pub(crate) fn plans_from(files: Vec<(String, FilePath, Option<FilePath>)>) -> Vec<PlanGraph> {
+    let mut plans = Vec::new();
+    for (module, path, rules) in files {
+        let rules = rules.filter(|r| !r.0.as_os_str().is_empty());
         match petrel_plans::load_plan(&path.0, rules.as_ref().map(|r| r.0.as_path())) {
-            Ok(loaded) => plans.push(plan_graph(&m.name, &loaded.plan)),
+            Ok(loaded) => plans.push(plan_graph(&module, &loaded.plan)),
             Err(e) => {
-                tracing::warn!(module = %m.name, error = %e, "the console cannot draw this plan")
+                tracing::warn!(%module, error = %e, "the console cannot draw this plan")
             }
         }
     }

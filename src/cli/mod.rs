@@ -1,6 +1,7 @@
 //! The `petrel` command line: `run`, `check`, `modules`, `plan`, and the tools that attach to
 //! running agents (`ls`, `get`, `set`).
 
+mod attach;
 mod check;
 pub(crate) use check::check_all;
 mod chrome;
@@ -20,6 +21,7 @@ mod record_log;
 mod remote;
 mod run;
 mod stop_guard;
+mod team_agent;
 mod top;
 mod trace;
 
@@ -155,6 +157,9 @@ enum Command {
         #[command(flatten)]
         reach: remote::Reach,
     },
+    /// Serves the web console for agents already running (every `petrel run` on this machine,
+    /// or those of `--team`), attached over their teams; agents are shown as they come and go.
+    Console(attach::ConsoleArgs),
     /// Recordings (MCAP): `record info FILE` shows channels, types, counts, rates, duration
     /// and drops.
     Record {
@@ -337,6 +342,7 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             count,
             reach,
         } => follow::events(&reach, agent.as_deref(), count),
+        Command::Console(args) => attach::run(args),
         Command::Ls { agent, reach } => remote::list(&reach, agent.as_deref()),
         Command::Get { url, reach } => remote::property(&reach, &url, remote::Request::Get),
         Command::Set { url, value, reach } => {

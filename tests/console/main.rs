@@ -2,6 +2,7 @@
 //! `petrel` binary's flags, and the page in a real headless browser.
 
 mod api;
+mod attach;
 mod browser;
 mod cli;
 mod map;

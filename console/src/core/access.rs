@@ -164,8 +164,14 @@ pub fn writable(kind: PropertyKind) -> bool {
     matches!(kind, PropertyKind::Param | PropertyKind::Control)
 }
 
+/// [`writable`] for a kind as listings name it (`param`, `control`, `output`, ...): what a
+/// remote agent's listing says.
+pub fn writable_named(kind: &str) -> bool {
+    matches!(kind, "param" | "control")
+}
+
 /// Why a write was refused, in words for the field it came from.
-pub fn refusal(key: &str, kind: PropertyKind) -> String {
+pub fn refusal(key: &str, kind: impl std::fmt::Display) -> String {
     format!(
         "`{key}` ({kind}) cannot be set from the console: only params/ and control/ properties can"
     )
