@@ -22,6 +22,7 @@
 //! ```
 
 pub mod core;
+pub mod live;
 mod logs;
 mod shell;
 pub mod source;
@@ -31,7 +32,7 @@ use std::net::SocketAddr;
 pub use crate::core::access::BindError;
 pub use crate::core::plan::{PlaceView, PlanGraph, TransitionView};
 pub use logs::{LogLine, LogTail, LOG_LINES};
-pub use shell::Console;
+pub use shell::{Console, FoxgloveServer};
 pub use source::{AgentSource, Backend, RemoteAgent, RemoteEvent, RemoteSample, RemoteWatch};
 
 /// Where the console listens, and its token.

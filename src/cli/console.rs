@@ -61,6 +61,43 @@ pub(crate) async fn stop(console: Console) {
     *LOG_TAIL.write().unwrap_or_else(|e| e.into_inner()) = None;
 }
 
+/// What a run serves to watch it: the web console (`--console`), the Foxglove live view
+/// (`--foxglove`).
+#[derive(Default)]
+pub(crate) struct Views {
+    console: Option<Console>,
+    foxglove: Option<petrel_console::FoxgloveServer>,
+}
+
+/// Starts the views `args` ask for.
+pub(crate) async fn start_views(args: &super::RunArgs, agents: &[Agent]) -> Result<Views, String> {
+    let mut views = Views::default();
+    if let Some(addr) = args.console {
+        views.console = Some(start(addr, args.console_token.clone(), agents).await?);
+    }
+    if let Some(addr) = args.foxglove {
+        let format = args.record_format.map(Into::into);
+        match super::foxglove::start(addr, format, agents).await {
+            Ok(server) => views.foxglove = Some(server),
+            Err(e) => {
+                stop_views(views).await;
+                return Err(e);
+            }
+        }
+    }
+    Ok(views)
+}
+
+/// Stops the views.
+pub(crate) async fn stop_views(views: Views) {
+    if let Some(console) = views.console {
+        stop(console).await;
+    }
+    if let Some(server) = views.foxglove {
+        server.stop().await;
+    }
+}
+
 /// The plans of `agent`'s `mission.pnp` modules, from the files their parameters name (a plan
 /// that does not load is left out: the mission module reports why).
 async fn plans_of(agent: &Agent) -> Vec<PlanGraph> {

@@ -9,6 +9,7 @@ pub mod console;
 mod console_log;
 mod exits;
 mod follow;
+mod foxglove;
 mod graph;
 mod listing;
 mod logging;
@@ -268,6 +269,10 @@ pub(crate) struct RunArgs {
     /// required beyond loopback, where one is generated and printed if not given.
     #[arg(long, value_name = "TOKEN", requires = "console")]
     console_token: Option<String>,
+    /// Serve the Foxglove live view here (`127.0.0.1:8765`): the Foxglove WebSocket protocol
+    /// with the channels and schemas of `--record` (its `--record-format`).
+    #[arg(long, value_name = "ADDR")]
+    foxglove: Option<std::net::SocketAddr>,
     /// Set by `petrel replay`.
     #[arg(skip)]
     replay: Option<record::ReplaySpec>,

@@ -5,6 +5,7 @@ mod api;
 mod attach;
 mod browser;
 mod cli;
+mod foxglove;
 mod map;
 mod security;
 mod support;

@@ -4,6 +4,7 @@
 mod api;
 mod collect;
 mod collect_remote;
+mod foxglove;
 mod remote;
 mod state;
 mod ws;
@@ -23,6 +24,8 @@ use tokio::task::JoinHandle;
 use crate::core::access::{self, Access};
 use crate::{AgentSource, ConsoleError, ConsoleOptions, LogTail};
 use state::Shared;
+
+pub use foxglove::FoxgloveServer;
 
 /// A running console; [`stop`](Console::stop) ends it (dropping it leaves it serving until the
 /// runtime ends).
