@@ -15,7 +15,8 @@ use crate::support::*;
 
 /// A child process whose output lines (stdout and stderr) the test reads; killed when dropped.
 struct Proc {
-    child: Child,
+    /// Taken when the test waits for it to end.
+    child: Option<Child>,
     lines: Receiver<String>,
 }
 
@@ -43,7 +44,10 @@ impl Proc {
                 }
             });
         }
-        Proc { child, lines }
+        Proc {
+            child: Some(child),
+            lines,
+        }
     }
 
     /// The first line (from now) containing `needle`, within the deadline.
@@ -60,10 +64,18 @@ impl Proc {
     }
 }
 
+impl Proc {
+    fn child(&mut self) -> &mut Child {
+        self.child.as_mut().expect("a running child")
+    }
+}
+
 impl Drop for Proc {
     fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        if let Some(mut child) = self.child.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
     }
 }
 
@@ -155,10 +167,17 @@ async fn the_console_attaches_to_a_running_agent_over_its_team() {
     assert!(bad.body.contains("expected f64"), "{}", bad.body);
 
     // SIGKILL: no goodbye; the console sees the run gone and shows the agent left.
-    run.child.kill().unwrap();
-    run.child.wait().unwrap();
+    run.child().kill().unwrap();
+    run.child().wait().unwrap();
     console.wait_for("console: agent `robot1` left");
     let agents = get(addr, "/api/agents").await.json();
     assert_eq!(agents["agents"][0]["state"], "left", "{agents}");
     assert_eq!(get(addr, "/api/agents/robot1/properties").await.status, 404);
+
+    // SIGTERM ends the console cleanly (exit 0).
+    let mut console = console;
+    let child = console.child.take().unwrap();
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) };
+    let out = crate::cli::bounded::wait_within_deadline(child, "petrel console");
+    assert!(out.status.success(), "{:?}", out.status);
 }
