@@ -110,10 +110,12 @@ function connect() {
   if (socket) socket.close();
   const q = new URLSearchParams({ agent });
   if (token) q.set("token", token);
-  socket = new WebSocket(`ws://${location.host}/api/ws?${q}`);
-  socket.onopen = () => { setStatus("live"); socket.send(JSON.stringify({ watch: "all" })); };
-  socket.onclose = () => setStatus("disconnected", true);
-  socket.onmessage = (m) => {
+  const s = new WebSocket(`ws://${location.host}/api/ws?${q}`);
+  socket = s;
+  s.onopen = () => { setStatus("live"); s.send(JSON.stringify({ watch: "all" })); };
+  // The console closes the socket of an agent that left: attach again when it is back.
+  s.onclose = () => { if (socket === s) { setStatus("disconnected", true); agentState = "disconnected"; } };
+  s.onmessage = (m) => {
     const msg = JSON.parse(m.data);
     if (msg.values) showValues(msg.values);
   };

@@ -57,10 +57,17 @@ impl FoxgloveServer {
         encoders: Arc<dyn LiveEncoders>,
     ) -> Result<FoxgloveServer, ConsoleError> {
         let addr = options.addr;
+        let mut token_error = None;
         let access = Access::for_bind(addr, options.token.as_deref(), || {
-            super::generate_token().unwrap_or_default()
+            super::generate_token().unwrap_or_else(|e| {
+                token_error = Some(e);
+                String::new()
+            })
         })
         .map_err(|source| ConsoleError::Bind { addr, source })?;
+        if let Some(e) = token_error {
+            return Err(ConsoleError::Token(e));
+        }
         let listener = tokio::net::TcpListener::bind(addr)
             .await
             .map_err(|source| ConsoleError::Listen { addr, source })?;
