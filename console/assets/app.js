@@ -114,7 +114,12 @@ function connect() {
   socket = s;
   s.onopen = () => { setStatus("live"); s.send(JSON.stringify({ watch: "all" })); };
   // The console closes the socket of an agent that left: attach again when it is back.
-  s.onclose = () => { if (socket === s) { setStatus("disconnected", true); agentState = "disconnected"; } };
+  s.onclose = () => {
+    // An agent already shown as left keeps saying so.
+    if (socket !== s || agentState !== "live") return;
+    setStatus("disconnected", true);
+    agentState = "disconnected";
+  };
   s.onmessage = (m) => {
     const msg = JSON.parse(m.data);
     if (msg.values) showValues(msg.values);

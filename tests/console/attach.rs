@@ -14,14 +14,14 @@ use serde_json::json;
 use crate::support::*;
 
 /// A child process whose output lines (stdout and stderr) the test reads; killed when dropped.
-struct Proc {
+pub(crate) struct Proc {
     /// Taken when the test waits for it to end.
     child: Option<Child>,
     lines: Receiver<String>,
 }
 
 impl Proc {
-    fn start(args: &[&str], records: &Path) -> Proc {
+    pub(crate) fn start(args: &[&str], records: &Path) -> Proc {
         let mut child = Command::new(env!("CARGO_BIN_EXE_petrel"))
             .args(args)
             .env("PETREL_RUNTIME_DIR", records)
@@ -51,7 +51,7 @@ impl Proc {
     }
 
     /// The first line (from now) containing `needle`, within the deadline.
-    fn wait_for(&self, needle: &str) -> String {
+    pub(crate) fn wait_for(&self, needle: &str) -> String {
         let deadline = std::time::Instant::now() + DEADLINE;
         loop {
             let left = deadline.saturating_duration_since(std::time::Instant::now());
@@ -65,7 +65,7 @@ impl Proc {
 }
 
 impl Proc {
-    fn child(&mut self) -> &mut Child {
+    pub(crate) fn child(&mut self) -> &mut Child {
         self.child.as_mut().expect("a running child")
     }
 }
@@ -84,16 +84,13 @@ async fn set(addr: SocketAddr, key: &str, value: &str) -> Answer {
     http(addr, "POST", "/api/agents/robot1/set", &[], Some(&body)).await
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_console_attaches_to_a_running_agent_over_its_team() {
-    let records = tempfile::tempdir().unwrap();
-    let mut run = Proc::start(
-        &["run", "configs/pipeline.ron", "--for", "120s"],
-        records.path(),
-    );
+/// `configs/pipeline.ron` run as robot1, and `petrel console` showing it (both using the
+/// discovery records in `records`), with the console's address.
+pub(crate) fn run_and_attach(records: &Path) -> (Proc, Proc, SocketAddr) {
+    let run = Proc::start(&["run", "configs/pipeline.ron", "--for", "120s"], records);
     // The run's record is written (tools can find it) when it says so.
     run.wait_for("reachable by tools");
-    let console = Proc::start(&["console", "--listen", "127.0.0.1:0"], records.path());
+    let console = Proc::start(&["console", "--listen", "127.0.0.1:0"], records);
     let url = console.wait_for("console: http://");
     let addr: SocketAddr = url
         .trim_start_matches("console: http://")
@@ -101,6 +98,13 @@ async fn the_console_attaches_to_a_running_agent_over_its_team() {
         .parse()
         .unwrap_or_else(|_| panic!("a loopback address: {url}"));
     console.wait_for("console: showing agent `robot1`");
+    (run, console, addr)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_console_attaches_to_a_running_agent_over_its_team() {
+    let records = tempfile::tempdir().unwrap();
+    let (mut run, console, addr) = run_and_attach(records.path());
 
     // The remote agent's modules, with their step figures read over the team.
     let agents = get(addr, "/api/agents").await.json();

@@ -4,6 +4,7 @@
 mod api;
 mod attach;
 mod browser;
+mod browser_attach;
 mod cli;
 mod foxglove;
 mod map;
