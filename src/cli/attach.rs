@@ -1,7 +1,9 @@
 //! `petrel console`: the web console attached to running agents over their teams, instead of
 //! inside a `petrel run`. It finds agents as the CLI tools do (the records every `petrel run`
 //! writes on this machine), shows each as it appears, and shows it gone when its process ends
-//! (a SIGKILLed run included: its record is skipped once the process is gone).
+//! (a SIGKILLed run included: its record is skipped once the process is gone). With `--via
+//! CONFIG` it shows the members of that config's team instead, wherever they run, as they join
+//! and leave (their liveliness tokens, as members see them).
 
 use std::collections::{BTreeMap, HashMap};
 use std::net::SocketAddr;
@@ -12,7 +14,7 @@ use std::time::Duration;
 use petrel_actors::outln;
 use petrel_console::{AgentSource, Console, RemoteAgent};
 use petrel_team::discovery::{self, Reachable, Record};
-use petrel_team::Client;
+use petrel_team::{Client, Members};
 
 use super::team_agent::TeamAgent;
 use super::EXIT_BAD_INPUT;
@@ -32,6 +34,10 @@ pub(crate) struct ConsoleArgs {
     /// Only the agents of the run with this process id.
     #[arg(long)]
     pid: Option<u32>,
+    /// The members of the team of this config (any agent config of the team), wherever they
+    /// run, instead of the runs recorded on this machine.
+    #[arg(long, value_name = "CONFIG", conflicts_with_all = ["team", "pid"])]
+    via: Option<std::path::PathBuf>,
     /// The token every request must carry (`?token=` or `Authorization: Bearer`); required
     /// beyond loopback, where one is generated and printed if not given.
     #[arg(long, value_name = "TOKEN")]
@@ -69,6 +75,19 @@ pub(crate) fn run(args: ConsoleArgs) -> ExitCode {
         eprintln!("error: --listen {}: {e}", args.listen);
         return ExitCode::from(EXIT_BAD_INPUT);
     }
+    let via = match &args.via {
+        Some(path) => {
+            let reach = super::remote::Reach {
+                via: Some(path.clone()),
+                pid: None,
+            };
+            match super::remote::team_of(&reach, "") {
+                Ok(team) => Some(team),
+                Err(code) => return code,
+            }
+        }
+        None => None,
+    };
     let runtime = match tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -90,15 +109,38 @@ pub(crate) fn run(args: ConsoleArgs) -> ExitCode {
             }
         };
         let mut attached = Attached::default();
+        let mut finder = match via {
+            Some(team) => match attached.follow(&team).await {
+                Ok(members) => Finder::Team {
+                    at: Reachable {
+                        agent: String::new(),
+                        team: team.name.clone(),
+                        connect: discovery::endpoints_of(&team),
+                    },
+                    members,
+                },
+                Err(e) => {
+                    eprintln!("error: --via: {e}");
+                    super::console::stop(console).await;
+                    return ExitCode::from(super::EXIT_FAILED);
+                }
+            },
+            None => Finder::Records {
+                teams: args.team.clone(),
+                pid: args.pid,
+            },
+        };
         let mut tick = tokio::time::interval(ROSTER_PERIOD);
         let stop = stop_requested();
         tokio::pin!(stop);
         loop {
             tokio::select! {
-                _ = tick.tick() => attached.update(&console, &args).await,
+                _ = tick.tick() => attached.update(&console, &finder).await,
+                _ = finder.changed() => attached.update(&console, &finder).await,
                 _ = &mut stop => break,
             }
         }
+        drop(finder);
         super::console::stop(console).await;
         attached.close().await;
         ExitCode::SUCCESS
@@ -114,20 +156,75 @@ async fn stop_requested() {
     }
 }
 
+/// Where the agents to show are found.
+enum Finder {
+    /// In the records of the runs on this machine, of these teams (all: none named).
+    Records {
+        teams: Vec<String>,
+        pid: Option<u32>,
+    },
+    /// Among the members of one team, reached at `at` (its agent left empty).
+    Team { at: Reachable, members: Members },
+}
+
+impl Finder {
+    /// The agents to show now, by name.
+    fn wanted(&self) -> BTreeMap<String, Reachable> {
+        match self {
+            Finder::Records { teams, pid } => {
+                roster(&discovery::running(&discovery::directory()), teams, *pid)
+            }
+            Finder::Team { at, members } => members
+                .now()
+                .into_iter()
+                .map(|agent| {
+                    let reach = Reachable {
+                        agent: agent.clone(),
+                        ..at.clone()
+                    };
+                    (agent, reach)
+                })
+                .collect(),
+        }
+    }
+
+    /// Resolves when the team's membership changed (never for records: they are re-read).
+    async fn changed(&mut self) {
+        match self {
+            Finder::Team { members, .. } => members.changed().await,
+            Finder::Records { .. } => std::future::pending().await,
+        }
+    }
+}
+
 /// The agents shown and the team clients that reach them.
 #[derive(Default)]
 struct Attached {
     /// One client per team and endpoints (agents of one team share it).
     clients: HashMap<(String, Vec<String>), Arc<Client>>,
+    /// The client following a `--via` team's members (kept while the console runs).
+    following: Option<Arc<Client>>,
     /// Shown agents and where they were found.
     shown: BTreeMap<String, Reachable>,
 }
 
 impl Attached {
-    /// Shows the agents that appeared and marks gone those whose run ended.
-    async fn update(&mut self, console: &Console, args: &ConsoleArgs) {
-        let records = discovery::running(&discovery::directory());
-        let wanted = roster(&records, &args.team, args.pid);
+    /// Connects to `team` and follows its members; its agents are reached with that client.
+    async fn follow(
+        &mut self,
+        team: &petrel_actors::team::TeamConfig,
+    ) -> Result<Members, petrel_team::TeamError> {
+        let client = Arc::new(Client::connect(team).await?);
+        let members = client.members().await?;
+        let key = (team.name.clone(), discovery::endpoints_of(team));
+        self.clients.insert(key, client.clone());
+        self.following = Some(client);
+        Ok(members)
+    }
+
+    /// Shows the agents that appeared and marks gone those that left.
+    async fn update(&mut self, console: &Console, finder: &Finder) {
+        let wanted = finder.wanted();
         let gone: Vec<String> = self
             .shown
             .iter()
@@ -156,7 +253,10 @@ impl Attached {
             .values()
             .map(|a| (a.team.clone(), a.connect.clone()))
             .collect();
-        self.clients.retain(|k, _| used.contains(k));
+        let following = self.following.clone();
+        self.clients.retain(|k, c| {
+            used.contains(k) || following.as_ref().is_some_and(|f| Arc::ptr_eq(f, c))
+        });
     }
 
     /// Connects to `at`'s team (or reuses its client) and asks the agent what it holds.
@@ -193,7 +293,8 @@ impl Attached {
         Some(source)
     }
 
-    async fn close(self) {
+    async fn close(mut self) {
+        self.following = None;
         for (_, client) in self.clients {
             if let Ok(client) = Arc::try_unwrap(client) {
                 client.close().await;

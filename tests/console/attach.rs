@@ -65,6 +65,19 @@ impl Proc {
 }
 
 impl Proc {
+    /// Reads lines until each of `needles` was in one, in any order, within the deadline.
+    pub(crate) fn wait_for_all(&self, needles: &[&str]) {
+        let deadline = std::time::Instant::now() + DEADLINE;
+        let mut missing: Vec<&str> = needles.to_vec();
+        while !missing.is_empty() {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => missing.retain(|n| !line.contains(n)),
+                Err(_) => panic!("no lines with {missing:?} in time"),
+            }
+        }
+    }
+
     pub(crate) fn child(&mut self) -> &mut Child {
         self.child.as_mut().expect("a running child")
     }
@@ -184,4 +197,79 @@ async fn the_console_attaches_to_a_running_agent_over_its_team() {
     unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGTERM) };
     let out = crate::cli::bounded::wait_within_deadline(child, "petrel console");
     assert!(out.status.success(), "{:?}", out.status);
+}
+
+/// An agent of team `team` listening on `port` (and connecting to `peer`), with a sine wave.
+fn team_agent(dir: &Path, name: &str, team: &str, port: u16, peer: Option<u16>) -> String {
+    let connect = peer.map_or(String::new(), |p| {
+        format!("connect: [\"tcp/127.0.0.1:{p}\"],")
+    });
+    let text = format!(
+        r#"Agent(name: "{name}", team: (name: "{team}", listen: ["tcp/127.0.0.1:{port}"], {connect} lease_ms: 1000),
+            modules: [(name: "signal", type: "demo.signal", values: {{"params/sample_ms": 50}})])"#
+    );
+    let path = dir.join(format!("{name}.ron"));
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .unwrap()
+        .port()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn with_via_the_console_shows_a_teams_members_as_they_join_and_leave() {
+    let dir = tempfile::tempdir().unwrap();
+    let records = tempfile::tempdir().unwrap();
+    let team = format!("console-via-{}", std::process::id());
+    let (a, b) = (free_port(), free_port());
+    let first = team_agent(dir.path(), "scout", &team, a, None);
+    let second = team_agent(dir.path(), "relay", &team, b, Some(a));
+    let mut run = Proc::start(&["run", &first, &second, "--for", "120s"], records.path());
+    run.wait_for("reachable by tools");
+    let console = Proc::start(
+        &["console", "--via", &first, "--listen", "127.0.0.1:0"],
+        records.path(),
+    );
+    let url = console.wait_for("console: http://");
+    let addr: SocketAddr = url
+        .trim_start_matches("console: http://")
+        .trim_end_matches('/')
+        .parse()
+        .unwrap();
+    console.wait_for_all(&[
+        "console: showing agent `scout`",
+        "console: showing agent `relay`",
+    ]);
+    let agents = get(addr, "/api/agents").await.json();
+    let mut live: Vec<&str> = agents["agents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|a| a["state"] == "live")
+        .map(|a| a["name"].as_str().unwrap())
+        .collect();
+    live.sort();
+    assert_eq!(live, ["relay", "scout"], "{agents}");
+    let value = get(addr, "/api/agents/relay/value?key=signal/params/sample_ms")
+        .await
+        .json();
+    assert_eq!(value["json"], 50, "{value}");
+
+    // Their process is killed: the team's tokens go, and the console shows both left.
+    run.child().kill().unwrap();
+    run.child().wait().unwrap();
+    console.wait_for_all(&["console: agent `scout` left", "console: agent `relay` left"]);
+    let agents = get(addr, "/api/agents").await.json();
+    assert!(
+        agents["agents"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|a| a["state"] == "left"),
+        "{agents}"
+    );
 }
