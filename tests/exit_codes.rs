@@ -160,6 +160,11 @@ const CASES: &[(&[&str], i32, &str)] = &[
     ),
     (&["echo", "petrel://nobody/c/out/value"], 1, "no such agent"),
     (&["events"], 1, "nothing to follow"),
+    (
+        &["console", "--listen", "0.0.0.0:0", "--token", "short"],
+        2,
+        "a token too short",
+    ),
     (&["get", "no-address"], 2, "bad address"),
     (&["no-such-command"], 2, "bad command"),
 ];

@@ -110,10 +110,17 @@ function connect() {
   if (socket) socket.close();
   const q = new URLSearchParams({ agent });
   if (token) q.set("token", token);
-  socket = new WebSocket(`ws://${location.host}/api/ws?${q}`);
-  socket.onopen = () => { setStatus("live"); socket.send(JSON.stringify({ watch: "all" })); };
-  socket.onclose = () => setStatus("disconnected", true);
-  socket.onmessage = (m) => {
+  const s = new WebSocket(`ws://${location.host}/api/ws?${q}`);
+  socket = s;
+  s.onopen = () => { setStatus("live"); s.send(JSON.stringify({ watch: "all" })); };
+  // The console closes the socket of an agent that left: attach again when it is back.
+  s.onclose = () => {
+    // An agent already shown as left keeps saying so.
+    if (socket !== s || agentState !== "live") return;
+    setStatus("disconnected", true);
+    agentState = "disconnected";
+  };
+  s.onmessage = (m) => {
     const msg = JSON.parse(m.data);
     if (msg.values) showValues(msg.values);
   };
@@ -280,11 +287,36 @@ function feed(id, items, line) {
   $(id).replaceChildren(...items.slice(-50).reverse().map((i) => el("li", {}, line(i))));
 }
 
+// Agents come and go (`petrel console`): the list is redrawn when it changes, an agent that
+// left is shown so, and one that comes back is attached to again.
+let shownAgents = "";
+let agentState = null;
+
+function showAgents(agents) {
+  const text = agents.map((a) => a.name + ":" + a.state).join(",");
+  if (text === shownAgents) return;
+  shownAgents = text;
+  $("agent").replaceChildren(...agents.map((a) =>
+    el("option", { value: a.name, "data-state": a.state }, a.state === "live" ? a.name : `${a.name} (${a.state})`)));
+  if (agent) $("agent").value = agent;
+}
+
 async function refresh() {
   try {
     const { agents } = await api("/api/agents");
+    showAgents(agents);
+    const first = agents.find((a) => a.state === "live");
+    if (agent === null && first) return choose(first.name);
     const me = agents.find((a) => a.name === agent);
     if (!me) return;
+    const before = agentState;
+    agentState = me.state;
+    if (me.state !== "live") {
+      setStatus(`agent ${agent} ${me.state}`, true);
+      showModules([]);
+      return;
+    }
+    if (before !== null && before !== "live") return choose(agent);
     showModules(me.modules);
     $("map-section").hidden = !me.map;
     const [events, contexts, logs, plans] = await Promise.all([
@@ -317,6 +349,7 @@ async function refreshMap() {
 
 async function choose(name) {
   agent = name;
+  agentState = "live";
   grid = null; gridVersion = null;
   await loadProperties();
   drawGraph(await api(agentPath("/graph")));
@@ -327,10 +360,12 @@ async function choose(name) {
 async function main() {
   try {
     const { agents } = await api("/api/agents");
-    $("agent").replaceChildren(...agents.map((a) => el("option", { value: a.name }, a.name)));
+    showAgents(agents);
     $("agent").addEventListener("change", (e) => choose(e.target.value));
     $("filter").addEventListener("input", applyFilter);
-    if (agents.length) await choose(agents[0].name);
+    const first = agents.find((a) => a.state === "live");
+    if (first) await choose(first.name);
+    else setStatus("waiting for agents…");
     setInterval(refresh, 1000);
     setInterval(refreshMap, 500);
   } catch (e) {

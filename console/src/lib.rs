@@ -3,7 +3,8 @@
 //!
 //! Functional core, imperative shell: [`core`] decides what is shown (JSON shapes, map
 //! sources, plan firings), how often values are pushed, and who may do what; `shell` is a
-//! thin axum server over agents' [`Blackboard`]s. The page's HTML, JavaScript and CSS are
+//! thin axum server over agents' blackboards, or over remote agents reached through a team
+//! ([`source`]: `petrel console` attaching to running agents). The page's HTML, JavaScript and CSS are
 //! plain files embedded in the binary: nothing to build at install time.
 //!
 //! ```no_run
@@ -21,17 +22,18 @@
 //! ```
 
 pub mod core;
+pub mod live;
 mod logs;
 mod shell;
+pub mod source;
 
 use std::net::SocketAddr;
-
-use petrel_actors::Blackboard;
 
 pub use crate::core::access::BindError;
 pub use crate::core::plan::{PlaceView, PlanGraph, TransitionView};
 pub use logs::{LogLine, LogTail, LOG_LINES};
-pub use shell::Console;
+pub use shell::{Console, FoxgloveServer};
+pub use source::{AgentSource, Backend, RemoteAgent, RemoteEvent, RemoteSample, RemoteWatch};
 
 /// Where the console listens, and its token.
 #[derive(Debug, Clone)]
@@ -41,29 +43,6 @@ pub struct ConsoleOptions {
     /// The token every request must carry; required beyond loopback, where one is generated
     /// when none is given.
     pub token: Option<String>,
-}
-
-/// An agent the console shows.
-#[derive(Clone)]
-pub struct AgentSource {
-    /// The agent's name.
-    pub name: String,
-    /// Its blackboard: everything shown is read from (and every edit written to) it.
-    pub blackboard: Blackboard,
-    /// The structure of the plans its `mission.pnp` modules run (the console reads no plan
-    /// files itself).
-    pub plans: Vec<PlanGraph>,
-}
-
-impl AgentSource {
-    /// An agent without plans to draw.
-    pub fn new(name: &str, blackboard: Blackboard) -> Self {
-        AgentSource {
-            name: name.to_string(),
-            blackboard,
-            plans: Vec::new(),
-        }
-    }
 }
 
 /// Why the console did not start.

@@ -30,6 +30,15 @@ pub(crate) async fn start(
         source.plans = plans_of(agent).await;
         sources.push(source);
     }
+    serve(addr, token, sources).await
+}
+
+/// Starts the console on `addr` for `sources`, printing where it is (and a generated token).
+pub(crate) async fn serve(
+    addr: SocketAddr,
+    token: Option<String>,
+    sources: Vec<AgentSource>,
+) -> Result<Console, String> {
     let logs = LogTail::default();
     *LOG_TAIL.write().unwrap_or_else(|e| e.into_inner()) = Some(logs.clone());
     let console = Console::start(ConsoleOptions { addr, token }, sources, logs)
@@ -52,13 +61,50 @@ pub(crate) async fn stop(console: Console) {
     *LOG_TAIL.write().unwrap_or_else(|e| e.into_inner()) = None;
 }
 
+/// What a run serves to watch it: the web console (`--console`), the Foxglove live view
+/// (`--foxglove`).
+#[derive(Default)]
+pub(crate) struct Views {
+    console: Option<Console>,
+    foxglove: Option<petrel_console::FoxgloveServer>,
+}
+
+/// Starts the views `args` ask for.
+pub(crate) async fn start_views(args: &super::RunArgs, agents: &[Agent]) -> Result<Views, String> {
+    let mut views = Views::default();
+    if let Some(addr) = args.console {
+        views.console = Some(start(addr, args.console_token.clone(), agents).await?);
+    }
+    if let Some(addr) = args.foxglove {
+        let format = args.record_format.map(Into::into);
+        match super::foxglove::start(addr, format, agents).await {
+            Ok(server) => views.foxglove = Some(server),
+            Err(e) => {
+                stop_views(views).await;
+                return Err(e);
+            }
+        }
+    }
+    Ok(views)
+}
+
+/// Stops the views.
+pub(crate) async fn stop_views(views: Views) {
+    if let Some(console) = views.console {
+        stop(console).await;
+    }
+    if let Some(server) = views.foxglove {
+        server.stop().await;
+    }
+}
+
 /// The plans of `agent`'s `mission.pnp` modules, from the files their parameters name (a plan
 /// that does not load is left out: the mission module reports why).
 async fn plans_of(agent: &Agent) -> Vec<PlanGraph> {
     let Ok(listing) = agent.blackboard().listing().await else {
         return Vec::new();
     };
-    let mut plans = Vec::new();
+    let mut files = Vec::new();
     for m in listing
         .modules
         .iter()
@@ -71,12 +117,22 @@ async fn plans_of(agent: &Agent) -> Vec<PlanGraph> {
         let rules = bb
             .get::<FilePath>(&format!("{}/params/rules", m.name))
             .await
-            .ok()
-            .filter(|r| !r.0.as_os_str().is_empty());
+            .ok();
+        files.push((m.name.clone(), (*path).clone(), rules.map(|r| (*r).clone())));
+    }
+    plans_from(files)
+}
+
+/// The plans of mission modules, from (module, plan file, rules file) (a plan that does not
+/// load is left out: the mission module reports why).
+pub(crate) fn plans_from(files: Vec<(String, FilePath, Option<FilePath>)>) -> Vec<PlanGraph> {
+    let mut plans = Vec::new();
+    for (module, path, rules) in files {
+        let rules = rules.filter(|r| !r.0.as_os_str().is_empty());
         match petrel_plans::load_plan(&path.0, rules.as_ref().map(|r| r.0.as_path())) {
-            Ok(loaded) => plans.push(plan_graph(&m.name, &loaded.plan)),
+            Ok(loaded) => plans.push(plan_graph(&module, &loaded.plan)),
             Err(e) => {
-                tracing::warn!(module = %m.name, error = %e, "the console cannot draw this plan")
+                tracing::warn!(%module, error = %e, "the console cannot draw this plan")
             }
         }
     }

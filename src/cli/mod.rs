@@ -1,6 +1,7 @@
 //! The `petrel` command line: `run`, `check`, `modules`, `plan`, and the tools that attach to
 //! running agents (`ls`, `get`, `set`).
 
+mod attach;
 mod check;
 pub(crate) use check::check_all;
 mod chrome;
@@ -8,6 +9,7 @@ pub mod console;
 mod console_log;
 mod exits;
 mod follow;
+mod foxglove;
 mod graph;
 mod listing;
 mod logging;
@@ -20,6 +22,7 @@ mod record_log;
 mod remote;
 mod run;
 mod stop_guard;
+mod team_agent;
 mod top;
 mod trace;
 
@@ -155,6 +158,9 @@ enum Command {
         #[command(flatten)]
         reach: remote::Reach,
     },
+    /// Serves the web console for agents already running (every `petrel run` on this machine,
+    /// or those of `--team`), attached over their teams; agents are shown as they come and go.
+    Console(attach::ConsoleArgs),
     /// Recordings (MCAP): `record info FILE` shows channels, types, counts, rates, duration
     /// and drops.
     Record {
@@ -263,6 +269,10 @@ pub(crate) struct RunArgs {
     /// required beyond loopback, where one is generated and printed if not given.
     #[arg(long, value_name = "TOKEN", requires = "console")]
     console_token: Option<String>,
+    /// Serve the Foxglove live view here (`127.0.0.1:8765`): the Foxglove WebSocket protocol
+    /// with the channels and schemas of `--record` (its `--record-format`).
+    #[arg(long, value_name = "ADDR")]
+    foxglove: Option<std::net::SocketAddr>,
     /// Set by `petrel replay`.
     #[arg(skip)]
     replay: Option<record::ReplaySpec>,
@@ -337,6 +347,7 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             count,
             reach,
         } => follow::events(&reach, agent.as_deref(), count),
+        Command::Console(args) => attach::run(args),
         Command::Ls { agent, reach } => remote::list(&reach, agent.as_deref()),
         Command::Get { url, reach } => remote::property(&reach, &url, remote::Request::Get),
         Command::Set { url, value, reach } => {

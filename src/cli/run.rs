@@ -148,26 +148,21 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
             return code;
         }
     };
-    let console = match args.console {
-        Some(addr) => {
-            match super::console::start(addr, args.console_token.clone(), &agents).await {
-                Ok(console) => Some(console),
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    drop(registration);
-                    stop_all(&agents, teams, args, &guard).await;
-                    for agent in agents {
-                        agent.shutdown().await;
-                    }
-                    // A run refused at its start leaves no recording behind.
-                    if let Some(recorder) = recorder {
-                        super::record::discard(recorder).await;
-                    }
-                    return ExitCode::from(EXIT_BAD_INPUT);
-                }
+    let views = match super::console::start_views(args, &agents).await {
+        Ok(views) => views,
+        Err(e) => {
+            eprintln!("error: {e}");
+            drop(registration);
+            stop_all(&agents, teams, args, &guard).await;
+            for agent in agents {
+                agent.shutdown().await;
             }
+            // A run refused at its start leaves no recording behind.
+            if let Some(recorder) = recorder {
+                super::record::discard(recorder).await;
+            }
+            return ExitCode::from(EXIT_BAD_INPUT);
         }
-        None => None,
     };
     if let Some(duration) = args.duration {
         guard.run_for(duration);
@@ -202,9 +197,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     }
     // Tools stop finding the run before its agents stop answering.
     drop(registration);
-    if let Some(console) = console {
-        super::console::stop(console).await;
-    }
+    super::console::stop_views(views).await;
     for agent in &agents {
         tracing::info!(agent = agent.name(), "stopping: {why}");
     }

@@ -51,9 +51,17 @@ impl StopGuard {
         let runtime = tokio::runtime::Builder::new_current_thread()
             .enable_all()
             .build()?;
+        // The handlers are installed here, before this returns and any agent starts: installed
+        // on the thread, a Ctrl-C sent as soon as the log says "agent started" could come first
+        // and end the process the default way (seen under load).
+        let signals = {
+            use tokio::signal::unix::{signal, SignalKind};
+            let _runtime = runtime.enter();
+            signal(SignalKind::interrupt()).and_then(|i| Ok((i, signal(SignalKind::terminate())?)))
+        };
         std::thread::Builder::new()
             .name("petrel-stop-guard".into())
-            .spawn(move || runtime.block_on(watch_over(event_rx, request_tx, limit)))?;
+            .spawn(move || runtime.block_on(watch_over(event_rx, request_tx, limit, signals)))?;
         Ok(StopGuard { events, requests })
     }
 
@@ -106,12 +114,9 @@ async fn watch_over(
     mut events: mpsc::UnboundedReceiver<Event>,
     requests: watch::Sender<Option<StopRequest>>,
     timeout: Duration,
+    signals: std::io::Result<(tokio::signal::unix::Signal, tokio::signal::unix::Signal)>,
 ) {
-    use tokio::signal::unix::{signal, SignalKind};
-    let (Ok(mut interrupts), Ok(mut terminations)) = (
-        signal(SignalKind::interrupt()),
-        signal(SignalKind::terminate()),
-    ) else {
+    let Ok((mut interrupts, mut terminations)) = signals else {
         tracing::error!(
             "cannot listen for Ctrl-C and SIGTERM: only --for and the agents end this run"
         );

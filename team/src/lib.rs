@@ -32,6 +32,7 @@ pub mod lossy;
 mod mail;
 mod members;
 pub mod membership;
+mod roster;
 mod service;
 mod session;
 pub mod tracker;
@@ -39,6 +40,7 @@ mod watch;
 pub mod wire;
 
 pub use client::{ron_encoding, AgentInfo, Client, REQUEST_TIMEOUT};
+pub use roster::Members;
 pub use session::zenoh_config;
 pub use watch::{Update, Watch, WatchEvent};
 

@@ -16,7 +16,7 @@ use tokio_tungstenite::tungstenite::Message;
 use crate::support::*;
 
 /// Kills the browser however the test ends.
-struct Browser(Child);
+pub(crate) struct Browser(Child);
 
 impl Drop for Browser {
     fn drop(&mut self) {
@@ -25,7 +25,7 @@ impl Drop for Browser {
     }
 }
 
-fn chromium() -> Option<&'static str> {
+pub(crate) fn chromium() -> Option<&'static str> {
     ["chromium", "chromium-browser"].into_iter().find(|name| {
         Command::new(name)
             .arg("--version")
@@ -38,7 +38,7 @@ fn chromium() -> Option<&'static str> {
 
 /// Starts headless Chromium with its own profile and DevTools on a loopback port it picks;
 /// returns the browser's DevTools WebSocket URL, read from the line Chromium prints.
-fn start_browser(program: &str, profile: &std::path::Path) -> (Browser, String) {
+pub(crate) fn start_browser(program: &str, profile: &std::path::Path) -> (Browser, String) {
     let mut child = Command::new(program)
         .args([
             "--headless",
@@ -83,7 +83,7 @@ fn is_root() -> bool {
 }
 
 /// A DevTools protocol session on one page (flat mode: the page's session id on each call).
-struct DevTools {
+pub(crate) struct DevTools {
     socket: tokio_tungstenite::WebSocketStream<tokio::net::TcpStream>,
     session: Option<String>,
     next_id: u64,
@@ -111,6 +111,25 @@ impl DevTools {
             next_id: 1,
             events: Vec::new(),
         }
+    }
+
+    /// A new page of the browser at `endpoint`, loaded from `url`.
+    pub(crate) async fn open(endpoint: &str, url: &str) -> DevTools {
+        let mut devtools = DevTools::connect(endpoint).await;
+        let target = devtools
+            .call("Target.createTarget", json!({"url": "about:blank"}))
+            .await;
+        let attached = devtools
+            .call(
+                "Target.attachToTarget",
+                json!({"targetId": target["targetId"], "flatten": true}),
+            )
+            .await;
+        devtools.session = Some(attached["sessionId"].as_str().unwrap().to_string());
+        devtools.call("Page.enable", json!({})).await;
+        devtools.call("Page.navigate", json!({"url": url})).await;
+        devtools.event("Page.loadEventFired").await;
+        devtools
     }
 
     /// The next DevTools message.
@@ -162,7 +181,7 @@ impl DevTools {
     }
 
     /// Evaluates `expression` in the page (awaiting a promise) and returns its value.
-    async fn eval(&mut self, expression: &str) -> Value {
+    pub(crate) async fn eval(&mut self, expression: &str) -> Value {
         let r = self
             .call(
                 "Runtime.evaluate",
@@ -176,7 +195,7 @@ impl DevTools {
 
 /// A promise that resolves with `value()` once `ready()` holds, re-checked on every change of
 /// the page (a MutationObserver: no polling), and rejects after 20 s.
-fn when(ready: &str, value: &str) -> String {
+pub(crate) fn when(ready: &str, value: &str) -> String {
     format!(
         r#"new Promise((resolve, reject) => {{
             const check = () => {{ try {{ if ({ready}) {{ observer.disconnect(); resolve({value}); }} }} catch (e) {{}} }};
@@ -198,22 +217,7 @@ async fn a_real_browser_sees_live_values_and_edits_a_parameter() {
     let console = console_for(&agent, Some("browser-test-token-0123")).await;
     let profile = tempfile::tempdir().unwrap();
     let (_browser, endpoint) = start_browser(program, profile.path());
-    let mut devtools = DevTools::connect(&endpoint).await;
-    let target = devtools
-        .call("Target.createTarget", json!({"url": "about:blank"}))
-        .await;
-    let attached = devtools
-        .call(
-            "Target.attachToTarget",
-            json!({"targetId": target["targetId"], "flatten": true}),
-        )
-        .await;
-    devtools.session = Some(attached["sessionId"].as_str().unwrap().to_string());
-    devtools.call("Page.enable", json!({})).await;
-    devtools
-        .call("Page.navigate", json!({"url": console.url()}))
-        .await;
-    devtools.event("Page.loadEventFired").await;
+    let mut devtools = DevTools::open(&endpoint, &console.url()).await;
 
     // Live values: the sensor's value cell shows two different versions pushed by the server.
     let cell = r#"document.querySelector('tr[data-key="sensor/out/value"] td.value')"#;

@@ -8,7 +8,7 @@ use std::sync::mpsc;
 use crate::support::*;
 
 #[path = "../common/bounded.rs"]
-mod bounded;
+pub(crate) mod bounded;
 
 fn petrel() -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_petrel"));

@@ -2,8 +2,11 @@
 //! `petrel` binary's flags, and the page in a real headless browser.
 
 mod api;
+mod attach;
 mod browser;
+mod browser_attach;
 mod cli;
+mod foxglove;
 mod map;
 mod security;
 mod support;

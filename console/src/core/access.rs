@@ -137,6 +137,23 @@ pub fn check_origin(
     }
 }
 
+/// The web pages allowed to open the Foxglove live view besides its own host: Foxglove's app.
+/// The view is read-only (no parameters, no publishing), so this lets Foxglove's page read
+/// what the view serves, and no other site.
+pub const FOXGLOVE_ORIGINS: [&str; 2] = ["https://app.foxglove.dev", "https://studio.foxglove.dev"];
+
+/// [`check_origin`] for the Foxglove live view: Foxglove's app may open it too.
+pub fn check_foxglove_origin(
+    bound: SocketAddr,
+    host: Option<&str>,
+    origin: Option<&str>,
+) -> Result<(), OriginError> {
+    match origin {
+        Some(o) if FOXGLOVE_ORIGINS.contains(&o) => check_origin(bound, host, None),
+        _ => check_origin(bound, host, origin),
+    }
+}
+
 fn host_is_console(bound: SocketAddr, host: &str) -> bool {
     let port = bound.port().to_string();
     let Some((name, host_port)) = host.rsplit_once(':') else {
@@ -164,8 +181,14 @@ pub fn writable(kind: PropertyKind) -> bool {
     matches!(kind, PropertyKind::Param | PropertyKind::Control)
 }
 
+/// [`writable`] for a kind as listings name it (`param`, `control`, `output`, ...): what a
+/// remote agent's listing says.
+pub fn writable_named(kind: &str) -> bool {
+    matches!(kind, "param" | "control")
+}
+
 /// Why a write was refused, in words for the field it came from.
-pub fn refusal(key: &str, kind: PropertyKind) -> String {
+pub fn refusal(key: &str, kind: impl std::fmt::Display) -> String {
     format!(
         "`{key}` ({kind}) cannot be set from the console: only params/ and control/ properties can"
     )
@@ -177,6 +200,24 @@ mod tests {
 
     fn addr(s: &str) -> SocketAddr {
         s.parse().unwrap()
+    }
+
+    #[test]
+    fn foxgloves_app_may_open_the_live_view_and_other_sites_may_not() {
+        let bound = addr("127.0.0.1:8765");
+        let host = Some("127.0.0.1:8765");
+        assert!(check_foxglove_origin(bound, host, Some("https://app.foxglove.dev")).is_ok());
+        assert!(check_foxglove_origin(bound, host, None).is_ok());
+        assert_eq!(
+            check_foxglove_origin(bound, host, Some("https://evil.example")),
+            Err(OriginError::ForeignOrigin("https://evil.example".into()))
+        );
+        assert!(check_foxglove_origin(
+            bound,
+            Some("evil.example:8765"),
+            Some("https://app.foxglove.dev")
+        )
+        .is_err());
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! clock, no actors: everything here is tested on plain values.
 
 pub mod access;
+pub mod foxglove;
 pub mod map;
 pub mod plan;
 pub mod throttle;

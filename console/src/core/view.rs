@@ -103,7 +103,7 @@ pub fn properties(listing: &AgentListing) -> Vec<PropertyView> {
             kind: p.kind.clone(),
             type_name: p.type_name.clone(),
             link: p.link.clone(),
-            writable: matches!(p.kind.as_str(), "param" | "control"),
+            writable: crate::core::access::writable_named(&p.kind),
         })
         .collect()
 }
@@ -165,6 +165,36 @@ pub fn bulky_summary(value: &AnyValue) -> Option<String> {
         return Some(format!("Path2 {} points", p.points().len()));
     }
     None
+}
+
+/// A remote value's one-line display, from its JSON (what the team transport carries): bulky
+/// values summarised as [`bulky_summary`] does, strings without quotes, the rest as compact JSON.
+pub fn json_text(type_name: &str, json: Option<&Value>) -> String {
+    let Some(json) = json else {
+        return String::from("?");
+    };
+    let n = |field: &str| json[field].as_u64().unwrap_or(0);
+    let len = |v: &Value| v.as_array().map_or(0, Vec::len);
+    match type_name {
+        "OccupancyGrid" => format!(
+            "OccupancyGrid {}×{} cells of {} m",
+            n("width"),
+            n("height"),
+            json["resolution"].as_f64().unwrap_or(0.0)
+        ),
+        "Image" => format!(
+            "Image {}×{} {}",
+            n("width"),
+            n("height"),
+            json["encoding"].as_str().unwrap_or_default()
+        ),
+        "LaserScan" => format!("LaserScan {} rays", len(&json["ranges"])),
+        "Path2" => format!("Path2 {} points", len(json)),
+        _ => match json {
+            Value::String(s) => s.clone(),
+            other => other.to_string(),
+        },
+    }
 }
 
 /// The last `capacity` things that happened, oldest first.
@@ -309,6 +339,21 @@ mod tests {
             bulky_summary(&(std::sync::Arc::new(1.5f64) as AnyValue)),
             None
         );
+    }
+
+    #[test]
+    fn remote_values_are_shown_from_their_json_with_bulky_ones_summarised() {
+        let grid =
+            serde_json::json!({"width": 200, "height": 100, "resolution": 0.05, "data": [0]});
+        assert_eq!(
+            json_text("OccupancyGrid", Some(&grid)),
+            "OccupancyGrid 200×100 cells of 0.05 m"
+        );
+        let path = serde_json::json!([{"x": 1.0, "y": 2.0}, {"x": 3.0, "y": 2.0}]);
+        assert_eq!(json_text("Path2", Some(&path)), "Path2 2 points");
+        assert_eq!(json_text("String", Some(&Value::from("ok"))), "ok");
+        assert_eq!(json_text("f64", Some(&Value::from(1.5))), "1.5");
+        assert_eq!(json_text("f64", None), "?");
     }
 
     #[test]

@@ -12,8 +12,10 @@ use petrel_actors::{Image, OccupancyGrid, Pose2};
 use serde::Deserialize;
 use serde_json::{json, Value};
 
-use super::state::{value_view, AgentState, Shared};
+use super::remote::remote_view;
+use super::state::{AgentState, Shared};
 use crate::core::{access, map, plan, view};
+use crate::source::Backend;
 
 type Api = Result<Json<Value>, ApiError>;
 
@@ -36,36 +38,47 @@ fn error(status: StatusCode, message: impl Into<String>) -> ApiError {
     }
 }
 
-fn agent<'a>(shared: &'a Shared, name: &str) -> Result<&'a AgentState, ApiError> {
-    shared.agent(name).ok_or_else(|| {
-        let known: Vec<&str> = shared.agents.iter().map(|a| a.name.as_str()).collect();
-        error(
-            StatusCode::NOT_FOUND,
-            format!("no agent `{name}` here; agents: {}", known.join(", ")),
-        )
-    })
+fn agent(shared: &Shared, name: &str) -> Result<Arc<AgentState>, ApiError> {
+    match shared.agent(name) {
+        Some(a) if a.has_left() => {
+            Err(error(StatusCode::NOT_FOUND, format!("agent `{name}` left")))
+        }
+        Some(a) => Ok(a),
+        None => {
+            let known: Vec<String> = shared.agents().iter().map(|a| a.name.clone()).collect();
+            Err(error(
+                StatusCode::NOT_FOUND,
+                format!("no agent `{name}` here; agents: {}", known.join(", ")),
+            ))
+        }
+    }
 }
 
 fn unavailable(e: impl std::fmt::Display) -> ApiError {
     error(StatusCode::SERVICE_UNAVAILABLE, e.to_string())
 }
 
-/// `GET /api/agents`: every agent with its modules' status and step figures.
+/// `GET /api/agents`: every agent with its modules' status and step figures; `state` is
+/// `live`, `left` (gone: shown without modules) or `unreachable` (not answering just now).
 pub(crate) async fn agents(State(shared): State<Arc<Shared>>) -> Api {
     let mut out = Vec::new();
-    for a in &shared.agents {
-        let listing = a.listing().await.map_err(unavailable)?;
-        let mut stats = Vec::new();
-        for p in listing.properties.iter().filter(|p| view::is_stat(&p.key)) {
-            if let Ok(h) = a.handle(&p.key).await {
-                stats.push((
-                    p.key.clone(),
-                    value_view(&h, false).json.unwrap_or_default(),
-                ));
-            }
-        }
+    for a in shared.agents() {
+        let listing = match a.has_left() {
+            true => Err("left".to_string()),
+            false => a.listing().await,
+        };
+        let Ok(listing) = listing else {
+            let state = if a.has_left() { "left" } else { "unreachable" };
+            out.push(
+                json!({"name": a.name, "state": state, "modules": [], "plans": [], "map": false}),
+            );
+            continue;
+        };
+        let stats = a.stats(&listing).await;
         out.push(json!({
             "name": a.name,
+            "state": "live",
+            "remote": matches!(a.backend, Backend::Remote(_)),
             "modules": view::modules(&listing, &stats),
             "plans": a.plans.iter().map(|p| &p.module).collect::<Vec<_>>(),
             "map": map::pick(&listing).any(),
@@ -98,11 +111,11 @@ pub(crate) async fn value(
     Query(q): Query<KeyQuery>,
 ) -> Api {
     let a = agent(&shared, &name)?;
-    let h = a
-        .handle(&q.key)
+    let v = a
+        .view(&q.key, true)
         .await
-        .map_err(|e| error(StatusCode::NOT_FOUND, e.to_string()))?;
-    Ok(Json(json!(value_view(&h, true))))
+        .map_err(|e| error(StatusCode::NOT_FOUND, e))?;
+    Ok(Json(json!(v)))
 }
 
 #[derive(Deserialize)]
@@ -113,31 +126,56 @@ pub(crate) struct SetRequest {
 }
 
 /// `POST /api/agents/{agent}/set` `{"key", "value"}`: sets a parameter or control from RON
-/// text with `petrel set`'s checks; 403 for other kinds, 400 with the reason for a bad value.
+/// text with `petrel set`'s checks (a remote agent's through the same remote write); 403 for
+/// other kinds, 400 with the reason for a bad value or the owner's refusal.
 pub(crate) async fn set(
     State(shared): State<Arc<Shared>>,
     Path(name): Path<String>,
     Json(request): Json<SetRequest>,
 ) -> Api {
     let a = agent(&shared, &name)?;
-    let (kind, _) = a
-        .blackboard
-        .kind_of(&request.key)
-        .await
-        .map_err(|e| error(StatusCode::NOT_FOUND, e.to_string()))?;
-    if !access::writable(kind) {
-        return Err(error(
-            StatusCode::FORBIDDEN,
-            access::refusal(&request.key, kind),
-        ));
+    let key = &request.key;
+    match &a.backend {
+        Backend::Local(bb) => {
+            let (kind, _) = bb
+                .kind_of(key)
+                .await
+                .map_err(|e| error(StatusCode::NOT_FOUND, e.to_string()))?;
+            if !access::writable(kind) {
+                return Err(error(StatusCode::FORBIDDEN, access::refusal(key, kind)));
+            }
+            bb.set_text(key, &request.value)
+                .await
+                .map_err(|e| error(StatusCode::BAD_REQUEST, e.to_string()))?;
+        }
+        Backend::Remote(remote) => {
+            let listing = a.listing().await.map_err(unavailable)?;
+            let Some(p) = listing.properties.iter().find(|p| &p.key == key) else {
+                return Err(error(
+                    StatusCode::NOT_FOUND,
+                    format!("agent `{}` has no property `{key}`", a.name),
+                ));
+            };
+            if !access::writable_named(&p.kind) {
+                return Err(error(StatusCode::FORBIDDEN, access::refusal(key, &p.kind)));
+            }
+            remote
+                .set_ron(key, &request.value)
+                .await
+                .map_err(|e| error(StatusCode::BAD_REQUEST, e))?;
+            tracing::info!(agent = %a.name, property = %key, value = %request.value, "set from the console");
+            // The owner answered once the value was set; its stream may not have brought it
+            // yet, so the value is asked for.
+            let read = remote.get_matching(key).await.map_err(unavailable)?;
+            let (_, sample) = read
+                .first()
+                .ok_or_else(|| unavailable("the agent did not answer"))?;
+            return Ok(Json(json!(remote_view(key, sample, false))));
+        }
     }
-    a.blackboard
-        .set_text(&request.key, &request.value)
-        .await
-        .map_err(|e| error(StatusCode::BAD_REQUEST, e.to_string()))?;
-    tracing::info!(agent = %a.name, property = %request.key, value = %request.value, "set from the console");
-    let h = a.handle(&request.key).await.map_err(unavailable)?;
-    Ok(Json(json!(value_view(&h, false))))
+    tracing::info!(agent = %a.name, property = %key, value = %request.value, "set from the console");
+    let v = a.view(key, false).await.map_err(unavailable)?;
+    Ok(Json(json!(v)))
 }
 
 /// `GET /api/agents/{agent}/graph`: modules and links.
@@ -155,9 +193,10 @@ pub(crate) async fn plans(State(shared): State<Arc<Shared>>, Path(name): Path<St
     for graph in &a.plans {
         let read = |path: &str| {
             let key = format!("{}/{path}", graph.module);
+            let a = a.clone();
             async move {
-                match a.handle(&key).await {
-                    Ok(h) => value_view(&h, false).json.unwrap_or_default(),
+                match a.view(&key, false).await {
+                    Ok(v) => v.json.unwrap_or_default(),
                     Err(_) => Value::Null,
                 }
             }
@@ -194,8 +233,8 @@ pub(crate) async fn contexts(State(shared): State<Arc<Shared>>, Path(name): Path
         .iter()
         .filter(|m| m.type_name == "context.manager")
     {
-        if let Ok(h) = a.handle(&format!("{}/out/active", m.name)).await {
-            active.insert(m.name.clone(), value_view(&h, false).json);
+        if let Ok(v) = a.view(&format!("{}/out/active", m.name), false).await {
+            active.insert(m.name.clone(), v.json);
         }
     }
     let switches = a.history.lock().switches.items();
@@ -235,19 +274,16 @@ pub(crate) async fn map(
     let sources = map::pick(&listing);
     let mut out = json!({ "sources": sources });
     if let Some(key) = &sources.grid {
-        if let Ok(h) = a.handle(key).await {
-            let sample = h.read();
-            out["grid_version"] = json!(sample.version);
-            if q.grid_version != Some(sample.version) {
-                if let Ok(grid) = sample.value.downcast::<OccupancyGrid>() {
-                    out["grid"] = map::grid_json(&grid);
-                }
+        if let Some((version, grid)) = a.typed::<OccupancyGrid>(key).await {
+            out["grid_version"] = json!(version);
+            if q.grid_version != Some(version) {
+                out["grid"] = map::grid_json(&grid);
             }
         }
     }
     for (name, key) in [("pose", &sources.pose), ("true_pose", &sources.true_pose)] {
-        if let Some(h) = key.as_ref().map(|k| a.handle(k)) {
-            if let Some(pose) = h.await.ok().and_then(|h| h.get::<Pose2>()) {
+        if let Some(key) = key {
+            if let Some((_, pose)) = a.typed::<Pose2>(key).await {
                 out[name] = map::pose_json(&pose);
             }
         }
@@ -259,8 +295,8 @@ pub(crate) async fn map(
         ("laser", &sources.laser),
     ] {
         if let Some(key) = key {
-            if let Ok(h) = a.handle(key).await {
-                out[name] = value_view(&h, true).json.unwrap_or_default();
+            if let Ok(v) = a.view(key, true).await {
+                out[name] = v.json.unwrap_or_default();
             }
         }
     }
@@ -274,10 +310,10 @@ pub(crate) async fn camera(State(shared): State<Arc<Shared>>, Path(name): Path<S
     let Some(key) = map::pick(&listing).camera else {
         return Ok(Json(json!({ "image": null })));
     };
-    let image = match a.handle(&key).await {
-        Ok(h) => h.get::<Image>().map(|i| map::image_json(&i)),
-        // No frame yet: the queue's latest item cannot be read before the first push.
-        Err(_) => None,
-    };
+    // No frame yet: the queue's latest item cannot be read before the first push.
+    let image = a
+        .typed::<Image>(&key)
+        .await
+        .map(|(_, i)| map::image_json(&i));
     Ok(Json(json!({ "key": key, "image": image })))
 }

@@ -6,13 +6,14 @@ use tokio::time::Instant;
 
 use parking_lot::Mutex;
 use petrel_actors::team::{QueueTap, Tap, ValueTap};
-use petrel_actors::{AnyHandle, Blackboard, TypeInfo};
+use petrel_actors::{Blackboard, TypeInfo};
 use serde_json::{json, Value};
 use tokio::task::JoinHandle;
 
 use super::state::{History, HISTORY};
 use crate::core::plan::{fired_between, parse_marking, Firing, PlanGraph};
 use crate::core::view::Recent;
+use crate::source::Backend;
 use crate::AgentSource;
 
 /// Starts the readers of one agent.
@@ -21,7 +22,12 @@ pub(crate) async fn start(
     history: &Arc<Mutex<History>>,
     started: Instant,
 ) -> Vec<JoinHandle<()>> {
-    let bb = &source.blackboard;
+    let bb = match &source.backend {
+        Backend::Local(bb) => bb,
+        Backend::Remote(remote) => {
+            return super::collect_remote::start(remote, &source.plans, history, started).await
+        }
+    };
     let mut tasks = Vec::new();
     if let Some((tap, type_info)) = queue_tap(bb, "_supervisor/events").await {
         let history = history.clone();
@@ -64,7 +70,11 @@ pub(crate) async fn start(
                 .ok();
             let (module, history) = (plan.module.clone(), history.clone());
             tasks.push(tokio::spawn(read_queue(tap, type_info, move |item| {
-                let firing = firing_of(&item, started, fired.as_ref());
+                let fired = fired
+                    .as_ref()
+                    .and_then(|h| h.get::<i64>())
+                    .map_or(0, |n| *n);
+                let firing = firing_of(&item, started, fired);
                 if let Some(recent) = history.lock().firings.get_mut(&module) {
                     recent.push(firing);
                 }
@@ -88,8 +98,9 @@ pub(crate) async fn start(
     tasks
 }
 
-/// A firing as a mission pushed it to `out/firings` (JSON: transitions, marking).
-fn firing_of(item: &Value, started: Instant, fired: Option<&AnyHandle>) -> Firing {
+/// A firing as a mission pushed it to `out/firings` (JSON: transitions, marking), with the
+/// count `out/fired` shows.
+pub(crate) fn firing_of(item: &Value, started: Instant, fired: i64) -> Firing {
     let transitions = item["transitions"].as_array().map_or(Vec::new(), |a| {
         a.iter()
             .filter_map(|t| t.as_str().map(str::to_string))
@@ -97,7 +108,7 @@ fn firing_of(item: &Value, started: Instant, fired: Option<&AnyHandle>) -> Firin
     });
     Firing {
         time_s: started.elapsed().as_secs_f64(),
-        fired: fired.and_then(|h| h.get::<i64>()).map_or(0, |n| *n),
+        fired,
         marking: item["marking"].as_str().unwrap_or_default().to_string(),
         transitions,
     }

@@ -3,6 +3,9 @@
 
 mod api;
 mod collect;
+mod collect_remote;
+mod foxglove;
+mod remote;
 mod state;
 mod ws;
 
@@ -21,6 +24,8 @@ use tokio::task::JoinHandle;
 use crate::core::access::{self, Access};
 use crate::{AgentSource, ConsoleError, ConsoleOptions, LogTail};
 use state::Shared;
+
+pub use foxglove::FoxgloveServer;
 
 /// A running console; [`stop`](Console::stop) ends it (dropping it leaves it serving until the
 /// runtime ends).
@@ -76,6 +81,19 @@ impl Console {
             server,
             shared,
         })
+    }
+
+    /// Shows another agent (one that joined); it replaces a shown agent of the same name (one
+    /// that left and came back).
+    pub async fn join(&self, agent: AgentSource) {
+        tracing::info!(agent = %agent.name, "the console shows an agent that joined");
+        self.shared.join(agent).await;
+    }
+
+    /// Shows the agent `name` as gone (its requests are refused; it stays listed as `left`).
+    pub fn leave(&self, name: &str) {
+        tracing::info!(agent = %name, "the console shows an agent that left");
+        self.shared.leave(name);
     }
 
     /// The address it listens on (the port the system chose for port 0).

@@ -13,12 +13,11 @@ use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{Query, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use petrel_actors::AnyHandle;
 use serde::Deserialize;
 use serde_json::{json, Value};
 
-use super::state::{value_view, AgentState, Shared};
-use crate::core::throttle::{interval_of, Throttle};
+use super::state::{AgentState, Shared, Watched};
+use crate::core::throttle::Throttle;
 
 #[derive(Deserialize)]
 pub(crate) struct WsQuery {
@@ -31,16 +30,15 @@ pub(crate) async fn upgrade(
     Query(q): Query<WsQuery>,
     ws: WebSocketUpgrade,
 ) -> Response {
-    if shared.agent(&q.agent).is_none() {
+    let Some(agent) = shared.agent(&q.agent).filter(|a| !a.has_left()) else {
         return (
             StatusCode::NOT_FOUND,
             format!("no agent `{}` here", q.agent),
         )
             .into_response();
-    }
+    };
     ws.on_upgrade(move |socket| async move {
-        let agent = shared.agent(&q.agent).expect("checked before the upgrade");
-        if let Err(e) = serve(socket, agent, shared.stopped()).await {
+        if let Err(e) = serve(socket, &agent, shared.stopped()).await {
             tracing::debug!(error = %e, "console socket closed");
         }
     })
@@ -58,8 +56,8 @@ struct ClientMessage {
     watch: Watch,
 }
 
-struct Watched {
-    handles: Vec<AnyHandle>,
+struct Watching {
+    handles: Vec<Watched>,
     throttle: Throttle,
 }
 
@@ -68,10 +66,7 @@ async fn serve(
     agent: &AgentState,
     stopped: impl std::future::Future<Output = ()>,
 ) -> Result<(), axum::Error> {
-    let mut watched = Watched {
-        handles: Vec::new(),
-        throttle: Throttle::default(),
-    };
+    let mut watched = empty();
     let mut stopped = std::pin::pin!(stopped);
     loop {
         // Tokio's clock, not the system's: under a paused test clock the two differ.
@@ -97,13 +92,18 @@ async fn serve(
                 return Ok(());
             }
         }
+        if agent.has_left() {
+            let _ = socket.send(Message::Close(None)).await;
+            return Ok(());
+        }
         let now = now();
         let values: Vec<_> = watched
             .handles
             .iter()
             .enumerate()
-            .filter(|(i, h)| watched.throttle.due(*i, h.version(), now))
-            .map(|(_, h)| value_view(h, false))
+            .filter_map(|(i, h)| h.version().map(|v| (i, v, h)))
+            .filter(|(i, version, _)| watched.throttle.due(*i, *version, now))
+            .filter_map(|(_, _, h)| h.view())
             .collect();
         if !values.is_empty() {
             send(&mut socket, json!({ "values": values })).await?;
@@ -120,13 +120,16 @@ async fn send(socket: &mut WebSocket, message: Value) -> Result<(), axum::Error>
 }
 
 /// Handles for what the client asked to watch, and the keys that could not be watched.
-async fn watch(agent: &AgentState, watch: Watch) -> (Watched, Vec<String>) {
+async fn watch(agent: &AgentState, watch: Watch) -> (Watching, Vec<String>) {
+    let listing = match agent.listing().await {
+        Ok(listing) => listing,
+        Err(e) => return (empty(), vec![e]),
+    };
     let keys = match watch {
         Watch::Keys(keys) => keys,
-        Watch::All(all) if all == "all" => match agent.listing().await {
-            Ok(listing) => listing.properties.into_iter().map(|p| p.key).collect(),
-            Err(e) => return (empty(), vec![e.to_string()]),
-        },
+        Watch::All(all) if all == "all" => {
+            listing.properties.iter().map(|p| p.key.clone()).collect()
+        }
         Watch::All(other) => {
             return (
                 empty(),
@@ -137,10 +140,15 @@ async fn watch(agent: &AgentState, watch: Watch) -> (Watched, Vec<String>) {
     let mut watched = empty();
     let mut problems = Vec::new();
     for key in keys {
-        match agent.handle(&key).await {
-            Ok(h) => {
-                watched.throttle.add(interval_of(h.type_info().name()));
-                watched.handles.push(h);
+        let type_name = listing
+            .properties
+            .iter()
+            .find(|p| p.key == key)
+            .map_or("", |p| p.type_name.as_str());
+        match agent.watched(&key, type_name).await {
+            Ok(w) => {
+                watched.throttle.add(w.interval());
+                watched.handles.push(w);
             }
             Err(e) => problems.push(format!("{key}: {e}")),
         }
@@ -148,8 +156,8 @@ async fn watch(agent: &AgentState, watch: Watch) -> (Watched, Vec<String>) {
     (watched, problems)
 }
 
-fn empty() -> Watched {
-    Watched {
+fn empty() -> Watching {
+    Watching {
         handles: Vec::new(),
         throttle: Throttle::default(),
     }

@@ -1,0 +1,45 @@
+//! The Foxglove live view: the agents' properties served over the Foxglove WebSocket protocol
+//! ([`core::foxglove`](crate::core::foxglove)), so Foxglove shows the laser, the map and the
+//! image while the robot runs.
+//!
+//! Channels and messages are those of a recording: the console does not encode anything
+//! itself. The root package hands in [`LiveEncoders`] built on petrel-record's encoders (topic
+//! names, schemas, messages), so a live channel and a recorded one are the same.
+
+use std::sync::Arc;
+
+use petrel_actors::{AnyValue, TypeInfo};
+
+/// A channel's topic and schema, as a recording names them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveChannel {
+    /// The topic, `/agent/module/path`.
+    pub topic: String,
+    /// Message encoding (`json`, `cdr`).
+    pub encoding: String,
+    /// Schema name (`foxglove.LaserScan`, ...).
+    pub schema_name: String,
+    /// Schema text.
+    pub schema: String,
+    /// Schema encoding (`jsonschema`, `ros2msg`).
+    pub schema_encoding: String,
+}
+
+/// Encodes the messages of one channel.
+pub trait ChannelEncoder: Send + Sync + 'static {
+    /// Appends the message of `value`, stamped `stamp_ns` (ns since the Unix epoch), to `out`.
+    fn encode(&self, value: &AnyValue, stamp_ns: u64, out: &mut Vec<u8>) -> Result<(), String>;
+}
+
+/// Decides the channel of each property.
+pub trait LiveEncoders: Send + Sync + 'static {
+    /// The channel of `agent`'s property `key` of type `type_info`, whose current value (or
+    /// latest queue item) is `first`, and its encoder; `None` leaves it out.
+    fn channel(
+        &self,
+        agent: &str,
+        key: &str,
+        type_info: &TypeInfo,
+        first: Option<&AnyValue>,
+    ) -> Option<(LiveChannel, Arc<dyn ChannelEncoder>)>;
+}
