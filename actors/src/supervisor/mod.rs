@@ -15,7 +15,7 @@ use tokio::time::Instant;
 
 use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
-use crate::config::ModuleConfig;
+use crate::config::{ModuleConfig, Scheduler};
 use crate::handle::QueueWriter;
 use crate::module_actor::status;
 use crate::module_actor::{ModuleArgs, StopRequest};
@@ -40,6 +40,8 @@ pub(crate) struct ModuleSpec {
     pub policy: RestartPolicy,
     pub watchdog: Option<Duration>,
     pub shutdown_timeout: Duration,
+    /// Runs on the shared runtime, not on the agent's thread (`long_steps: true`).
+    pub long_steps: bool,
 }
 
 /// A supervision group as the supervisor is told about it.
@@ -104,6 +106,10 @@ pub(crate) struct SupervisorArgs {
     pub modules: Vec<ModuleSpec>,
     pub events: QueueWriter<SupervisorEvent>,
     pub probe: StepProbe,
+    pub scheduler: Scheduler,
+    /// The shared runtime, when the agent's actors run on a thread of their own: modules with
+    /// `long_steps` are spawned there.
+    pub shared: Option<tokio::runtime::Handle>,
 }
 
 pub(crate) struct SupervisorState {
@@ -121,6 +127,8 @@ pub(crate) struct SupervisorState {
     stopping: bool,
     rng: u64,
     probe: StepProbe,
+    scheduler: Scheduler,
+    shared: Option<tokio::runtime::Handle>,
 }
 
 /// A runtime request about one module.
@@ -186,6 +194,8 @@ impl Actor for AgentSupervisor {
             stopping: false,
             rng: seed | 1,
             probe: args.probe,
+            scheduler: args.scheduler,
+            shared: args.shared,
         };
         for i in 0..state.slots.len() {
             state.spawn(i).await;
@@ -309,7 +319,21 @@ impl SupervisorState {
             step_mark: self.probe.mark(&slot.spec.name),
         };
         slot.backoff.started(Instant::now());
-        match slot.spec.module_type.spawn(args, self.me.get_cell()).await {
+        let spawning = slot.spec.module_type.spawn(args, self.me.get_cell());
+        // ractor spawns an actor where it is spawned from: a long-step module is spawned from
+        // a task on the shared runtime, so that its steps never hold up the agent's thread.
+        let spawned = match (&self.shared, slot.spec.long_steps) {
+            (Some(shared), true) => crate::agent_thread::run_on(shared, spawning)
+                .await
+                .unwrap_or_else(|e| {
+                    Err(crate::module_types::SpawnFailure {
+                        reason: e,
+                        unrecoverable: false,
+                    })
+                }),
+            _ => spawning.await,
+        };
+        match spawned {
             Ok((actor, join)) => {
                 slot.actor = Some(actor);
                 slot.join = Some(join);
