@@ -72,9 +72,14 @@ impl Module for Busy {
 
 fn config(busy: usize) -> String {
     let mut modules = String::from(r#"(name: "p", type: "bench.periodic"),"#);
+    // On an agent thread, busy modules are what `long_steps` is for: off the agent's thread.
+    let long = match common::scheduler().as_str() {
+        "agent_thread" => "long_steps: true, ",
+        _ => "",
+    };
     for i in 0..busy {
         modules.push_str(&format!(
-            r#"(name: "b{i}", type: "bench.busy", links: {{"in/value": "b{i}/out/value"}}),"#
+            r#"(name: "b{i}", type: "bench.busy", {long}links: {{"in/value": "b{i}/out/value"}}),"#
         ));
     }
     format!(r#"Agent(name: "bench", modules: [{modules}])"#)
@@ -95,7 +100,7 @@ struct Run {
 fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> Run {
     let mut registry = common::registry();
     registry.register::<Periodic>().register::<Busy>();
-    let file = ConfigFile::parse("jitter.ron", &config(busy)).unwrap();
+    let file = ConfigFile::parse("jitter.ron", &common::scheduled(&config(busy))).unwrap();
     let agent = rt.block_on(async { Agent::start(&file, &registry).await.unwrap() });
     STEPS.lock().unwrap().clear();
     std::thread::sleep(length);

@@ -3,8 +3,9 @@
 //! the `property_wake` petrel round trip (module A writes, B wakes and answers, A wakes)
 //! measured in the same run.
 //!
-//! The plan loops `LABEL_top; <go ? work>; GOTO_LABEL_top`, `go` bound to
-//! `w/in/go > w/out/done`, `work` enabling `w` until `w/out/done >= w/in/go`. The module
+//! The plan loops `LABEL_top; < go ? work; GOTO_LABEL_top : quit ? work >`, `go` bound to
+//! `w/in/go > w/out/done`, `work` enabling `w` until `w/out/done >= w/in/go`; `quit` (never
+//! true here) gives the plan the goal place a mission needs. The module
 //! `bench.trigger` makes the requests (`w/in/go` is linked to its `out/request`), one after
 //! the other. Both functions are timed the same way: a batch of N round trips, from the bench
 //! thread's request to the last answer (so the mission's return to its waiting place between
@@ -28,7 +29,7 @@ fn mission_config(plan: &str) -> String {
     (name: "w", type: "bench.work", values: {{"enabled": false}}, links: {{"in/go": "t/out/request"}}),
     (name: "m", type: "mission.pnp", values: {{
         "params/plan": "{plan}",
-        "params/conditions": {{"go": "w/in/go > w/out/done"}},
+        "params/conditions": {{"go": "w/in/go > w/out/done", "quit": "w/in/go < 0"}},
         "params/actions": {{"work": (enable: ["w"], finished: "w/out/done >= w/in/go")}},
     }}),
 ])"#
@@ -42,7 +43,11 @@ fn bench(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("petrel-pnp-reaction-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let plan = dir.join("loop.plan");
-    std::fs::write(&plan, "LABEL_top; <go ? work>; GOTO_LABEL_top\n").unwrap();
+    std::fs::write(
+        &plan,
+        "LABEL_top; < go ? work; GOTO_LABEL_top : quit ? work >\n",
+    )
+    .unwrap();
 
     let (agent, go, batches) = rt.block_on(async {
         let agent = common::start(&mission_config(&plan.display().to_string())).await;

@@ -6,8 +6,9 @@ use std::time::Duration;
 use ractor::{Actor, ActorRef};
 use tokio::task::JoinHandle;
 
+use crate::agent_thread::AgentThread;
 use crate::blackboard::Blackboard;
-use crate::config::{ConfigErrors, ConfigFile, ModuleConfig};
+use crate::config::{ConfigErrors, ConfigFile, ModuleConfig, Scheduler};
 use crate::module_types::ModuleRegistry;
 use crate::step_probe::StepProbe;
 use crate::summary::RunSummary;
@@ -79,6 +80,8 @@ pub struct Agent {
     blackboard: Blackboard,
     supervisor: ActorRef<SupervisorMsg>,
     joins: Vec<JoinHandle<()>>,
+    /// Where its actors run under `scheduler: agent_thread`; ends with the agent.
+    thread: Option<AgentThread>,
 }
 
 impl Agent {
@@ -143,12 +146,23 @@ impl Agent {
                     shutdown_timeout: ms(m
                         .shutdown_timeout_ms
                         .unwrap_or(cfg.supervision.shutdown_timeout_ms)),
+                    long_steps: m.long_steps,
                 })
             })
             .collect();
         let name = cfg.name.clone();
-        let (blackboard, bb_join) = Blackboard::spawn(registry)
-            .await
+        let thread = match cfg.scheduler {
+            Scheduler::Shared => None,
+            Scheduler::AgentThread => AgentThread::start(&name)
+                .map_err(|e| StartError::Spawn(format!("the agent's thread: {e}")))?,
+        };
+        // Actors run on the runtime they are spawned from: the agent's thread, if it has one.
+        let spawned = match &thread {
+            Some(thread) => thread.run(Blackboard::spawn(registry)).await,
+            None => Ok(Blackboard::spawn(registry).await),
+        };
+        let (blackboard, bb_join) = spawned
+            .map_err(StartError::Spawn)?
             .map_err(|e| StartError::Spawn(e.to_string()))?;
         let control = AgentControl::new();
         let probe = StepProbe::default();
@@ -162,10 +176,13 @@ impl Agent {
             modules,
             events,
             probe: probe.clone(),
+            scheduler: cfg.scheduler,
+            shared: thread.as_ref().map(AgentThread::shared),
         };
         Ok(PreparedAgent {
             pending: Some((args, bb_join)),
             blackboard,
+            thread,
         })
     }
 
@@ -242,6 +259,7 @@ impl Agent {
         for join in self.joins {
             let _ = join.await;
         }
+        drop(self.thread);
         tracing::info!(agent = %self.name, "agent stopped");
     }
 
@@ -258,6 +276,7 @@ impl Agent {
 pub struct PreparedAgent {
     pending: Option<(SupervisorArgs, JoinHandle<()>)>,
     blackboard: Blackboard,
+    thread: Option<AgentThread>,
 }
 
 impl PreparedAgent {
@@ -272,11 +291,19 @@ impl PreparedAgent {
         let control = args.control.clone();
         let probe = args.probe.clone();
         let name = args.agent.to_string();
-        let (supervisor, sup_join) = match Actor::spawn(None, AgentSupervisor, args).await {
+        let spawn = Actor::spawn(None, AgentSupervisor, args);
+        let spawned = match &self.thread {
+            Some(thread) => thread
+                .run(spawn)
+                .await
+                .and_then(|r| r.map_err(|e| e.to_string())),
+            None => spawn.await.map_err(|e| e.to_string()),
+        };
+        let (supervisor, sup_join) = match spawned {
             Ok(spawned) => spawned,
             Err(e) => {
                 self.blackboard.stop();
-                return Err(StartError::Spawn(e.to_string()));
+                return Err(StartError::Spawn(e));
             }
         };
         Ok(Agent {
@@ -286,6 +313,7 @@ impl PreparedAgent {
             blackboard: self.blackboard.clone(),
             supervisor,
             joins: vec![sup_join, bb_join],
+            thread: self.thread.take(),
         })
     }
 }

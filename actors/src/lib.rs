@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 mod agent;
+mod agent_thread;
 mod blackboard;
 mod cell;
 pub mod config;

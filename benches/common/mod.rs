@@ -72,10 +72,25 @@ pub fn registry() -> ModuleRegistry {
 
 /// Starts an agent from config text.
 pub async fn start(text: &str) -> Agent {
-    let file = ConfigFile::parse("bench.ron", text).unwrap_or_else(|e| panic!("{e}"));
+    let text = scheduled(text);
+    let file = ConfigFile::parse("bench.ron", &text).unwrap_or_else(|e| panic!("{e}"));
     Agent::start(&file, &registry())
         .await
         .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `PETREL_BENCH_SCHEDULER=agent_thread` runs the bench agents with `scheduler: agent_thread`,
+/// so one build measures both schedulers (unset: the config's own, `shared` by default).
+pub fn scheduler() -> String {
+    std::env::var("PETREL_BENCH_SCHEDULER").unwrap_or_default()
+}
+
+/// Agent config `text` (which starts `Agent(`) with the scheduler [`scheduler`] names, if any.
+pub fn scheduled(text: &str) -> String {
+    match scheduler().as_str() {
+        "" => text.to_string(),
+        name => text.replacen("Agent(", &format!("Agent(scheduler: {name}, "), 1),
+    }
 }
 
 /// Two modules playing ping-pong through two links: `a` (bench.ping) and `b` (bench.echo).

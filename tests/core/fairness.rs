@@ -122,3 +122,88 @@ async fn long_steps_with_work_waiting_let_a_periodic_module_step_between_their_s
         "{summary:?}"
     );
 }
+
+/// Steps so far of every `test.self_waker` (only the stop test uses them).
+static WAKER_STEPS: AtomicU64 = AtomicU64::new(0);
+
+/// `test.self_waker`: wakes itself after every step (its input is its own output); its cleanup
+/// notes in `out/steps_at_cleanup` how many steps every self-waker had made by then.
+struct SelfWaker {
+    input: Input<f64>,
+    out: Output<f64>,
+    at_cleanup: Output<i64>,
+}
+
+impl Module for SelfWaker {
+    const TYPE: &'static str = "test.self_waker";
+    const DESCRIPTION: &'static str = "Wakes itself; notes the step total at cleanup.";
+    fn declare(ports: &mut Ports) -> Self {
+        SelfWaker {
+            input: ports.input("in/value", 0.0, "its own output"),
+            out: ports.output("out/value", 0.0, "steps so far"),
+            at_cleanup: ports.output("out/steps_at_cleanup", -1, "all wakers' steps at cleanup"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        WAKER_STEPS.fetch_add(1, Ordering::SeqCst);
+        self.out.set(self.input.value() + 1.0);
+        Ok(())
+    }
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.at_cleanup
+            .set(WAKER_STEPS.load(Ordering::SeqCst) as i64);
+        Ok(())
+    }
+}
+
+/// One thread (the paused-clock runtime), so "at once" is exact: the stop halts every module
+/// before any of them cleans up. Stopped one by one, the busy modules kept stepping while the
+/// ones after them cleaned up, and a stop took as long as their turns on the workers.
+#[tokio::test(start_paused = true)]
+async fn an_agent_stop_halts_every_busy_module_before_the_first_cleanup() {
+    let mut registry = crate::support::registry();
+    registry.register::<SelfWaker>();
+    let wakers: Vec<String> = (0..5)
+        .map(|i| {
+            format!(
+                r#"(name: "w{i}", type: "test.self_waker", links: {{"in/value": "w{i}/out/value"}}),"#
+            )
+        })
+        .collect();
+    let text = format!(r#"Agent(name: "r", modules: [{}])"#, wakers.join("\n"));
+    let agent = Agent::start(&config(&text), &registry).await.unwrap();
+    // Every waker has stepped a few times (bounded by the test's own deadline).
+    for i in 0..5 {
+        let steps = agent
+            .blackboard()
+            .handle::<f64>(&format!("w{i}/out/value"))
+            .await
+            .unwrap();
+        tokio::time::timeout(Duration::from_secs(30), async {
+            while *steps.get() < 10.0 {
+                steps.changed().await;
+            }
+        })
+        .await
+        .expect("every waker steps");
+    }
+    agent.stop_modules(Duration::from_secs(10)).await;
+    let mut totals = Vec::new();
+    for i in 0..5 {
+        let at = agent
+            .blackboard()
+            .get::<i64>(&format!("w{i}/out/steps_at_cleanup"))
+            .await
+            .unwrap();
+        totals.push(*at);
+    }
+    assert!(totals[0] > 0, "every cleanup ran: {totals:?}");
+    assert!(
+        totals.iter().all(|&t| t == totals[0]),
+        "no module stepped once the first cleanup began: {totals:?}"
+    );
+    agent.shutdown().await;
+}

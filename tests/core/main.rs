@@ -9,6 +9,7 @@ mod fairness;
 mod links;
 mod ordering;
 mod ordering_modules;
+mod placement;
 mod queues;
 mod scheduling;
 mod snapshot;

@@ -5,7 +5,8 @@
 //!
 //! These run on the wall clock (a paused clock never advances while a module is always
 //! runnable), each wait bounded by [`DEADLINE`]; the ordering and fairness tests run on a
-//! current-thread runtime (one thread for everything, like `--workers 1`) and on two workers.
+//! current-thread runtime (one thread for everything, like `--workers 1`), on two workers, and
+//! on two workers with `scheduler: agent_thread` (the agent's modules on a thread of its own).
 
 use std::time::Duration;
 
@@ -17,8 +18,25 @@ use crate::support::config;
 /// The longest any wait of these tests may take before the test fails.
 const DEADLINE: Duration = Duration::from_secs(20);
 
-async fn start(text: &str) -> Agent {
-    Agent::start(&config(text), &registry())
+/// Where the agent's modules run: `Shared` on the test's runtime, `AgentThread` with
+/// `scheduler: agent_thread`.
+#[derive(Clone, Copy, PartialEq)]
+enum On {
+    Shared,
+    AgentThread,
+}
+
+/// Starts agent `r` from `text` (which begins `Agent(name: "r", `), scheduled as `on` says.
+async fn start(on: On, text: &str) -> Agent {
+    let text = match on {
+        On::Shared => text.to_string(),
+        On::AgentThread => text.replacen(
+            r#"Agent(name: "r", "#,
+            r#"Agent(name: "r", scheduler: agent_thread, "#,
+            1,
+        ),
+    };
+    Agent::start(&config(&text), &registry())
         .await
         .unwrap_or_else(|e| panic!("agent should start:\n{e}"))
 }
@@ -68,8 +86,9 @@ fn assert_all_stopped(summary: &RunSummary) {
 
 /// `w` writes 1..=2000, letting the readers run after each write; `r1` and `r2` read it, `r3`
 /// reads `r1`.
-async fn readers_never_go_back() {
+async fn readers_never_go_back(on: On) {
     let agent = start(
+        on,
         r#"Agent(name: "r", modules: [
             (name: "w", type: "test.writer", links: {"in/value": "w/out/value"}, values: {"params/limit": 2000, "params/yield": true}),
             (name: "r1", type: "test.relay", links: {"in/value": "w/out/value"}),
@@ -104,18 +123,24 @@ async fn readers_never_go_back() {
 
 #[tokio::test(flavor = "current_thread")]
 async fn a_reader_never_sees_a_value_older_than_one_it_saw_on_one_thread() {
-    readers_never_go_back().await;
+    readers_never_go_back(On::Shared).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_reader_never_sees_a_value_older_than_one_it_saw_on_two_workers() {
-    readers_never_go_back().await;
+    readers_never_go_back(On::Shared).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_reader_never_sees_a_value_older_than_one_it_saw_on_the_agents_thread() {
+    readers_never_go_back(On::AgentThread).await;
 }
 
 /// `w` writes 1..=300; `c0` → `c1` → `c2` → `c3` pass it on. Every value a relay saw, its
 /// predecessor saw first, in an earlier step.
-async fn chain_in_causal_order() {
+async fn chain_in_causal_order(on: On) {
     let agent = start(
+        on,
         r#"Agent(name: "r", modules: [
             (name: "w", type: "test.writer", links: {"in/value": "w/out/value"}, values: {"params/limit": 300}),
             (name: "c0", type: "test.relay", links: {"in/value": "w/out/value"}),
@@ -164,27 +189,38 @@ async fn chain_in_causal_order() {
 
 #[tokio::test(flavor = "current_thread")]
 async fn a_chain_of_modules_steps_in_causal_order_on_one_thread() {
-    chain_in_causal_order().await;
+    chain_in_causal_order(On::Shared).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_chain_of_modules_steps_in_causal_order_on_two_workers() {
-    chain_in_causal_order().await;
+    chain_in_causal_order(On::Shared).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_chain_of_modules_steps_in_causal_order_on_the_agents_thread() {
+    chain_in_causal_order(On::AgentThread).await;
 }
 
 /// Two workers, like `petrel run` on this machine: a step that blocks one of them must not hold
-/// up the modules that are ready on the other. (On one thread, today, it does: moving long
-/// steps off the agent's thread is the scheduler issue's to do.)
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_blocking_step_does_not_hold_up_the_other_modules() {
-    let gate_name = "a_blocking_step_does_not_hold_up_the_other_modules";
-    let agent = start(&format!(
-        r#"Agent(name: "r", modules: [
-            (name: "b", type: "test.blocker", values: {{"params/gate": "{gate_name}"}}),
+/// up the modules that are ready on the other. (On one thread it does; with
+/// `scheduler: agent_thread` the blocker is declared `long_steps: true`, which puts it on the
+/// shared workers, away from the agent's thread.)
+async fn blocking_step_holds_up_nobody(on: On, gate_name: &str) {
+    let long_steps = match on {
+        On::Shared => "",
+        On::AgentThread => "long_steps: true, ",
+    };
+    let agent = start(
+        on,
+        &format!(
+            r#"Agent(name: "r", modules: [
+            (name: "b", type: "test.blocker", {long_steps}values: {{"params/gate": "{gate_name}"}}),
             (name: "e", type: "test.echo"),
             (name: "c", type: "demo.counter", values: {{"params/period_ms": 10}}),
         ])"#
-    ))
+        ),
+    )
     .await;
     // Every handle is made before `b` blocks: the blackboard actor's task may be queued on the
     // worker `b` holds (tokio's LIFO slot cannot be stolen), so no request to it is made until
@@ -208,11 +244,30 @@ async fn a_blocking_step_does_not_hold_up_the_other_modules() {
     assert_all_stopped(&stop(agent).await);
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_blocking_step_does_not_hold_up_the_other_modules() {
+    blocking_step_holds_up_nobody(
+        On::Shared,
+        "a_blocking_step_does_not_hold_up_the_other_modules",
+    )
+    .await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_blocking_step_declared_long_does_not_hold_up_the_agents_thread() {
+    blocking_step_holds_up_nobody(
+        On::AgentThread,
+        "a_blocking_step_declared_long_does_not_hold_up_the_agents_thread",
+    )
+    .await;
+}
+
 /// `w` writes in a tight loop for up to 20 s; beside it the echo answers, the periodic module
 /// counts, and the stop stops `w` (not killed after the stop timeout) — all while `w` is still
 /// writing, so none of it waited for `w` to finish.
-async fn tight_loop_starves_nobody() {
+async fn tight_loop_starves_nobody(on: On) {
     let agent = start(
+        on,
         r#"Agent(name: "r", modules: [
             (name: "w", type: "test.writer", links: {"in/value": "w/out/value"}, values: {"params/limit": 1000000000000}),
             (name: "e", type: "test.echo"),
@@ -234,10 +289,15 @@ async fn tight_loop_starves_nobody() {
 
 #[tokio::test(flavor = "current_thread")]
 async fn a_module_writing_in_a_tight_loop_starves_nobody_on_one_thread() {
-    tight_loop_starves_nobody().await;
+    tight_loop_starves_nobody(On::Shared).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_module_writing_in_a_tight_loop_starves_nobody_on_two_workers() {
-    tight_loop_starves_nobody().await;
+    tight_loop_starves_nobody(On::Shared).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_module_writing_in_a_tight_loop_starves_nobody_on_the_agents_thread() {
+    tight_loop_starves_nobody(On::AgentThread).await;
 }

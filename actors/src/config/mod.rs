@@ -27,10 +27,12 @@ use crate::team::{LinkTarget, TeamConfig};
 
 mod error;
 mod record;
+mod scheduler;
 mod written;
 
 pub use error::{parse_ron, read_text, ConfigError, ConfigErrors};
 pub use record::RecordSection;
+pub use scheduler::Scheduler;
 
 /// One agent's configuration.
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -56,6 +58,9 @@ pub struct AgentConfig {
     /// without it.
     #[serde(default)]
     pub record: Option<RecordSection>,
+    /// Where the agent's modules run (default `shared`; see [`Scheduler`]).
+    #[serde(default)]
+    pub scheduler: Scheduler,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -92,6 +97,10 @@ pub struct ModuleConfig {
     /// Time the module gets to stop before it is killed, ms (default: the agent's).
     #[serde(default)]
     pub shutdown_timeout_ms: Option<u64>,
+    /// The module's steps are long (or block): under `scheduler: agent_thread` it runs on the
+    /// shared runtime instead of its agent's thread, so it never holds up the other modules.
+    #[serde(default)]
+    pub long_steps: bool,
 }
 
 /// A loaded config, with the text it came from (for locating errors).
@@ -132,8 +141,8 @@ impl ConfigFile {
     }
 
     /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
-    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`; per module `type`,
-    /// `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`), while modules match by name
+    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`; per module
+    /// `type`, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
     /// and their `values`, `links` and `capacities` are merged key by key; modules only it
     /// has are appended.
     pub fn overlay(&mut self, overlay: ConfigFile) {
@@ -153,6 +162,9 @@ impl ConfigFile {
         }
         if wrote("contexts") {
             self.config.contexts = overlay.config.contexts.clone();
+        }
+        if wrote("scheduler") {
+            self.config.scheduler = overlay.config.scheduler;
         }
         if wrote("name") && !overlay.config.name.is_empty() {
             self.config.name = overlay.config.name.clone();
@@ -180,6 +192,9 @@ impl ConfigFile {
                     }
                     if wrote("shutdown_timeout_ms") {
                         base.shutdown_timeout_ms = m.shutdown_timeout_ms;
+                    }
+                    if wrote("long_steps") {
+                        base.long_steps = m.long_steps;
                     }
                     base.values.extend(m.values);
                     base.links.extend(m.links);
@@ -215,6 +230,7 @@ impl ConfigFile {
         let mut registry = Registry::new(&self.config.name);
         registry.keep_settings(&self.config);
         let mut errors = self.check_supervision();
+        errors.extend(self.check_scheduler());
         let mut names = HashSet::new();
         for m in &self.config.modules {
             if !names.insert(m.name.as_str()) {

@@ -180,6 +180,8 @@ impl<M: Module> Actor for ModuleActor<M> {
         let span = state.span.clone();
         match failure(catching(state.run().instrument(span.clone())).await) {
             None => {
+                // Stopped with the whole agent: clean up in reverse start order, when told.
+                state.stop.cleanup_turn().await;
                 let cleanup = catching(state.module.cleanup(&mut state.ctx).instrument(span)).await;
                 state.publish(status::STOPPED);
                 me.stop(None);

@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use super::{ControlRequest, ModuleSpec, Slot, SlotState, SupervisorState};
-use crate::config::ModuleConfig;
+use crate::config::{ModuleConfig, Scheduler};
 
 impl SupervisorState {
     pub(super) async fn control_request(&mut self, request: ControlRequest) -> Result<(), String> {
@@ -61,6 +61,13 @@ impl SupervisorState {
                 config.type_name
             ));
         };
+        if config.long_steps && self.scheduler != Scheduler::AgentThread {
+            return Err(format!(
+                "module `{}`: `long_steps: true` needs `scheduler: agent_thread` (this agent's scheduler is `{}`)",
+                config.name,
+                self.scheduler.name()
+            ));
+        }
         let group = match &config.group {
             None => None,
             Some(g) => Some(
@@ -81,6 +88,7 @@ impl SupervisorState {
                     .shutdown_timeout_ms
                     .unwrap_or(self.config.shutdown_timeout_ms),
             ),
+            long_steps: config.long_steps,
         };
         self.blackboard.add_module(config, module_type).await?;
         self.slots.push(Slot::new(spec, self.config.backoff));

@@ -3,7 +3,8 @@
 //! It starts module actors in config order, turns their failures into restart plans (strategy,
 //! restart policy, intensity, escalation, backoff), carries the plans out, publishes what it does
 //! (traces, `_supervisor/events`, `stats/failures`, `stats/restarts`, `stats/status`), serves
-//! runtime control requests, and stops everything in reverse order.
+//! runtime control requests, and stops everything in reverse order (all asked at once, cleaned
+//! up one by one).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -14,7 +15,7 @@ use tokio::time::Instant;
 
 use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
-use crate::config::ModuleConfig;
+use crate::config::{ModuleConfig, Scheduler};
 use crate::handle::QueueWriter;
 use crate::module_actor::status;
 use crate::module_actor::{ModuleArgs, StopRequest};
@@ -27,6 +28,7 @@ use crate::supervision::{
 
 mod control;
 mod restart;
+mod stop;
 
 /// Exit code of `petrel run` when the supervisor gives up and stops the agent.
 pub const EXIT_GAVE_UP: u8 = 3;
@@ -39,6 +41,8 @@ pub(crate) struct ModuleSpec {
     pub policy: RestartPolicy,
     pub watchdog: Option<Duration>,
     pub shutdown_timeout: Duration,
+    /// Runs on the shared runtime, not on the agent's thread (`long_steps: true`).
+    pub long_steps: bool,
 }
 
 /// A supervision group as the supervisor is told about it.
@@ -103,6 +107,10 @@ pub(crate) struct SupervisorArgs {
     pub modules: Vec<ModuleSpec>,
     pub events: QueueWriter<SupervisorEvent>,
     pub probe: StepProbe,
+    pub scheduler: Scheduler,
+    /// The shared runtime, when the agent's actors run on a thread of their own: modules with
+    /// `long_steps` are spawned there.
+    pub shared: Option<tokio::runtime::Handle>,
 }
 
 pub(crate) struct SupervisorState {
@@ -120,6 +128,8 @@ pub(crate) struct SupervisorState {
     stopping: bool,
     rng: u64,
     probe: StepProbe,
+    scheduler: Scheduler,
+    shared: Option<tokio::runtime::Handle>,
 }
 
 /// A runtime request about one module.
@@ -185,6 +195,8 @@ impl Actor for AgentSupervisor {
             stopping: false,
             rng: seed | 1,
             probe: args.probe,
+            scheduler: args.scheduler,
+            shared: args.shared,
         };
         for i in 0..state.slots.len() {
             state.spawn(i).await;
@@ -308,7 +320,21 @@ impl SupervisorState {
             step_mark: self.probe.mark(&slot.spec.name),
         };
         slot.backoff.started(Instant::now());
-        match slot.spec.module_type.spawn(args, self.me.get_cell()).await {
+        let spawning = slot.spec.module_type.spawn(args, self.me.get_cell());
+        // ractor spawns an actor where it is spawned from: a long-step module is spawned from
+        // a task on the shared runtime, so that its steps never hold up the agent's thread.
+        let spawned = match (&self.shared, slot.spec.long_steps) {
+            (Some(shared), true) => crate::agent_thread::run_on(shared, spawning)
+                .await
+                .unwrap_or_else(|e| {
+                    Err(crate::module_types::SpawnFailure {
+                        reason: e,
+                        unrecoverable: false,
+                    })
+                }),
+            _ => spawning.await,
+        };
+        match spawned {
             Ok((actor, join)) => {
                 slot.actor = Some(actor);
                 slot.join = Some(join);
@@ -319,36 +345,6 @@ impl SupervisorState {
                 let _ = self
                     .me
                     .cast(SupervisorMsg::StartFailed(i, slot.generation, reason));
-            }
-        }
-    }
-
-    /// Stops slot `i` gracefully, killing it after its shutdown timeout.
-    async fn stop_slot(&mut self, i: usize, timeout: Option<Duration>) {
-        let slot = &mut self.slots[i];
-        slot.generation += 1;
-        slot.state = SlotState::Stopped;
-        slot.stop.request();
-        let timeout = timeout.unwrap_or(slot.spec.shutdown_timeout);
-        let actor = slot.actor.take();
-        if let Some(join) = slot.join.take() {
-            if tokio::time::timeout(timeout, join).await.is_err() {
-                tracing::warn!(agent = %self.agent, module = %slot.spec.name, ?timeout, "module did not stop in time: killed");
-                slot.killed = true;
-                if let Some(actor) = actor {
-                    actor.kill();
-                }
-            }
-        }
-    }
-
-    async fn stop_all(&mut self, timeout: Option<Duration>) {
-        self.stopping = true;
-        for i in (0..self.slots.len()).rev() {
-            if self.slots[i].actor.is_some() {
-                self.stop_slot(i, timeout).await;
-            } else if self.slots[i].state == SlotState::Waiting {
-                self.slots[i].state = SlotState::Stopped;
             }
         }
     }

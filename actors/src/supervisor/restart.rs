@@ -127,11 +127,7 @@ impl SupervisorState {
 
     /// Stops `stop` (reverse order), then restarts `restart` after the failed module's backoff.
     async fn execute(&mut self, failed: usize, stop: Vec<usize>, restart: Vec<usize>) {
-        for j in stop {
-            if self.slots[j].actor.is_some() {
-                self.stop_slot(j, None).await;
-            }
-        }
+        self.stop_slots(&stop, None).await;
         let unit = self.unit();
         let delay = self.slots[failed].backoff.next_delay(Instant::now(), unit);
         let mut due = Vec::with_capacity(restart.len());

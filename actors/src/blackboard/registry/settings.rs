@@ -1,10 +1,10 @@
-//! What a config says beyond properties — supervision, groups, recording, and each module's
-//! group, restart policy, watchdog and stop timeout — kept with the registry so that a snapshot
+//! What a config says beyond properties — supervision, groups, recording, the scheduler, and
+//! each module's group, restart policy, watchdog, stop timeout and `long_steps` — kept with the registry so that a snapshot
 //! writes it back and a snapshot run behaves like the run it froze.
 
 use std::collections::HashMap;
 
-use crate::config::{AgentConfig, ModuleConfig, RecordSection};
+use crate::config::{AgentConfig, ModuleConfig, RecordSection, Scheduler};
 use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
 
 /// The agent's settings that live outside the blackboard.
@@ -13,6 +13,7 @@ pub(crate) struct Settings {
     supervision: SupervisionConfig,
     groups: Vec<GroupConfig>,
     record: Option<RecordSection>,
+    scheduler: Scheduler,
     modules: HashMap<String, ModuleSettings>,
 }
 
@@ -23,6 +24,7 @@ pub(crate) struct ModuleSettings {
     restart: RestartPolicy,
     watchdog_ms: Option<u64>,
     shutdown_timeout_ms: Option<u64>,
+    long_steps: bool,
 }
 
 impl Settings {
@@ -31,6 +33,7 @@ impl Settings {
             supervision: config.supervision.clone(),
             groups: config.groups.clone(),
             record: config.record.clone(),
+            scheduler: config.scheduler,
             modules: config
                 .modules
                 .iter()
@@ -57,6 +60,9 @@ impl Settings {
         if let Some(record) = &self.record {
             fields.push(format!("record: {}", ron_text(record)));
         }
+        if self.scheduler != Scheduler::default() {
+            fields.push(format!("scheduler: {}", self.scheduler.name()));
+        }
         fields
     }
 
@@ -76,6 +82,9 @@ impl Settings {
         if let Some(ms) = m.shutdown_timeout_ms {
             fields.push(format!("shutdown_timeout_ms: {ms}"));
         }
+        if m.long_steps {
+            fields.push("long_steps: true".to_string());
+        }
         fields
     }
 }
@@ -87,6 +96,7 @@ impl ModuleSettings {
             restart: m.restart,
             watchdog_ms: m.watchdog_ms,
             shutdown_timeout_ms: m.shutdown_timeout_ms,
+            long_steps: m.long_steps,
         }
     }
 }
