@@ -75,7 +75,10 @@ async fn a_coordinator_dispatches_robot_actions_and_reads_robot_conditions() {
         .set("probe/in/value", 9.0)
         .await
         .unwrap();
-    let heard = t.boss.handle::<String>("mission/out/robot_conditions").await;
+    let heard = t
+        .boss
+        .handle::<String>("mission/out/robot_conditions")
+        .await;
     wait_for(&heard, "r2's door open at the coordinator", |c| {
         c == "r2#doorOpen=true"
     })
