@@ -1,6 +1,8 @@
 //! `nav.searched`: the floor the camera has searched for victims, frame by frame.
 
-use petrel_actors::{Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule};
+use petrel_actors::{
+    CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule,
+};
 
 use super::{count, param_error};
 use crate::nav::{SearchParams, SearchedMap};
@@ -21,6 +23,8 @@ pub struct SearchedModule {
     area: Output<f64>,
     counted: Output<i64>,
     skipped: Output<i64>,
+    /// The frame count last looked at: a step without a new frame (the first) looks at nothing.
+    last_frame: i64,
     core: Option<SearchedMap>,
 }
 
@@ -45,6 +49,7 @@ impl Module for SearchedModule {
             area: ports.output("out/area", 0.0, "searched area, m²"),
             counted: ports.output("out/frames", 0, "frames that searched (bright enough)"),
             skipped: ports.output("out/skipped", 0, "frames too dark or too bright to search anything"),
+            last_frame: 0,
             core: None,
         }
     }
@@ -53,7 +58,47 @@ impl Module for SearchedModule {
         Schedule::new().on_change(&self.frames)
     }
 
+    fn check(&self) -> Vec<CheckProblem> {
+        match self.build_core() {
+            Ok(_) => Vec::new(),
+            Err(e) => vec![super::check_problem(&e)],
+        }
+    }
+
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.core = Some(self.build_core()?);
+        Ok(())
+    }
+
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let core = self
+            .core
+            .as_mut()
+            .expect("stepping only after a successful init");
+        let frame = self.frames.value();
+        if frame == self.last_frame {
+            return Ok(());
+        }
+        self.last_frame = frame;
+        let brightness = self.brightness.value();
+        // A frame too dark (or washed out) holds too little contrast for a victim's pattern:
+        // looking through it searched nothing.
+        if !(self.min_brightness.value()..=self.max_brightness.value()).contains(&brightness) {
+            self.skipped.set(self.skipped.value() + 1);
+            return Ok(());
+        }
+        self.counted.set(self.counted.value() + 1);
+        if core.look(self.robot.value(), &self.map.get()) > 0 {
+            self.searched.set(core.grid());
+            self.area.set(core.area());
+        }
+        Ok(())
+    }
+}
+
+impl SearchedModule {
+    /// The core its parameters make, or an error naming the parameter.
+    fn build_core(&self) -> anyhow::Result<SearchedMap> {
         let (lo, hi) = (self.min_brightness.value(), self.max_brightness.value());
         if lo >= hi {
             anyhow::bail!("invalid parameter `params/min_brightness`: expected less than params/max_brightness ({hi}), got {lo}");
@@ -68,28 +113,6 @@ impl Module for SearchedModule {
             })?,
             ..SearchParams::default()
         };
-        let core = SearchedMap::new(params).map_err(|e| param_error(e, &[("fov", "fov_deg")]))?;
-        self.core = Some(core);
-        Ok(())
-    }
-
-    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
-        let brightness = self.brightness.value();
-        // A frame too dark (or washed out) holds too little contrast for a victim's pattern:
-        // looking through it searched nothing.
-        if !(self.min_brightness.value()..=self.max_brightness.value()).contains(&brightness) {
-            self.skipped.set(self.skipped.value() + 1);
-            return Ok(());
-        }
-        self.counted.set(self.counted.value() + 1);
-        if core.look(self.robot.value(), &self.map.get()) > 0 {
-            self.searched.set(core.grid());
-            self.area.set(core.area());
-        }
-        Ok(())
+        SearchedMap::new(params).map_err(|e| param_error(e, &[("fov", "fov_deg")]))
     }
 }

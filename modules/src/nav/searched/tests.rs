@@ -81,7 +81,7 @@ fn range_limits_leave_the_near_and_far_floor_unsearched() {
 #[test]
 fn heading_and_map_origin_are_honoured() {
     // Facing -y (down) from cell (5, 5) of a map whose corner is at (-2, -3).
-    let m = map(&vec![".........."; 10], (-2.0, -3.0));
+    let m = map(&[".........."; 10], (-2.0, -3.0));
     let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
     s.look(Pose2::new(3.5, 2.5, -std::f64::consts::FRAC_PI_2), &m);
     let expected: BTreeSet<_> = [(4, 4), (5, 4), (6, 4), (4, 3), (5, 3), (6, 3)].into();
