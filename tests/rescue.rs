@@ -140,7 +140,6 @@ async fn every_victim_is_found_in_the_ascii_rescue_world() {
 }
 
 #[tokio::test(start_paused = true)]
-#[ignore = "known gap: the warehouse's top-right nook victim (17.5, 17.5) is passed only 0.9 m away, too close for the detector, and seen from nowhere else (BENCHMARKS.md, rescue robot); 4/5 found, 0 false, 0 collisions, plan goal; run with --ignored"]
 async fn every_victim_is_found_in_the_map_server_warehouse() {
     let o = rescue("robot-warehouse.ron").await;
     assert_rescued(&o, 5);

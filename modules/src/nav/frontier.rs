@@ -9,6 +9,15 @@
 //! centre, of the frontier with the lowest `travel - gain_weight * size` (near and large
 //! first). Exploration is done when the robot's cell is known and no reachable frontier is
 //! left. Nothing here knows the world: only the map the robot built.
+//!
+//! A robot that searches with a camera passes a *searched* map too ([`crate::nav::searched`],
+//! same geometry): then the frontier cells are the reachable free cells it marks not
+//! searched, so exploration also leads to known floor the laser saw but the camera never
+//! looked at, and is done only when every reachable free cell was searched. Free cells next
+//! to unknown space are not searched either until the camera looked at them from its range,
+//! so the unknown is still explored; but once searched they are no frontier: the laser looked
+//! past them from closer than that and saw nothing beyond (a shelf's inside through a gap in
+//! its face), and driving there again would change nothing.
 
 use std::collections::VecDeque;
 
@@ -119,6 +128,19 @@ pub fn explore(
     blacklist: &[Point2],
     params: &FrontierParams,
 ) -> Exploration {
+    explore_searched(map, None, robot, blacklist, params)
+}
+
+/// [`explore`], where the frontier cells are the reachable free cells that `searched` (a grid
+/// of `map`'s geometry, -1 = not searched) does not mark as searched. A `searched` grid of
+/// another geometry (none published yet) is ignored: the laser's frontiers count until then.
+pub fn explore_searched(
+    map: &OccupancyGrid,
+    searched: Option<&OccupancyGrid>,
+    robot: Pose2,
+    blacklist: &[Point2],
+    params: &FrontierParams,
+) -> Exploration {
     let (w, h) = (map.width as i64, map.height as i64);
     if w == 0 || h == 0 || map.data.len() < (w * h) as usize || map.resolution <= 0.0 {
         return Exploration::Waiting;
@@ -184,15 +206,22 @@ pub fn explore(
     // area first): the area is still unknown, and the way there is what must be explored.
     let reached = (0..h).any(|r| (0..w).any(|c| dist[index(c, r)] != u32::MAX && inside(c, r)));
     let in_area = |c: i64, r: i64| !reached || inside(c, r);
+    let searched = searched.filter(|s| {
+        (s.width, s.height, s.resolution, s.origin) == (map.width, map.height, res, map.origin)
+            && s.data.len() == map.data.len()
+    });
     let is_frontier = |c: i64, r: i64| {
         let i = index(c, r);
         in_area(c, r)
             && dist[i] != u32::MAX
             && !blocked[i]
-            && [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|(dc, dr)| {
-                let (nc, nr) = (c + dc, r + dr);
-                nc >= 0 && nr >= 0 && nc < w && nr < h && class(index(nc, nr)) == Class::Unknown
-            })
+            && match searched {
+                Some(s) => s.data[i] < 0,
+                None => [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|(dc, dr)| {
+                    let (nc, nr) = (c + dc, r + dr);
+                    nc >= 0 && nr >= 0 && nc < w && nr < h && class(index(nc, nr)) == Class::Unknown
+                }),
+            }
     };
     // Group reachable frontier cells into 8-connected frontiers.
     let mut seen = vec![false; (w * h) as usize];

@@ -6,7 +6,7 @@ use petrel_actors::{
 };
 
 use super::{count, param_error, MISSION_FAILED};
-use crate::nav::{explore, known_area, Exploration, FrontierParams};
+use crate::nav::{explore_searched, known_area, Exploration, FrontierParams};
 
 /// Simulated seconds a new target gets before the planner's flags are taken to be about it
 /// (the planner answers a new target at its next step; older flags are about the last one).
@@ -19,6 +19,7 @@ const PAUSE_S: f64 = 1.0;
 /// `nav.explorer`: wraps [`explore`].
 pub struct ExplorerModule {
     map: Input<OccupancyGrid>,
+    searched: Input<OccupancyGrid>,
     robot: Input<Pose2>,
     arrived: Input<bool>,
     failed: Input<bool>,
@@ -64,6 +65,7 @@ impl Module for ExplorerModule {
     fn declare(ports: &mut Ports) -> Self {
         ExplorerModule {
             map: ports.input("in/map", OccupancyGrid::default(), "the map being built"),
+            searched: ports.input("in/searched", OccupancyGrid::default(), "optional: the floor a camera searched (nav.searched's out/searched); reachable free cells not searched are frontiers too, so exploring ends only when the camera looked everywhere"),
             robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose"),
             arrived: ports.input("in/arrived", false, "the planner reached the target"),
             failed: ports.input("in/failed", false, "the planner finds no path to the target"),
@@ -195,7 +197,14 @@ impl Module for ExplorerModule {
         }
         let map = self.map.get();
         self.explored.set(known_area(&map));
-        let decision = explore(&map, self.robot.value(), &state.blacklist, &state.params);
+        let searched = self.searched.get();
+        let decision = explore_searched(
+            &map,
+            Some(&searched),
+            self.robot.value(),
+            &state.blacklist,
+            &state.params,
+        );
         state.last_plan = t;
         match decision {
             Exploration::Waiting => {}

@@ -21,6 +21,7 @@ mod localizer;
 mod mapper;
 mod path_planner;
 mod recorder;
+mod searched;
 mod sequencer;
 mod team_member;
 mod team_search;
@@ -39,6 +40,7 @@ pub use localizer::LocalizerModule;
 pub use mapper::MapperModule;
 pub use path_planner::PathPlanner;
 pub use recorder::Recorder;
+pub use searched::SearchedModule;
 pub use sequencer::{GoalSequencerModule, MISSION_FAILED};
 pub use team_member::{MemberNames, TeamMember};
 pub use team_search::TeamSearch;
@@ -64,6 +66,7 @@ pub fn register(registry: &mut ModuleRegistry) {
         .register::<ObstacleAvoidance>()
         .register::<GoalSequencerModule>()
         .register::<ExplorerModule>()
+        .register::<SearchedModule>()
         .register::<VictimDetector>()
         .register::<VictimMapper>()
         .register::<TeamVictimsModule>()

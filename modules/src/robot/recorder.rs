@@ -44,6 +44,7 @@ pub struct Recorder {
     last_progress: f64,
     dark: Input<Vec<f64>>,
     rough: Input<Vec<f64>>,
+    searched: Input<OccupancyGrid>,
     context_log: ContextLog,
     /// Colour of each trajectory point (the highest-priority active context).
     colours: Vec<[u8; 3]>,
@@ -125,6 +126,7 @@ impl Module for Recorder {
                 Vec::new(),
                 "rough floor to tint, `[x0, y0, x1, y1, ...]`",
             ),
+            searched: ports.input("in/searched", OccupancyGrid::default(), "optional: the floor the camera searched (nav.searched's out/searched); free floor not searched is tinted"),
             context_log: ContextLog::default(),
             colours: Vec::new(),
             collisions: ports.input("in/collisions", 0, "collision count"),
@@ -316,6 +318,7 @@ impl Module for Recorder {
                 .zip(&matched)
                 .map(|(v, m)| (*v, m.is_some()))
                 .collect();
+            let searched = self.searched.get();
             let layers = RenderLayers {
                 trajectory: &self.trajectory,
                 // Without contexts, the trajectory shows time instead (blue to orange).
@@ -324,6 +327,7 @@ impl Module for Recorder {
                     false => &self.colours,
                 },
                 areas: &areas,
+                searched: Some(&searched),
                 victims: &victims,
                 reported: found.points(),
                 path: path.points(),

@@ -256,3 +256,56 @@ async fn time_scale_sets_the_pace_of_simulated_time_in_both_modes() {
         );
     }
 }
+
+/// Waits (bounded, on the paused clock) until `path` holds `want`.
+async fn wait_for(agent: &Agent, path: &str, want: i64) {
+    for _ in 0..500 {
+        if *agent.blackboard().get::<i64>(path).await.unwrap() == want {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let got = *agent.blackboard().get::<i64>(path).await.unwrap();
+    panic!("{path} never became {want} (it is {got})");
+}
+
+#[tokio::test(start_paused = true)]
+async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
+    use petrel_actors::{OccupancyGrid, Pose2};
+    let agent = start(
+        r#"(name: "searched", type: "nav.searched",
+            values: {"params/min_views": 1, "params/min_range": 1.0, "params/max_range": 2.5,
+                     "params/fov_deg": 100.0})"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    // A 10 m x 10 m free map, 1 m cells; the camera in cell (0, 5) facing +x.
+    let map = OccupancyGrid {
+        width: 10,
+        height: 10,
+        resolution: 1.0,
+        origin: Pose2::default(),
+        data: vec![0i8; 100].into(),
+    };
+    bb.set("searched/in/map", map).await.unwrap();
+    bb.set("searched/in/robotPose", Pose2::new(0.5, 5.5, 0.0))
+        .await
+        .unwrap();
+    // Too dark: nothing searched.
+    bb.set("searched/in/brightness", 0.05).await.unwrap();
+    bb.set("searched/in/frames", 1i64).await.unwrap();
+    wait_for(&agent, "searched/out/skipped", 1).await;
+    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 0.0);
+    // Bright enough: the six cells ahead (as the core's test), 6 m².
+    bb.set("searched/in/brightness", 0.5).await.unwrap();
+    bb.set("searched/in/frames", 2i64).await.unwrap();
+    wait_for(&agent, "searched/out/frames", 1).await;
+    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 6.0);
+    let grid = bb
+        .get::<OccupancyGrid>("searched/out/searched")
+        .await
+        .unwrap();
+    assert_eq!(grid.get(1, 5), Some(0));
+    assert_eq!(grid.get(0, 5), Some(-1));
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

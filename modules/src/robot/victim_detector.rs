@@ -74,7 +74,6 @@ impl Module for VictimDetector {
                 )
             },
         )?;
-        self.frames.set(self.frames.value() + 1);
         self.brightness.set(out.brightness);
         self.sharpness.set(out.sharpness);
         let seen = !out.detections.is_empty();
@@ -82,6 +81,8 @@ impl Module for VictimDetector {
             self.seen.set(seen);
         }
         self.detections.set(Detections(out.detections));
+        // Last: a module woken by a new frame count finds this frame's quality already there.
+        self.frames.set(self.frames.value() + 1);
         Ok(())
     }
 }

@@ -16,6 +16,9 @@ pub struct RenderLayers<'a> {
     pub trajectory_colours: &'a [[u8; 3]],
     /// Areas tinted over the map (dark rooms, rough floor), with their colour.
     pub areas: &'a [(Rect, [u8; 3])],
+    /// A searched map of the map's geometry (`nav.searched`: -1 = not searched): free cells
+    /// the camera never searched are tinted, so the picture shows what the search missed.
+    pub searched: Option<&'a OccupancyGrid>,
     /// Victims of the world: position and whether they were found (green) or missed (red).
     pub victims: &'a [(Point2, bool)],
     /// Where the robot reported victims (small black dots).
@@ -49,6 +52,8 @@ pub struct Track<'a> {
 const FREE: [f64; 3] = [246.0, 244.0, 238.0];
 const WALL: [f64; 3] = [38.0, 41.0, 54.0];
 const UNKNOWN: Rgb<u8> = Rgb([168, 170, 178]);
+/// Free floor the camera has not searched: a pale rose, distinct from free and unknown.
+const UNSEARCHED: Rgb<u8> = Rgb([238, 206, 206]);
 
 /// Renders `grid` (ROS convention) and `layers` into an RGB image.
 pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
@@ -58,6 +63,12 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
         .unwrap_or_else(|| (1000 / w.max(h)).clamp(1, 8))
         .max(1);
     let mut img = RgbImage::new(w * scale, h * scale);
+    let searched = layers.searched.filter(|s| {
+        (s.width, s.height, s.data.len()) == (grid.width, grid.height, grid.data.len())
+    });
+    let unsearched = |col: u32, row: u32| {
+        searched.is_some_and(|s| s.data[row as usize * s.width as usize + col as usize] < 0)
+    };
     for row in 0..h {
         for col in 0..w {
             // Read defensively: a malformed grid (short data) renders as unknown, not a panic.
@@ -66,6 +77,7 @@ pub fn render(grid: &OccupancyGrid, layers: &RenderLayers) -> RgbImage {
                 .get(row as usize * grid.width as usize + col as usize)
                 .copied();
             let colour = match value {
+                Some(v) if (0..50).contains(&v) && unsearched(col, row) => UNSEARCHED,
                 Some(v) if v >= 0 => {
                     let t = v.min(100) as f64 / 100.0;
                     // Dark walls, light free space, with a visible step at 50 %.
@@ -277,6 +289,31 @@ mod tests {
         assert_eq!(*img.get_pixel(5, 15), Rgb([38, 41, 54]));
         assert_eq!(*img.get_pixel(25, 15), UNKNOWN);
         assert_eq!(*img.get_pixel(5, 5), Rgb([246, 244, 238]));
+        // With a searched map: the free cells not searched are tinted, walls and unknown not.
+        let searched = OccupancyGrid {
+            data: vec![-1, 0, -1, -1, 0, 0].into(),
+            ..grid.clone()
+        };
+        let img = render(
+            &grid,
+            &RenderLayers {
+                scale: Some(10),
+                searched: Some(&searched),
+                ..RenderLayers::default()
+            },
+        );
+        assert_eq!(
+            *img.get_pixel(5, 15),
+            Rgb([38, 41, 54]),
+            "a wall stays a wall"
+        );
+        assert_eq!(
+            *img.get_pixel(15, 15),
+            Rgb([246, 244, 238]),
+            "searched floor"
+        );
+        assert_eq!(*img.get_pixel(25, 15), UNKNOWN);
+        assert_eq!(*img.get_pixel(5, 5), UNSEARCHED, "floor not searched");
         let traj = [Point2::new(0.5, 1.5), Point2::new(2.5, 1.5)];
         let layers = RenderLayers {
             trajectory: &traj,

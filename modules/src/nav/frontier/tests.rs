@@ -196,3 +196,74 @@ fn an_area_keeps_only_the_frontiers_inside_it() {
     };
     assert_eq!(bad.validate().unwrap_err().param, "area");
 }
+
+#[test]
+fn known_floor_not_searched_is_explored_until_searched() {
+    // A closed room: no laser frontier, so exploration alone is done.
+    let m = map(&[
+        "##########",
+        "#........#",
+        "#........#",
+        "#........#",
+        "#........#",
+        "##########",
+    ]);
+    let robot = Pose2::new(0.15, 0.15, 0.0);
+    assert_eq!(explore(&m, robot, &[], &params()), Exploration::Done);
+    // The camera searched everything but the room's right end (columns 6..=8).
+    let searched = |unsearched_from: i64| {
+        let mut s = m.clone();
+        s.data = (0..m.data.len() as i64)
+            .map(|i| if i % 10 >= unsearched_from { -1 } else { 0 })
+            .collect();
+        s
+    };
+    let part = searched(6);
+    let Exploration::Frontiers(f) = explore_searched(&m, Some(&part), robot, &[], &params()) else {
+        panic!("the unsearched end should be a frontier");
+    };
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].size, 12, "3 columns x 4 free rows");
+    assert!((0.6..0.9).contains(&f[0].target.0.x), "{:?}", f[0].target);
+    // Searched everywhere (walls included or not): done again.
+    assert_eq!(
+        explore_searched(&m, Some(&searched(10)), robot, &[], &params()),
+        Exploration::Done
+    );
+    // A searched grid of another geometry (none published yet) is ignored.
+    assert_eq!(
+        explore_searched(&m, Some(&OccupancyGrid::default()), robot, &[], &params()),
+        Exploration::Done
+    );
+    // The edge of unknown space is a frontier while it is not searched, and no longer once
+    // the camera searched it (the laser looked past it and saw nothing).
+    let open_end = map(&[
+        "##########",
+        "#........?",
+        "#........?",
+        "#........?",
+        "#........?",
+        "##########",
+    ]);
+    assert!(matches!(
+        explore_searched(&open_end, Some(&part), robot, &[], &params()),
+        Exploration::Frontiers(_)
+    ));
+    assert_eq!(
+        explore_searched(&open_end, Some(&searched(10)), robot, &[], &params()),
+        Exploration::Done
+    );
+    // Unsearched floor the robot cannot reach does not count.
+    let walled = map(&[
+        "##########",
+        "#.....#..#",
+        "#.....#..#",
+        "#.....#..#",
+        "#.....#..#",
+        "##########",
+    ]);
+    assert_eq!(
+        explore_searched(&walled, Some(&part), robot, &[], &params()),
+        Exploration::Done
+    );
+}

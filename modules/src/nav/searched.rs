@@ -1,0 +1,246 @@
+//! The searched map: the floor a camera has looked at well enough to see a victim there.
+//!
+//! A laser maps a room in one glance, but a camera resolves a victim only between a minimum
+//! distance (closer, the victim overflows the image and its foot leaves it) and a maximum one
+//! (farther, its pattern is too small), inside a field of view narrower than the laser's.
+//! Exploration that ends when the laser map has no frontier left therefore leaves floor the
+//! camera never looked at. This map records, frame by frame, the cells that were in view: a
+//! cell is searched by a frame when its centre lies between `min_range` and `max_range` of the
+//! camera, within `fov / 2` of its heading, and the straight line from the camera to that
+//! centre crosses only known free cells of the navigation map (walls and unknown space hide
+//! what lies behind them; an occupied cell in view is itself searched, its face was seen).
+//! One glimpse is not a search: a detector confirms a victim over several frames, so a cell
+//! counts as searched once it was in view in `min_views` frames.
+//! Frames too dark or too blurred to detect anything are not counted by the module that
+//! feeds this map ([`crate::robot`]'s `nav.searched`), which knows the image quality.
+//!
+//! The map shares the navigation map's geometry, so the explorer can read both cell by cell.
+
+use petrel_actors::{OccupancyGrid, Pose2};
+
+use crate::sim::error::{positive, ParamError};
+use crate::sim::raycast::traverse;
+
+/// Value of a searched cell in the published grid (ROS convention: 0 = free, known).
+pub const SEARCHED: i8 = 0;
+/// Value of a cell not searched yet (ROS convention: -1 = unknown).
+pub const NOT_SEARCHED: i8 = -1;
+
+/// Searched-map parameters: what the camera and its detector can resolve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SearchParams {
+    /// Field of view that counts, radians, centred on the camera's heading (default 50°: a
+    /// 60° camera less the margin a victim at the image's edge needs to be whole in view).
+    pub fov: f64,
+    /// Cells closer than this are not searched, metres (default 1.0).
+    pub min_range: f64,
+    /// Cells farther than this are not searched, metres (default 3.5).
+    pub max_range: f64,
+    /// Navigation-map value from which a cell blocks the view (default 50, as the planner).
+    pub occupied_threshold: i8,
+    /// Frames a cell must be in view in to be searched (default 3, the sightings a victim
+    /// mapper wants before it believes a victim), 1..=255.
+    pub min_views: u8,
+}
+
+impl Default for SearchParams {
+    fn default() -> Self {
+        SearchParams {
+            fov: 50f64.to_radians(),
+            min_range: 1.0,
+            max_range: 3.5,
+            occupied_threshold: 50,
+            min_views: 3,
+        }
+    }
+}
+
+impl SearchParams {
+    /// Checks every parameter.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        if !(self.fov > 0.0 && self.fov < std::f64::consts::TAU) {
+            return Err(ParamError {
+                param: "fov".into(),
+                message: format!("expected an angle in (0, 2π) rad, got {}", self.fov),
+            });
+        }
+        positive("max_range", self.max_range)?;
+        if !(self.min_range >= 0.0 && self.min_range < self.max_range) {
+            return Err(ParamError {
+                param: "min_range".into(),
+                message: format!(
+                    "expected 0 <= min_range < max_range ({}), got {}",
+                    self.max_range, self.min_range
+                ),
+            });
+        }
+        if self.min_views == 0 {
+            return Err(ParamError {
+                param: "min_views".into(),
+                message: "expected 1..=255 frames, got 0".into(),
+            });
+        }
+        if !(1..=100).contains(&self.occupied_threshold) {
+            return Err(ParamError {
+                param: "occupied_threshold".into(),
+                message: format!("expected 1..=100, got {}", self.occupied_threshold),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The cells searched so far, on the navigation map's geometry.
+#[derive(Clone, Debug)]
+pub struct SearchedMap {
+    params: SearchParams,
+    /// Geometry of the navigation map the cells belong to (data left empty).
+    geometry: OccupancyGrid,
+    /// Frames each cell was in view in, up to `min_views`.
+    views: Vec<u8>,
+    /// Cells searched (in view in `min_views` frames).
+    count: usize,
+    /// The last published grid, reused until a cell changes.
+    published: Option<OccupancyGrid>,
+}
+
+impl SearchedMap {
+    /// Nothing searched yet.
+    pub fn new(params: SearchParams) -> Result<Self, ParamError> {
+        params.validate()?;
+        Ok(SearchedMap {
+            params,
+            geometry: OccupancyGrid::default(),
+            views: Vec::new(),
+            count: 0,
+            published: None,
+        })
+    }
+
+    /// Marks what a camera at `camera` (its position and heading, world frame) sees on `map`;
+    /// returns how many cells this frame made searched. A map of another geometry than the last
+    /// one starts the searched map afresh (nothing it held would line up).
+    pub fn look(&mut self, camera: Pose2, map: &OccupancyGrid) -> usize {
+        let (w, h) = (map.width as i64, map.height as i64);
+        if w == 0 || h == 0 || map.resolution <= 0.0 || map.data.len() < (w * h) as usize {
+            return 0;
+        }
+        if !self.same_geometry(map) {
+            self.geometry = OccupancyGrid {
+                data: Vec::new().into(),
+                ..map.clone()
+            };
+            self.views = vec![0; (w * h) as usize];
+            self.count = 0;
+            self.published = None;
+        }
+        let p = &self.params;
+        let res = map.resolution;
+        // Work in the grid's frame: cell (c, r) spans [c, c + 1) x [r, r + 1) times res.
+        let local = map.origin.0.inverse() * camera.0;
+        let (cx, cy) = (local.translation.x, local.translation.y);
+        let heading = local.rotation.angle();
+        let blocks = |c: i64, r: i64| {
+            let v = map.data[(r * w + c) as usize];
+            v < 0 || v >= p.occupied_threshold
+        };
+        let camera_cell = ((cx / res).floor() as i64, (cy / res).floor() as i64);
+        let reach = (p.max_range / res).ceil() as i64 + 1;
+        let mut added = 0;
+        for r in (camera_cell.1 - reach).max(0)..=(camera_cell.1 + reach).min(h - 1) {
+            for c in (camera_cell.0 - reach).max(0)..=(camera_cell.0 + reach).min(w - 1) {
+                let k = (r * w + c) as usize;
+                if self.views[k] >= p.min_views || map.data[k] < 0 {
+                    continue;
+                }
+                let (dx, dy) = ((c as f64 + 0.5) * res - cx, (r as f64 + 0.5) * res - cy);
+                let d = dx.hypot(dy);
+                if d < p.min_range || d > p.max_range || d == 0.0 {
+                    continue;
+                }
+                let off = (dy.atan2(dx) - heading + std::f64::consts::PI)
+                    .rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                if off.abs() > p.fov / 2.0 {
+                    continue;
+                }
+                let mut clear = true;
+                traverse(
+                    (0.0, 0.0),
+                    res,
+                    (cx, cy),
+                    (dx / d, dy / d),
+                    d,
+                    |col, row, _| {
+                        if (col, row) == (c, r) {
+                            return false;
+                        }
+                        // The camera's own cell never hides anything (the robot stands in it).
+                        let outside = col < 0 || row < 0 || col >= w || row >= h;
+                        if (col, row) != camera_cell && (outside || blocks(col, row)) {
+                            clear = false;
+                            return false;
+                        }
+                        true
+                    },
+                );
+                if clear {
+                    self.views[k] += 1;
+                    if self.views[k] == p.min_views {
+                        added += 1;
+                    }
+                }
+            }
+        }
+        if added > 0 {
+            self.count += added;
+            self.published = None;
+        }
+        added
+    }
+
+    /// Whether cell `(col, row)` of the navigation map was searched.
+    pub fn is_searched(&self, col: i64, row: i64) -> bool {
+        let (w, h) = (self.geometry.width as i64, self.geometry.height as i64);
+        col >= 0
+            && row >= 0
+            && col < w
+            && row < h
+            && self.views[(row * w + col) as usize] >= self.params.min_views
+    }
+
+    /// Searched area, square metres.
+    pub fn area(&self) -> f64 {
+        self.count as f64 * self.geometry.resolution * self.geometry.resolution
+    }
+
+    /// The searched map as a grid of the navigation map's geometry: [`SEARCHED`] or
+    /// [`NOT_SEARCHED`] per cell (empty before the first look).
+    pub fn grid(&mut self) -> OccupancyGrid {
+        if self.published.is_none() {
+            let min = self.params.min_views;
+            let data: Vec<i8> = self
+                .views
+                .iter()
+                .map(|&v| if v >= min { SEARCHED } else { NOT_SEARCHED })
+                .collect();
+            self.published = Some(OccupancyGrid {
+                data: data.into(),
+                ..self.geometry.clone()
+            });
+        }
+        self.published.clone().expect("just published")
+    }
+
+    fn same_geometry(&self, map: &OccupancyGrid) -> bool {
+        let g = &self.geometry;
+        g.width == map.width
+            && g.height == map.height
+            && g.resolution == map.resolution
+            && g.origin == map.origin
+            && !self.views.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests;

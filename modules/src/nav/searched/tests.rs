@@ -1,0 +1,179 @@
+use std::collections::BTreeSet;
+
+use super::*;
+
+/// A map from text rows (top first): `#` occupied, `.` free, `?` unknown; 1 m cells, so cell
+/// `(c, r)` has its centre at `(c + 0.5, r + 0.5)` plus `origin`.
+fn map(rows: &[&str], origin: (f64, f64)) -> OccupancyGrid {
+    let (w, h) = (rows[0].len(), rows.len());
+    let mut data = vec![0i8; w * h];
+    for (t, row) in rows.iter().enumerate() {
+        let r = h - 1 - t;
+        for (c, ch) in row.chars().enumerate() {
+            data[r * w + c] = match ch {
+                '#' => 100,
+                '?' => -1,
+                _ => 0,
+            };
+        }
+    }
+    OccupancyGrid {
+        width: w as u32,
+        height: h as u32,
+        resolution: 1.0,
+        origin: Pose2::new(origin.0, origin.1, 0.0),
+        data: data.into(),
+    }
+}
+
+/// An all-free `w` x `h` map.
+fn open(w: usize, h: usize) -> OccupancyGrid {
+    let row = ".".repeat(w);
+    map(&vec![row.as_str(); h], (0.0, 0.0))
+}
+
+fn params(min_range: f64, max_range: f64) -> SearchParams {
+    SearchParams {
+        fov: 100f64.to_radians(),
+        min_range,
+        max_range,
+        min_views: 1,
+        ..SearchParams::default()
+    }
+}
+
+/// The searched cells, as `(col, row)`.
+fn cells(s: &SearchedMap) -> BTreeSet<(i64, i64)> {
+    let g = s.geometry.clone();
+    (0..g.height as i64)
+        .flat_map(|r| (0..g.width as i64).map(move |c| (c, r)))
+        .filter(|&(c, r)| s.is_searched(c, r))
+        .collect()
+}
+
+#[test]
+fn a_camera_searches_exactly_the_cells_in_its_view_and_range() {
+    // Camera in cell (0, 5) facing +x, ±50°, 1 to 2.5 m: the cells one and two columns ahead,
+    // one row either side (two rows either side are 2.83 m away, or 63° off).
+    let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
+    let added = s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
+    let expected: BTreeSet<_> = [(1, 4), (1, 5), (1, 6), (2, 4), (2, 5), (2, 6)].into();
+    assert_eq!(cells(&s), expected);
+    assert_eq!(added, 6);
+    assert!((s.area() - 6.0).abs() < 1e-12);
+    // Looking again from the same pose adds nothing.
+    assert_eq!(s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10)), 0);
+}
+
+#[test]
+fn range_limits_leave_the_near_and_far_floor_unsearched() {
+    // A minimum of 1.5 m drops the first column (1 m and 1.41 m away).
+    let mut s = SearchedMap::new(params(1.5, 2.5)).unwrap();
+    s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
+    assert_eq!(cells(&s), [(2, 4), (2, 5), (2, 6)].into());
+    // A band of 2.5 to 3 m: the third column straight ahead (3 m) and the second column two
+    // rows either side (2.83 m, 45° off).
+    let mut s = SearchedMap::new(params(2.5, 3.0)).unwrap();
+    s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
+    assert_eq!(cells(&s), [(2, 3), (2, 7), (3, 5)].into());
+}
+
+#[test]
+fn heading_and_map_origin_are_honoured() {
+    // Facing -y (down) from cell (5, 5) of a map whose corner is at (-2, -3).
+    let m = map(&[".........."; 10], (-2.0, -3.0));
+    let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
+    s.look(Pose2::new(3.5, 2.5, -std::f64::consts::FRAC_PI_2), &m);
+    let expected: BTreeSet<_> = [(4, 4), (5, 4), (6, 4), (4, 3), (5, 3), (6, 3)].into();
+    assert_eq!(cells(&s), expected);
+}
+
+#[test]
+fn walls_and_unknown_space_hide_what_lies_behind_them() {
+    // Camera at cell (0, 2) facing +x, 1 to 4.5 m; a wall cell at (2, 2), unknown at (2, 0).
+    let rows = [
+        "........", // row 4
+        "........", // row 3
+        "..#.....", // row 2
+        "........", // row 1
+        "..?.....", // row 0
+    ];
+    let mut s = SearchedMap::new(params(1.0, 4.5)).unwrap();
+    s.look(Pose2::new(0.5, 2.5, 0.0), &map(&rows, (0.0, 0.0)));
+    let got = cells(&s);
+    assert!(got.contains(&(2, 2)), "the wall's face was seen: {got:?}");
+    for hidden in [(3, 2), (4, 2)] {
+        assert!(
+            !got.contains(&hidden),
+            "{hidden:?} is behind the wall: {got:?}"
+        );
+    }
+    assert!(
+        !got.contains(&(2, 0)),
+        "unknown cells are never searched: {got:?}"
+    );
+    assert!(!got.contains(&(3, 0)), "behind unknown space: {got:?}");
+    // Beside the wall the view is clear: the lines to (4, 4) and (3, 4) pass above it.
+    assert!(got.contains(&(4, 4)) && got.contains(&(3, 4)), "{got:?}");
+    // The same pose without the wall sees straight through.
+    let mut clear = SearchedMap::new(params(1.0, 4.5)).unwrap();
+    clear.look(Pose2::new(0.5, 2.5, 0.0), &open(8, 5));
+    assert!(cells(&clear).contains(&(4, 2)));
+}
+
+#[test]
+fn the_grid_marks_searched_cells_and_a_new_geometry_starts_afresh() {
+    let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
+    assert_eq!(s.grid().width, 0, "nothing before the first look");
+    s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
+    let g = s.grid();
+    assert_eq!((g.width, g.height), (10, 10));
+    assert_eq!(g.get(1, 5), Some(SEARCHED));
+    assert_eq!(g.get(0, 5), Some(NOT_SEARCHED));
+    assert_eq!(g.data.iter().filter(|&&v| v == SEARCHED).count(), 6);
+    s.look(Pose2::new(0.5, 5.5, 0.0), &open(12, 10));
+    assert_eq!(s.grid().width, 12);
+    assert_eq!(
+        cells(&s).len(),
+        6,
+        "the old cells were dropped, the new look counted"
+    );
+}
+
+#[test]
+fn a_cell_is_searched_only_after_enough_views() {
+    let mut s = SearchedMap::new(SearchParams {
+        min_views: 2,
+        ..params(1.0, 2.5)
+    })
+    .unwrap();
+    assert_eq!(s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10)), 0);
+    assert!(cells(&s).is_empty(), "one glimpse is not a search");
+    // The second frame, turned a little left: only the cells both frames saw are searched.
+    let added = s.look(Pose2::new(0.5, 5.5, 0.6), &open(10, 10));
+    let got = cells(&s);
+    assert_eq!(added, got.len());
+    assert!(got.contains(&(1, 5)) && got.contains(&(1, 6)), "{got:?}");
+    assert!(
+        !got.contains(&(1, 4)) && !got.contains(&(2, 4)),
+        "seen once: {got:?}"
+    );
+}
+
+#[test]
+fn bad_parameters_are_refused_by_name() {
+    let bad = |p: SearchParams| SearchedMap::new(p).unwrap_err().param;
+    assert_eq!(bad(params(3.0, 2.0)), "min_range");
+    assert_eq!(bad(params(-1.0, 2.0)), "min_range");
+    assert_eq!(bad(params(0.0, 0.0)), "max_range");
+    let fov = SearchParams {
+        fov: 0.0,
+        ..SearchParams::default()
+    };
+    assert_eq!(bad(fov), "fov");
+    let views = SearchParams {
+        min_views: 0,
+        ..SearchParams::default()
+    };
+    assert_eq!(bad(views), "min_views");
+}

@@ -1,0 +1,118 @@
+//! `nav.searched`: the floor the camera has searched for victims, frame by frame.
+
+use petrel_actors::{
+    CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule,
+};
+
+use super::{count, param_error};
+use crate::nav::{SearchParams, SearchedMap};
+
+/// `nav.searched`: wraps [`SearchedMap`].
+pub struct SearchedModule {
+    frames: Input<i64>,
+    map: Input<OccupancyGrid>,
+    robot: Input<Pose2>,
+    brightness: Input<f64>,
+    fov_deg: Input<f64>,
+    min_range: Input<f64>,
+    max_range: Input<f64>,
+    min_views: Input<i64>,
+    min_brightness: Input<f64>,
+    max_brightness: Input<f64>,
+    searched: Output<OccupancyGrid>,
+    area: Output<f64>,
+    counted: Output<i64>,
+    skipped: Output<i64>,
+    /// The frame count last looked at: a step without a new frame (the first) looks at nothing.
+    last_frame: i64,
+    core: Option<SearchedMap>,
+}
+
+impl Module for SearchedModule {
+    const TYPE: &'static str = "nav.searched";
+    const DESCRIPTION: &'static str =
+        "Marks the map cells the camera looked at well enough to see a victim (in range, in view, not hidden, image not too dark or bright), for an explorer that searches.";
+
+    fn declare(ports: &mut Ports) -> Self {
+        SearchedModule {
+            frames: ports.input("in/frames", 0, "frames the detector processed (link to its out/frames): each new value is one frame looked at"),
+            map: ports.input("in/map", OccupancyGrid::default(), "the navigation map (walls and unknown space hide what lies behind them)"),
+            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead)"),
+            brightness: ports.input("in/brightness", 0.5, "mean grey level of the frame, 0..1 (link to the detector's out/brightness)"),
+            fov_deg: ports.param_in("params/fov_deg", 50.0, Range::new(1.0, 179.0), "field of view that counts, degrees: the camera's less the margin a victim at the image edge needs"),
+            min_range: ports.param_in("params/min_range", 1.0, Range::new(0.0, 20.0), "closer floor is not searched (a victim overflows the image), m"),
+            max_range: ports.param_in("params/max_range", 3.5, Range::new(0.1, 50.0), "farther floor is not searched (a victim is too small to resolve), m"),
+            min_views: ports.param_in("params/min_views", 3, Range::new(1.0, 255.0), "frames a cell must be in view in to be searched"),
+            min_brightness: ports.param_in("params/min_brightness", 0.1, Range::new(0.0, 1.0), "darker frames search nothing (too little contrast left to detect), 0..1"),
+            max_brightness: ports.param_in("params/max_brightness", 0.95, Range::new(0.0, 1.0), "brighter frames search nothing (saturated), 0..1"),
+            searched: ports.output("out/searched", OccupancyGrid::default(), "the navigation map's cells: 0 searched, -1 not (written when it grows)"),
+            area: ports.output("out/area", 0.0, "searched area, m²"),
+            counted: ports.output("out/frames", 0, "frames that searched (bright enough)"),
+            skipped: ports.output("out/skipped", 0, "frames too dark or too bright to search anything"),
+            last_frame: 0,
+            core: None,
+        }
+    }
+
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.frames)
+    }
+
+    fn check(&self) -> Vec<CheckProblem> {
+        match self.build_core() {
+            Ok(_) => Vec::new(),
+            Err(e) => vec![super::check_problem(&e)],
+        }
+    }
+
+    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.core = Some(self.build_core()?);
+        Ok(())
+    }
+
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let core = self
+            .core
+            .as_mut()
+            .expect("stepping only after a successful init");
+        let frame = self.frames.value();
+        if frame == self.last_frame {
+            return Ok(());
+        }
+        self.last_frame = frame;
+        let brightness = self.brightness.value();
+        // A frame too dark (or washed out) holds too little contrast for a victim's pattern:
+        // looking through it searched nothing.
+        if !(self.min_brightness.value()..=self.max_brightness.value()).contains(&brightness) {
+            self.skipped.set(self.skipped.value() + 1);
+            return Ok(());
+        }
+        self.counted.set(self.counted.value() + 1);
+        if core.look(self.robot.value(), &self.map.get()) > 0 {
+            self.searched.set(core.grid());
+            self.area.set(core.area());
+        }
+        Ok(())
+    }
+}
+
+impl SearchedModule {
+    /// The core its parameters make, or an error naming the parameter.
+    fn build_core(&self) -> anyhow::Result<SearchedMap> {
+        let (lo, hi) = (self.min_brightness.value(), self.max_brightness.value());
+        if lo >= hi {
+            anyhow::bail!("invalid parameter `params/min_brightness`: expected less than params/max_brightness ({hi}), got {lo}");
+        }
+        let min_views = count("min_views", self.min_views.value())?;
+        let params = SearchParams {
+            fov: self.fov_deg.value().to_radians(),
+            min_range: self.min_range.value(),
+            max_range: self.max_range.value(),
+            min_views: u8::try_from(min_views).map_err(|_| {
+                anyhow::anyhow!("invalid parameter `params/min_views`: expected 1..=255 frames, got {min_views}")
+            })?,
+            ..SearchParams::default()
+        };
+        SearchedMap::new(params).map_err(|e| param_error(e, &[("fov", "fov_deg")]))
+    }
+}
