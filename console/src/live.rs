@@ -9,6 +9,11 @@
 use std::sync::Arc;
 
 use petrel_actors::{AnyValue, TypeInfo};
+use tokio::sync::broadcast;
+
+/// Log lines a live view has not sent yet before it drops the oldest (a client that reads
+/// slower than the log is written).
+const LOG_BACKLOG: usize = 1024;
 
 /// A channel's topic and schema, as a recording names them.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,4 +47,38 @@ pub trait LiveEncoders: Send + Sync + 'static {
         type_info: &TypeInfo,
         first: Option<&AnyValue>,
     ) -> Option<(LiveChannel, Arc<dyn ChannelEncoder>)>;
+
+    /// The channel of the log lines [`LiveLog`] carries, and their encoder; `None` (the
+    /// default) serves no log.
+    fn log(&self) -> Option<(LiveChannel, Arc<dyn ChannelEncoder>)> {
+        None
+    }
+}
+
+/// The log as it is written, for the live view's log channel: whoever owns the logging setup
+/// pushes each line (a value the [`LiveEncoders::log`] encoder reads) with its time. Pushing
+/// never waits; with no client subscribed it costs nothing more.
+#[derive(Clone)]
+pub struct LiveLog {
+    lines: broadcast::Sender<(u64, AnyValue)>,
+}
+
+impl Default for LiveLog {
+    fn default() -> Self {
+        LiveLog {
+            lines: broadcast::channel(LOG_BACKLOG).0,
+        }
+    }
+}
+
+impl LiveLog {
+    /// Hands `line`, logged at `stamp_ns` (ns since the Unix epoch), to the subscribed clients.
+    pub fn push(&self, stamp_ns: u64, line: AnyValue) {
+        let _ = self.lines.send((stamp_ns, line));
+    }
+
+    /// The lines pushed from now on.
+    pub(crate) fn subscribe(&self) -> broadcast::Receiver<(u64, AnyValue)> {
+        self.lines.subscribe()
+    }
 }

@@ -120,10 +120,7 @@ impl Recorder {
 
     /// The log channel (`/rosout` in ROS 2 files, `/log` otherwise).
     pub fn log_sink(&mut self) -> LogSink {
-        let topic = match self.options.format {
-            crate::Format::Ros2 => "/rosout",
-            crate::Format::Foxglove => "/log",
-        };
+        let topic = crate::select::log_topic(self.options.format);
         let out: Out = self.channels.lock().channel(ChannelSpec {
             topic: topic.into(),
             url: String::new(),

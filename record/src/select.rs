@@ -145,6 +145,15 @@ impl Selection {
     }
 }
 
+/// The topic of the tracing log: `/rosout` in ROS 2 files (where rosbag2's tools look for
+/// it), `/log` otherwise.
+pub fn log_topic(format: crate::Format) -> &'static str {
+    match format {
+        crate::Format::Ros2 => "/rosout",
+        crate::Format::Foxglove => "/log",
+    }
+}
+
 /// The topic of a property: `/agent/module/path`, with every character a ROS 2 name refuses
 /// replaced by `_` (and a segment starting with a digit prefixed by one).
 pub fn topic(agent: &str, key: &str) -> String {

@@ -94,6 +94,7 @@ pub(crate) async fn stop_views(views: Views) {
         stop(console).await;
     }
     if let Some(server) = views.foxglove {
+        super::record_log::install_live(None);
         server.stop().await;
     }
 }

@@ -6,9 +6,9 @@ use std::net::SocketAddr;
 use std::sync::Arc;
 
 use petrel_actors::{outln, Agent, AnyValue, TypeInfo};
-use petrel_console::live::{ChannelEncoder, LiveChannel, LiveEncoders};
+use petrel_console::live::{ChannelEncoder, LiveChannel, LiveEncoders, LiveLog};
 use petrel_console::{ConsoleOptions, FoxgloveServer};
-use petrel_record::{select, Codec, Format, Stamp};
+use petrel_record::{select, Codec, Format, LogRecord, Stamp};
 
 /// The recorder's encoders, in `format`.
 struct RecordEncoders {
@@ -40,20 +40,30 @@ impl LiveEncoders for RecordEncoders {
         // type without a standard message fall on `{"value": ...}`, which holds any JSON.
         let none: AnyValue = Arc::new(());
         let codec = Codec::for_value(self.format, type_info, first.unwrap_or(&none));
-        let schema = codec.schema(type_info.name());
-        let channel = LiveChannel {
-            topic: select::topic(agent, key),
-            encoding: schema.message_encoding.to_string(),
-            schema_name: schema.name,
-            schema: String::from_utf8(schema.data).ok()?,
-            schema_encoding: schema.encoding.to_string(),
-        };
-        let encoder = Encoder {
-            codec,
-            type_info: *type_info,
-        };
-        Some((channel, Arc::new(encoder)))
+        live_channel(select::topic(agent, key), codec, *type_info)
     }
+
+    fn log(&self) -> Option<(LiveChannel, Arc<dyn ChannelEncoder>)> {
+        let topic = select::log_topic(self.format).to_string();
+        live_channel(topic, Codec::log(self.format), TypeInfo::of::<LogRecord>())
+    }
+}
+
+/// Channel `topic` of values of type `type_info`, encoded by `codec`.
+fn live_channel(
+    topic: String,
+    codec: Codec,
+    type_info: TypeInfo,
+) -> Option<(LiveChannel, Arc<dyn ChannelEncoder>)> {
+    let schema = codec.schema(type_info.name());
+    let channel = LiveChannel {
+        topic,
+        encoding: schema.message_encoding.to_string(),
+        schema_name: schema.name,
+        schema: String::from_utf8(schema.data).ok()?,
+        schema_encoding: schema.encoding.to_string(),
+    };
+    Some((channel, Arc::new(Encoder { codec, type_info })))
 }
 
 /// Starts the live view on `addr` for `agents`, printing where Foxglove connects (and a
@@ -70,9 +80,12 @@ pub(crate) async fn start(
     let encoders = Arc::new(RecordEncoders {
         format: format.unwrap_or_default(),
     });
-    let server = FoxgloveServer::start(ConsoleOptions { addr, token: None }, sources, encoders)
+    let log = LiveLog::default();
+    let options = ConsoleOptions { addr, token: None };
+    let server = FoxgloveServer::start(options, sources, encoders, Some(log.clone()))
         .await
         .map_err(|e| e.to_string().replacen("--console", "--foxglove", 1))?;
+    super::record_log::install_live(Some(log));
     outln!("foxglove: {}", server.url());
     if let (Some(token), true) = server.token() {
         eprintln!(

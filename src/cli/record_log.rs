@@ -1,11 +1,12 @@
 //! The tracing log as a recording's log channel: a layer that hands each event at info and
-//! above to the recorder's [`LogSink`] while a recording runs (and costs one lock check when
-//! none does).
+//! above to the recorder's [`LogSink`] while a recording runs, and to the Foxglove live view's
+//! [`LiveLog`] while one serves (and costs a lock check when neither does).
 
 use std::fmt::Write as _;
 use std::sync::RwLock;
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use petrel_console::live::LiveLog;
 use petrel_record::{LogLevel, LogRecord, LogSink};
 use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Subscriber};
@@ -13,10 +14,16 @@ use tracing_subscriber::layer::Context;
 use tracing_subscriber::Layer;
 
 static SINK: RwLock<Option<LogSink>> = RwLock::new(None);
+static LIVE: RwLock<Option<LiveLog>> = RwLock::new(None);
 
 /// Sends the log to `sink` from now on (`None`: stop).
 pub(crate) fn install(sink: Option<LogSink>) {
     *SINK.write().unwrap_or_else(|e| e.into_inner()) = sink;
+}
+
+/// Sends the log to the live view's `live` from now on (`None`: stop).
+pub(crate) fn install_live(live: Option<LiveLog>) {
+    *LIVE.write().unwrap_or_else(|e| e.into_inner()) = live;
 }
 
 /// The layer; `logging::init` adds it.
@@ -56,8 +63,11 @@ impl<S: Subscriber> Layer<S> for RecordLayer {
         if *meta.level() > Level::INFO {
             return;
         }
-        let guard = SINK.read().unwrap_or_else(|e| e.into_inner());
-        let Some(sink) = guard.as_ref() else { return };
+        let sink = SINK.read().unwrap_or_else(|e| e.into_inner());
+        let live = LIVE.read().unwrap_or_else(|e| e.into_inner());
+        if sink.is_none() && live.is_none() {
+            return;
+        }
         let mut text = Text::default();
         event.record(&mut text);
         let level = match *meta.level() {
@@ -68,13 +78,19 @@ impl<S: Subscriber> Layer<S> for RecordLayer {
         let stamp_ns = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos() as u64);
-        sink.record(LogRecord {
+        let record = LogRecord {
             stamp_ns,
             level,
             target: meta.target().to_string(),
             message: text.0,
             file: meta.file().unwrap_or_default().to_string(),
             line: meta.line().unwrap_or(0),
-        });
+        };
+        if let Some(live) = live.as_ref() {
+            live.push(stamp_ns, std::sync::Arc::new(record.clone()));
+        }
+        if let Some(sink) = sink.as_ref() {
+            sink.record(record);
+        }
     }
 }

@@ -1,7 +1,8 @@
 //! `petrel run --foxglove`: a Foxglove WebSocket client (subprotocol `foxglove.websocket.v1`)
-//! against the running robot config: server info, the advertised channels, a subscription to
-//! the laser, and Message Data frames that decode with the advertised schema (and with the
-//! recorder's own decoder). Every read has a deadline; the run is killed when the test ends.
+//! against the running robot config: server info, the advertised channels, subscriptions to
+//! the laser and the log, and Message Data frames that decode with the advertised schema (and
+//! with the recorder's own decoder). Every read has a deadline; the run is killed when the
+//! test ends.
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -113,29 +114,51 @@ async fn foxglove_subscribes_to_the_laser_and_gets_messages_of_its_schema() {
         (&laser["encoding"], &laser["schemaEncoding"]),
         (&json!("json"), &json!("jsonschema"))
     );
+    let laser_topic = laser["topic"].as_str().unwrap();
     assert!(
-        laser["topic"].as_str().unwrap().starts_with("/robot1/"),
+        laser_topic.starts_with("/robot1/"),
         "topics as a recording names them: {laser}"
     );
     let schema: Value = serde_json::from_str(laser["schema"].as_str().unwrap()).unwrap();
+    let log = channels
+        .iter()
+        .find(|c| c["topic"] == "/log")
+        .unwrap_or_else(|| panic!("the log channel, as a recording has it: {advertise}"));
+    assert_eq!(log["schemaName"], "foxglove.Log", "{log}");
+    let log_schema: Value = serde_json::from_str(log["schema"].as_str().unwrap()).unwrap();
 
+    // The log first: the run logs the laser's subscription, which then comes on the log.
     send(
         &mut socket,
-        json!({"op": "subscribe", "subscriptions": [{"id": 7, "channelId": laser["id"]}]}),
+        json!({"op": "subscribe", "subscriptions": [
+            {"id": 3, "channelId": log["id"]}, {"id": 7, "channelId": laser["id"]}]}),
     )
     .await;
-    let frame = loop {
+    let (mut frame, mut logged) = (None, None);
+    while frame.is_none() || logged.is_none() {
         let message = tokio::time::timeout(DEADLINE, socket.next())
             .await
             .expect("a message in time")
             .expect("the socket stays open")
             .expect("a readable message");
-        if let Message::Binary(frame) = message {
-            break frame;
+        let Message::Binary(data) = message else {
+            continue;
+        };
+        assert_eq!(data[0], 0x01, "Message Data");
+        match u32::from_le_bytes(data[1..5].try_into().unwrap()) {
+            7 => frame = Some(data),
+            3 => {
+                let line: Value = serde_json::from_slice(&data[13..]).expect("a JSON log line");
+                fits(&log_schema, &line).unwrap();
+                let text = line["message"].as_str().unwrap_or_default();
+                if text.contains("a Foxglove client subscribed") && text.contains(laser_topic) {
+                    logged = Some(line);
+                }
+            }
+            other => panic!("a frame of subscription {other}, never asked for"),
         }
-    };
-    assert_eq!(frame[0], 0x01, "Message Data");
-    assert_eq!(u32::from_le_bytes(frame[1..5].try_into().unwrap()), 7);
+    }
+    let frame = frame.unwrap();
     assert!(
         u64::from_le_bytes(frame[5..13].try_into().unwrap()) > 0,
         "a receive time"

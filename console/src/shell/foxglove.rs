@@ -2,6 +2,7 @@
 //! console's access rules (loopback or token; Foxglove's app as the one other origin), and
 //! per subscription a tap on the property that encodes each change or queue item and hands
 //! the frame to the socket without ever making the module wait (a full socket drops frames).
+//! The log is one more channel, fed by [`LiveLog`] as lines are written.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -18,13 +19,13 @@ use axum::Router;
 use petrel_actors::team::Tap;
 use petrel_actors::{AnyValue, Blackboard, PropertyKind};
 use serde_json::Value;
-use tokio::sync::{mpsc, oneshot, watch};
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
 use crate::core::access::{self, Access};
 use crate::core::foxglove::{self as protocol, Channel, ClientOp, Level, SUBPROTOCOL};
-use crate::live::{ChannelEncoder, LiveEncoders};
+use crate::live::{ChannelEncoder, LiveEncoders, LiveLog};
 use crate::{ConsoleError, ConsoleOptions};
 
 /// Frames waiting for a slow client; beyond them frames are dropped.
@@ -42,6 +43,7 @@ pub struct FoxgloveServer {
 struct Live {
     agents: Vec<(String, Blackboard)>,
     encoders: Arc<dyn LiveEncoders>,
+    log: Option<LiveLog>,
     access: Access,
     bound: SocketAddr,
     /// An instant and the Unix time then: write times become message stamps.
@@ -50,11 +52,13 @@ struct Live {
 }
 
 impl FoxgloveServer {
-    /// Binds `options.addr` and serves `agents`' properties, encoded by `encoders`.
+    /// Binds `options.addr` and serves `agents`' properties, encoded by `encoders`, and the
+    /// lines `log` carries when `encoders` give the log a channel.
     pub async fn start(
         options: ConsoleOptions,
         agents: Vec<(String, Blackboard)>,
         encoders: Arc<dyn LiveEncoders>,
+        log: Option<LiveLog>,
     ) -> Result<FoxgloveServer, ConsoleError> {
         let addr = options.addr;
         let mut token_error = None;
@@ -82,6 +86,7 @@ impl FoxgloveServer {
         let live = Arc::new(Live {
             agents,
             encoders,
+            log,
             access: access.clone(),
             bound,
             epoch: (Instant::now(), unix_ns),
@@ -172,10 +177,19 @@ async fn upgrade(State(live): State<Arc<Live>>, ws: WebSocketUpgrade) -> Respons
 }
 
 /// An advertised channel: where its values come from and how they are encoded.
+#[derive(Clone)]
 struct Source {
-    bb: Blackboard,
-    key: String,
+    topic: String,
+    feed: Feed,
     encoder: Arc<dyn ChannelEncoder>,
+}
+
+#[derive(Clone)]
+enum Feed {
+    /// A property's changes or a queue's items.
+    Property { bb: Blackboard, key: String },
+    /// The log lines written from now on.
+    Log(LiveLog),
 }
 
 /// The channels of every property that holds data (not linked inputs), numbered from 1.
@@ -200,26 +214,51 @@ async fn channels(live: &Live) -> (Vec<Channel>, HashMap<u32, Source>) {
             else {
                 continue;
             };
-            let id = channels.len() as u32 + 1;
-            channels.push(Channel {
-                id,
-                topic: c.topic,
-                encoding: c.encoding,
-                schema_name: c.schema_name,
-                schema: c.schema,
-                schema_encoding: c.schema_encoding,
-            });
-            sources.insert(
-                id,
-                Source {
-                    bb: bb.clone(),
-                    key: p.key,
-                    encoder,
-                },
-            );
+            let feed = Feed::Property {
+                bb: bb.clone(),
+                key: p.key,
+            };
+            advertise(&mut channels, &mut sources, c, feed, encoder);
         }
     }
+    if let (Some(log), Some((c, encoder))) = (&live.log, live.encoders.log()) {
+        advertise(
+            &mut channels,
+            &mut sources,
+            c,
+            Feed::Log(log.clone()),
+            encoder,
+        );
+    }
     (channels, sources)
+}
+
+/// Adds channel `c` with the next id.
+fn advertise(
+    channels: &mut Vec<Channel>,
+    sources: &mut HashMap<u32, Source>,
+    c: crate::live::LiveChannel,
+    feed: Feed,
+    encoder: Arc<dyn ChannelEncoder>,
+) {
+    let id = channels.len() as u32 + 1;
+    let topic = c.topic.clone();
+    channels.push(Channel {
+        id,
+        topic: c.topic,
+        encoding: c.encoding,
+        schema_name: c.schema_name,
+        schema: c.schema,
+        schema_encoding: c.schema_encoding,
+    });
+    sources.insert(
+        id,
+        Source {
+            topic,
+            feed,
+            encoder,
+        },
+    );
 }
 
 async fn serve(mut socket: WebSocket, live: Arc<Live>) -> Result<(), axum::Error> {
@@ -243,7 +282,13 @@ async fn serve(mut socket: WebSocket, live: Arc<Live>) -> Result<(), axum::Error
                                 send(&mut socket, protocol::status(Level::Warning, &why)).await?;
                                 continue;
                             };
-                            let task = tokio::spawn(stream(source_clone(source), s.id, live.epoch, tx.clone()));
+                            // The log's lines count from the subscription, this one's own line included.
+                            let lines = match &source.feed {
+                                Feed::Log(log) => Some(log.subscribe()),
+                                Feed::Property { .. } => None,
+                            };
+                            tracing::info!(topic = %source.topic, "a Foxglove client subscribed");
+                            let task = tokio::spawn(stream(source.clone(), lines, s.id, live.epoch, tx.clone()));
                             if let Some(old) = subscriptions.insert(s.id, task) {
                                 old.abort();
                             }
@@ -276,17 +321,11 @@ async fn serve(mut socket: WebSocket, live: Arc<Live>) -> Result<(), axum::Error
     result
 }
 
-fn source_clone(s: &Source) -> Source {
-    Source {
-        bb: s.bb.clone(),
-        key: s.key.clone(),
-        encoder: s.encoder.clone(),
-    }
-}
-
-/// Streams one subscription: the current value at once, then every change or queue item.
+/// Streams one subscription: the current value at once, then every change or queue item (or,
+/// for the log, each line from `lines`).
 async fn stream(
     source: Source,
+    lines: Option<broadcast::Receiver<(u64, AnyValue)>>,
     subscription: u32,
     epoch: (Instant, u64),
     out: mpsc::Sender<Vec<u8>>,
@@ -299,9 +338,8 @@ async fn stream(
                 .saturating_sub(epoch.0.duration_since(at).as_nanos() as u64),
         }
     };
-    let send = |value: &AnyValue, at: Instant| {
+    let send_at = |value: &AnyValue, ns: u64| {
         let mut payload = Vec::new();
-        let ns = stamp(at);
         match source.encoder.encode(value, ns, &mut payload) {
             // A full socket drops the frame: the module never waits for Foxglove.
             Ok(()) => {
@@ -310,12 +348,26 @@ async fn stream(
                     || !out.is_closed()
             }
             Err(e) => {
-                tracing::debug!(key = %source.key, error = %e, "cannot encode for Foxglove");
+                tracing::debug!(topic = %source.topic, error = %e, "cannot encode for Foxglove");
                 true
             }
         }
     };
-    match source.bb.tap(&source.key).await {
+    let send = |value: &AnyValue, at: Instant| send_at(value, stamp(at));
+    let (bb, key) = match (&source.feed, lines) {
+        (Feed::Property { bb, key }, _) => (bb, key),
+        (Feed::Log(log), lines) => {
+            let mut lines = lines.unwrap_or_else(|| log.subscribe());
+            loop {
+                match lines.recv().await {
+                    Ok((ns, line)) if !send_at(&line, ns) => return,
+                    Ok(_) | Err(broadcast::error::RecvError::Lagged(_)) => {}
+                    Err(broadcast::error::RecvError::Closed) => return,
+                }
+            }
+        }
+    };
+    match bb.tap(key).await {
         Ok(Tap::Value(tap)) => {
             let mut sent = None;
             loop {
@@ -335,7 +387,7 @@ async fn stream(
             }
             tap.changed().await;
         },
-        Err(e) => tracing::debug!(key = %source.key, error = %e, "cannot tap for Foxglove"),
+        Err(e) => tracing::debug!(%key, error = %e, "cannot tap for Foxglove"),
     }
 }
 
