@@ -88,16 +88,9 @@ pub(crate) fn run(args: ConsoleArgs) -> ExitCode {
         }
         None => None,
     };
-    let runtime = match tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-    {
+    let runtime = match super::runtime::start(Some(2)) {
         Ok(rt) => rt,
-        Err(e) => {
-            eprintln!("error: cannot start the async runtime: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(code) => return code,
     };
     runtime.block_on(async {
         let console = match super::console::serve(args.listen, args.token.clone(), Vec::new()).await

@@ -21,6 +21,7 @@ mod record;
 mod record_log;
 mod remote;
 mod run;
+mod runtime;
 mod stop_guard;
 mod team_agent;
 mod top;

@@ -49,16 +49,9 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
         Ok(files) => files,
         Err(code) => return code,
     };
-    let mut builder = tokio::runtime::Builder::new_multi_thread();
-    if let Some(workers) = args.workers {
-        builder.worker_threads(workers.into());
-    }
-    let runtime = match builder.enable_all().build() {
+    let runtime = match super::runtime::start(args.workers.map(Into::into)) {
         Ok(rt) => rt,
-        Err(e) => {
-            eprintln!("error: cannot start the async runtime: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(code) => return code,
     };
     let code = runtime.block_on(run_agents(registry, &args, files));
     // A killed module whose step never yields still holds its worker thread: do not wait for it.

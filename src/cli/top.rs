@@ -129,16 +129,9 @@ where
     F: FnOnce(std::sync::Arc<Vec<(String, Client)>>) -> Fut,
     Fut: std::future::Future<Output = Result<(), TeamError>>,
 {
-    let runtime = match tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(1)
-        .enable_all()
-        .build()
-    {
+    let runtime = match super::runtime::start(Some(1)) {
         Ok(rt) => rt,
-        Err(e) => {
-            eprintln!("error: cannot start the async runtime: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(code) => return code,
     };
     runtime.block_on(async {
         let mut clients = Vec::new();

@@ -7,7 +7,7 @@
 use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::Arc;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{Request, State};
@@ -19,7 +19,7 @@ use axum::Router;
 use petrel_actors::team::Tap;
 use petrel_actors::{AnyValue, Blackboard, PropertyKind};
 use serde_json::Value;
-use tokio::sync::{broadcast, mpsc, oneshot, watch};
+use tokio::sync::{broadcast, mpsc, watch};
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
@@ -35,8 +35,7 @@ const BACKLOG: usize = 256;
 pub struct FoxgloveServer {
     addr: SocketAddr,
     access: Access,
-    shutdown: Option<oneshot::Sender<()>>,
-    server: JoinHandle<()>,
+    server: super::server::Server,
     stopping: watch::Sender<bool>,
 }
 
@@ -60,24 +59,8 @@ impl FoxgloveServer {
         encoders: Arc<dyn LiveEncoders>,
         log: Option<LiveLog>,
     ) -> Result<FoxgloveServer, ConsoleError> {
-        let addr = options.addr;
-        let mut token_error = None;
-        let access = Access::for_bind(addr, options.token.as_deref(), || {
-            super::generate_token().unwrap_or_else(|e| {
-                token_error = Some(e);
-                String::new()
-            })
-        })
-        .map_err(|source| ConsoleError::Bind { addr, source })?;
-        if let Some(e) = token_error {
-            return Err(ConsoleError::Token(e));
-        }
-        let listener = tokio::net::TcpListener::bind(addr)
-            .await
-            .map_err(|source| ConsoleError::Listen { addr, source })?;
-        let bound = listener
-            .local_addr()
-            .map_err(|source| ConsoleError::Listen { addr, source })?;
+        let binding = super::server::Binding::bind(&options).await?;
+        let (bound, access) = (binding.addr, binding.access.clone());
         let unix_ns = SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .unwrap_or_default()
@@ -96,20 +79,10 @@ impl FoxgloveServer {
             .route("/", get(upgrade))
             .layer(middleware::from_fn_with_state(live.clone(), guard))
             .with_state(live);
-        let (shutdown, stopped) = oneshot::channel::<()>();
-        let server = tokio::spawn(async move {
-            let serving = axum::serve(listener, app).with_graceful_shutdown(async move {
-                let _ = stopped.await;
-            });
-            if let Err(e) = serving.await {
-                tracing::error!(error = %e, "the Foxglove live view stopped serving");
-            }
-        });
-        tracing::info!(address = %bound, "Foxglove live view listening");
+        let server = binding.serve(app, "Foxglove live view");
         Ok(FoxgloveServer {
             addr: bound,
             access,
-            shutdown: Some(shutdown),
             server,
             stopping,
         })
@@ -136,15 +109,7 @@ impl FoxgloveServer {
     /// Stops serving: open connections close and their subscriptions end.
     pub async fn stop(mut self) {
         self.stopping.send_replace(true);
-        if let Some(s) = self.shutdown.take() {
-            let _ = s.send(());
-        }
-        if tokio::time::timeout(Duration::from_secs(1), &mut self.server)
-            .await
-            .is_err()
-        {
-            self.server.abort();
-        }
+        self.server.stop().await;
     }
 }
 

@@ -6,6 +6,7 @@ mod collect;
 mod collect_remote;
 mod foxglove;
 mod remote;
+mod server;
 mod state;
 mod ws;
 
@@ -18,8 +19,6 @@ use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::Router;
-use tokio::sync::oneshot;
-use tokio::task::JoinHandle;
 
 use crate::core::access::{self, Access};
 use crate::{AgentSource, ConsoleError, ConsoleOptions, LogTail};
@@ -32,8 +31,7 @@ pub use foxglove::FoxgloveServer;
 pub struct Console {
     addr: SocketAddr,
     access: Access,
-    shutdown: Option<oneshot::Sender<()>>,
-    server: JoinHandle<()>,
+    server: server::Server,
     shared: Arc<Shared>,
 }
 
@@ -44,40 +42,13 @@ impl Console {
         agents: Vec<AgentSource>,
         logs: LogTail,
     ) -> Result<Console, ConsoleError> {
-        let addr = options.addr;
-        let mut token_error = None;
-        let access = Access::for_bind(addr, options.token.as_deref(), || {
-            generate_token().unwrap_or_else(|e| {
-                token_error = Some(e);
-                String::new()
-            })
-        })
-        .map_err(|source| ConsoleError::Bind { addr, source })?;
-        if let Some(e) = token_error {
-            return Err(ConsoleError::Token(e));
-        }
-        let listener = tokio::net::TcpListener::bind(addr)
-            .await
-            .map_err(|source| ConsoleError::Listen { addr, source })?;
-        let bound = listener
-            .local_addr()
-            .map_err(|source| ConsoleError::Listen { addr, source })?;
-        let shared = Arc::new(Shared::new(agents, logs, access.clone(), bound).await);
-        let app = router(shared.clone());
-        let (shutdown, stopped) = oneshot::channel::<()>();
-        let server = tokio::spawn(async move {
-            let serving = axum::serve(listener, app).with_graceful_shutdown(async move {
-                let _ = stopped.await;
-            });
-            if let Err(e) = serving.await {
-                tracing::error!(error = %e, "the console stopped serving");
-            }
-        });
-        tracing::info!(address = %bound, "console listening");
+        let binding = server::Binding::bind(&options).await?;
+        let (addr, access) = (binding.addr, binding.access.clone());
+        let shared = Arc::new(Shared::new(agents, logs, access.clone(), addr).await);
+        let server = binding.serve(router(shared.clone()), "console");
         Ok(Console {
-            addr: bound,
+            addr,
             access,
-            shutdown: Some(shutdown),
             server,
             shared,
         })
@@ -123,21 +94,9 @@ impl Console {
     /// (at most a second) for answers under way.
     pub async fn stop(mut self) {
         self.shared.stop();
-        if let Some(s) = self.shutdown.take() {
-            let _ = s.send(());
-        }
-        if tokio::time::timeout(STOP_GRACE, &mut self.server)
-            .await
-            .is_err()
-        {
-            self.server.abort();
-            let _ = (&mut self.server).await;
-        }
+        self.server.stop().await;
     }
 }
-
-/// How long a stopping console waits for requests under way.
-const STOP_GRACE: std::time::Duration = std::time::Duration::from_secs(1);
 
 fn generate_token() -> Result<String, String> {
     let mut bytes = [0u8; 16];

@@ -19,6 +19,8 @@ pub mod searched;
 pub mod sequencer;
 pub mod team_log;
 pub mod team_map;
+#[cfg(test)]
+mod text_map;
 
 pub use allocate::{Allocator, Change};
 pub use avoidance::{Avoidance, AvoidanceParams};

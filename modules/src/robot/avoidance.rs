@@ -131,10 +131,7 @@ impl Module for ObstacleAvoidance {
             return Ok(());
         };
         let params = self.params();
-        let (core, built_with) = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let (core, built_with) = super::initialized(&mut self.core);
         if *built_with != params {
             match Avoidance::new(params.clone()) {
                 Ok(fresh) => (*core, *built_with) = (fresh, params),

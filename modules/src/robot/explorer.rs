@@ -140,10 +140,7 @@ impl Module for ExplorerModule {
         }
         let t = self.sim_time.value();
         let area = self.area()?;
-        let state = self
-            .state
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let state = super::initialized(&mut self.state);
         if area != state.params.area {
             // A new share of the search (a team reassigning areas): explore again.
             state.params.area = area;
@@ -251,10 +248,7 @@ impl ExplorerModule {
                 "invalid input `in/assigned`: expected `[x, y]` or `[]`, got {other:?}"
             ),
         };
-        let state = self
-            .state
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let state = super::initialized(&mut self.state);
         if state.over {
             return Ok(());
         }

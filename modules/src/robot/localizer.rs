@@ -250,11 +250,7 @@ impl Module for LocalizerModule {
     }
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        match self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init")
-        {
+        match super::initialized(&mut self.core) {
             Core::Simulated(core) => {
                 // Items carry no simulated time; a batch is at most a few steps old, so all of
                 // it is stamped with the current time (drift depends on distance, not on

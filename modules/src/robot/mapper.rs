@@ -118,10 +118,7 @@ impl Module for MapperModule {
     }
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let core = super::initialized(&mut self.core);
         self.pending.extend(self.scans.drain());
         let pose = self.pose.read();
         let mut changed = 0;

@@ -97,6 +97,14 @@ fn check_params(
     Ok(())
 }
 
+/// What a module built in `init` (its core, its state): a module steps only after an `init`
+/// that succeeded.
+fn initialized<T>(built: &mut Option<T>) -> &mut T {
+    built
+        .as_mut()
+        .expect("stepping only after a successful init")
+}
+
 /// An init error as a problem `petrel check` reports, at the first `params/...` it names.
 fn check_problem(e: &anyhow::Error) -> petrel_actors::CheckProblem {
     let message = e.to_string();

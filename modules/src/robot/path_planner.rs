@@ -169,10 +169,7 @@ impl Module for PathPlanner {
     }
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let core = super::initialized(&mut self.core);
         let target = self.target.read();
         if target.version == 0 {
             return Ok(()); // no target yet: the outputs already say "stay"

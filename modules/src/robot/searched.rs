@@ -71,10 +71,7 @@ impl Module for SearchedModule {
     }
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let core = super::initialized(&mut self.core);
         let frame = self.frames.value();
         if frame == self.last_frame {
             return Ok(());

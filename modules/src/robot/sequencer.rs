@@ -104,10 +104,7 @@ impl Module for GoalSequencerModule {
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let clock = self.sim_time.read();
-        let run = self
-            .run
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let run = super::initialized(&mut self.run);
         if run.over {
             return Ok(());
         }

@@ -112,10 +112,7 @@ impl Module for TeamSearch {
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let t = self.clock.value();
-        let state = self
-            .state
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let state = super::initialized(&mut self.state);
         let present = present(state);
         for left in state.log.membership(&present, t) {
             let held = match state.allocator.claim_of(&left) {

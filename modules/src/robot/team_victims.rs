@@ -62,10 +62,7 @@ impl Module for TeamVictimsModule {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let core = super::initialized(&mut self.core);
         for item in self.inbox.drain() {
             let robot = item.from.split('/').next().unwrap_or(&item.from);
             let Some(p) = parse(&item.body) else {

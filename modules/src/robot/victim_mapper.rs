@@ -99,10 +99,7 @@ impl Module for VictimMapper {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let core = self
-            .core
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let core = super::initialized(&mut self.core);
         let pose = self.robot.value();
         let frame = self.detections.read();
         if self.frame_version != Some(frame.version) {

@@ -319,10 +319,7 @@ impl Module for SimWorld {
             true => Some(self.camera_config()?),
             false => None,
         };
-        let sim = self
-            .sim
-            .as_mut()
-            .expect("stepping only after a successful init");
+        let sim = super::initialized(&mut self.sim);
         let steps = if self.deterministic.value() {
             1
         } else {

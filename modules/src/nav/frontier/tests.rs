@@ -2,25 +2,7 @@ use super::*;
 
 /// A map from text rows (top first): `#` occupied, `.` free, `?` unknown; 0.1 m cells.
 fn map(rows: &[&str]) -> OccupancyGrid {
-    let (w, h) = (rows[0].len(), rows.len());
-    let mut data = vec![0i8; w * h];
-    for (t, row) in rows.iter().enumerate() {
-        let r = h - 1 - t;
-        for (c, ch) in row.chars().enumerate() {
-            data[r * w + c] = match ch {
-                '#' => 100,
-                '?' => -1,
-                _ => 0,
-            };
-        }
-    }
-    OccupancyGrid {
-        width: w as u32,
-        height: h as u32,
-        resolution: 0.1,
-        origin: Pose2::default(),
-        data: data.into(),
-    }
+    crate::nav::text_map::text_map(rows, 0.1, (0.0, 0.0))
 }
 
 fn params() -> FrontierParams {

@@ -5,25 +5,7 @@ use super::*;
 /// A map from text rows (top first): `#` occupied, `.` free, `?` unknown; 1 m cells, so cell
 /// `(c, r)` has its centre at `(c + 0.5, r + 0.5)` plus `origin`.
 fn map(rows: &[&str], origin: (f64, f64)) -> OccupancyGrid {
-    let (w, h) = (rows[0].len(), rows.len());
-    let mut data = vec![0i8; w * h];
-    for (t, row) in rows.iter().enumerate() {
-        let r = h - 1 - t;
-        for (c, ch) in row.chars().enumerate() {
-            data[r * w + c] = match ch {
-                '#' => 100,
-                '?' => -1,
-                _ => 0,
-            };
-        }
-    }
-    OccupancyGrid {
-        width: w as u32,
-        height: h as u32,
-        resolution: 1.0,
-        origin: Pose2::new(origin.0, origin.1, 0.0),
-        data: data.into(),
-    }
+    crate::nav::text_map::text_map(rows, 1.0, origin)
 }
 
 /// An all-free `w` x `h` map.
