@@ -3,13 +3,10 @@
 use petrel::actors::{Agent, ConfigFile};
 use petrel::team::Team;
 
-/// A free TCP port on 127.0.0.1.
-pub fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .unwrap()
-}
+#[path = "../../tests/common/ports.rs"]
+mod ports;
+#[allow(unused_imports)] // benches without a team do not use it
+pub use ports::free_port;
 
 /// A team agent config listening on `port` and connecting to `connect`.
 pub fn config(name: &str, team: &str, port: u16, connect: Option<u16>, modules: &str) -> String {

@@ -9,6 +9,8 @@ mod mail;
 mod membership;
 mod partition;
 mod plans;
+#[path = "../common/ports.rs"]
+mod ports;
 mod processes;
 mod python;
 mod rescue_team;
