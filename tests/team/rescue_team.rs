@@ -229,16 +229,6 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
     assert_every_victim_found(&stdout);
 }
 
-/// The victims of ../configs/rescue/rescue.txt (its `V` markers, metres).
-const VICTIMS: [(f64, f64); 6] = [
-    (1.7, 4.3),
-    (3.3, 8.1),
-    (6.5, 1.3),
-    (8.3, 10.5),
-    (13.9, 1.3),
-    (13.7, 8.1),
-];
-
 /// Every victim of the floor is on the coordinator's list (`  N (x, y) found by ...`), within
 /// 1.5 m (sightings on the shaking rubble floor land up to about 1.2 m off; victims are more
 /// than 4 m apart).

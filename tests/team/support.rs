@@ -15,6 +15,17 @@ pub const DEADLINE: Duration = Duration::from_secs(20);
 
 pub use crate::ports::free_port;
 
+/// The victims of configs/rescue/rescue.txt (its `V` markers, metres), for the rescue-team
+/// runs.
+pub const VICTIMS: [(f64, f64); 6] = [
+    (1.7, 4.3),
+    (3.3, 8.1),
+    (6.5, 1.3),
+    (8.3, 10.5),
+    (13.9, 1.3),
+    (13.7, 8.1),
+];
+
 /// A unique team name, so parallel tests never see each other.
 pub fn team_name(test: &str) -> String {
     format!("t{}-{test}", std::process::id())

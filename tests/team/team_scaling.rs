@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::support::{free_port, spawn_run, team_name};
+use crate::support::{free_port, spawn_run, team_name, VICTIMS};
 
 /// Robots per run.
 const SIZES: [usize; 4] = [1, 2, 4, 8];
@@ -32,16 +32,6 @@ fn start(k: usize) -> (f64, f64) {
     let i = k - 1;
     (1.0 + (i / 4) as f64, 1.0 + (i % 4) as f64 * 0.8)
 }
-
-/// The victims of configs/rescue/rescue.txt (as in rescue_team.rs).
-const VICTIMS: [(f64, f64); 6] = [
-    (1.7, 4.3),
-    (3.3, 8.1),
-    (6.5, 1.3),
-    (8.3, 10.5),
-    (13.9, 1.3),
-    (13.7, 8.1),
-];
 
 /// One run's figures.
 #[derive(Debug, Default, Clone)]

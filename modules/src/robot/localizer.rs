@@ -238,10 +238,7 @@ impl Module for LocalizerModule {
 
     /// Parameters valid alone but not together: `petrel check` says so before anything runs.
     fn check(&self) -> Vec<CheckProblem> {
-        match self.build_core() {
-            Ok(_) => Vec::new(),
-            Err(e) => vec![super::check_problem(&e)],
-        }
+        super::check_built(self.build_core())
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {

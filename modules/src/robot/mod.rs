@@ -105,6 +105,12 @@ fn initialized<T>(built: &mut Option<T>) -> &mut T {
         .expect("stepping only after a successful init")
 }
 
+/// `check`'s answer for a module whose `init` builds a core from its parameters: nothing, or
+/// why the core cannot be built.
+fn check_built<T>(built: anyhow::Result<T>) -> Vec<petrel_actors::CheckProblem> {
+    built.err().iter().map(check_problem).collect()
+}
+
 /// An init error as a problem `petrel check` reports, at the first `params/...` it names.
 fn check_problem(e: &anyhow::Error) -> petrel_actors::CheckProblem {
     let message = e.to_string();
