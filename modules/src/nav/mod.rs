@@ -34,4 +34,4 @@ pub use scan_matcher::{ScanLocalizer, ScanMatcher, ScanMatcherParams, ScanOutcom
 pub use searched::{SearchParams, SearchedMap};
 pub use sequencer::{GoalSequencer, SequencerOutput};
 pub use team_log::{Reassignment, TeamLog};
-pub use team_map::merge_maps;
+pub use team_map::{merge_maps, merge_searched};

@@ -7,6 +7,9 @@
 //! robot itself, or anyone else, maps the cell free, so one stale sighting never walls a
 //! corridor off for the whole team. Maps of another size, resolution or origin than the
 //! first are left out (a misconfigured robot must not corrupt the team's map).
+//!
+//! The floor the robots' cameras searched ([`merge_searched`]) merges by union: a cell one
+//! robot looked at well enough is searched for the team.
 
 use petrel_actors::OccupancyGrid;
 
@@ -52,6 +55,31 @@ pub fn merge_maps(
         ..first.clone()
     };
     Some((merged, left_out))
+}
+
+/// The union of the robots' searched grids (`nav.searched`: 0 searched, -1 not) on the
+/// geometry of `map` (the team's merged map): searched where any robot searched. Grids of
+/// another geometry (a robot whose grid has not arrived yet, or a misconfigured one) are
+/// left out. `None` when no grid fits: the explorer then counts the laser's frontiers alone.
+pub fn merge_searched(grids: &[&OccupancyGrid], map: &OccupancyGrid) -> Option<OccupancyGrid> {
+    let cells = map.data.len();
+    let mut fitting = grids
+        .iter()
+        .filter(|g| is_filled(g) && same_geometry(map, g) && g.data.len() == cells)
+        .peekable();
+    fitting.peek()?;
+    let mut data = vec![-1i8; cells];
+    for g in fitting {
+        for (cell, &v) in data.iter_mut().zip(g.data.iter()) {
+            if v >= 0 {
+                *cell = 0;
+            }
+        }
+    }
+    Some(OccupancyGrid {
+        data: data.into(),
+        ..map.clone()
+    })
 }
 
 /// A grid with as many cells as its size says (an input that never received a map has none).
@@ -107,5 +135,19 @@ mod tests {
         assert_eq!((&*m.data, left_out), (&[0i8, -1][..], 2));
         assert!(merge_maps(&[&empty], 50).is_none());
         assert!(merge_maps(&[], 50).is_none());
+    }
+
+    #[test]
+    fn searched_floor_is_the_union_of_the_grids_that_fit_the_map() {
+        let map = grid(&[0, 0, 0, 100]);
+        let a = grid(&[0, -1, -1, -1]);
+        let b = grid(&[-1, -1, 0, -1]);
+        let mut moved = grid(&[0, 0, 0, 0]);
+        moved.origin = Pose2::new(1.0, 0.0, 0.0);
+        let empty = OccupancyGrid::default();
+        let union = merge_searched(&[&a, &empty, &moved, &b], &map).unwrap();
+        assert_eq!(&*union.data, &[0, -1, 0, -1]);
+        assert_eq!((union.width, union.resolution), (map.width, map.resolution));
+        assert!(merge_searched(&[&moved, &empty], &map).is_none());
     }
 }

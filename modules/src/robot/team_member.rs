@@ -1,7 +1,7 @@
 //! `nav.team_member`: one robot of a team's shared search, as the coordinator sees it.
 //!
 //! Passive, as `sim.body` is for a world: it only declares what the coordinator knows of one
-//! robot (its map, pose and given-up targets, linked to the robot's agent) and what it tells
+//! robot (its map, searched floor, pose and given-up targets, linked to the robot's agent) and what it tells
 //! it (`out/target`, which the robot's explorer links to). The `nav.team_search` module that
 //! names it in `params/members` reads and writes these ports, so each robot's share is one
 //! `agent/module` with fixed paths, whatever the size of the team.
@@ -21,6 +21,7 @@ impl petrel_actors::PropertyType for MemberNames {
 /// `nav.team_member`: one robot of a `nav.team_search` (see the module docs).
 pub struct TeamMember {
     _map: Input<OccupancyGrid>,
+    _searched: Input<OccupancyGrid>,
     _pose: Input<Pose2>,
     _given_up: Input<Path2>,
     _target: Output<Vec<f64>>,
@@ -29,11 +30,12 @@ pub struct TeamMember {
 impl Module for TeamMember {
     const TYPE: &'static str = "nav.team_member";
     const DESCRIPTION: &'static str =
-        "One robot of a team's shared search (named in a nav.team_search's params/members): its map, pose and given-up targets in, its frontier out.";
+        "One robot of a team's shared search (named in a nav.team_search's params/members): its map, searched floor, pose and given-up targets in, its frontier out.";
 
     fn declare(ports: &mut Ports) -> Self {
         TeamMember {
             _map: ports.input("in/map", OccupancyGrid::default(), "the robot's map, world frame (link it to the robot's mapper; periodic and lossy links are fine)"),
+            _searched: ports.input("in/searched", OccupancyGrid::default(), "optional: the floor the robot's camera searched (its nav.searched's out/searched; periodic and lossy links are fine); with it, the team searches until every reachable cell was looked at, not only until the laser mapped it"),
             _pose: ports.input("in/pose", Pose2::default(), "the robot's estimated pose, world frame"),
             _given_up: ports.input("in/givenUp", Path2::default(), "targets the robot reached or could not reach (its explorer's out/givenUp): never assigned again"),
             _target: ports.output("out/target", Vec::new(), "the frontier this robot is to explore, `[x, y]`; empty = none for now"),

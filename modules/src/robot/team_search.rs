@@ -1,6 +1,8 @@
 //! `nav.team_search`: the coordinator's side of a team's search. It merges the robots' maps
-//! ([`merge_maps`]), finds the frontiers each present robot can reach on the merged map
-//! ([`explore`]) and hands them out, one per robot, nearest unclaimed first ([`Allocator`]).
+//! ([`merge_maps`]) and the floor their cameras searched ([`merge_searched`]), finds the
+//! frontiers each present robot can reach on the merged map ([`explore_searched`]: unknown
+//! space, and reachable floor no camera searched yet) and hands them out, one
+//! per robot, nearest unclaimed first ([`Allocator`]).
 //! Each robot is a `nav.team_member` module of this agent, named as the robot's agent: a
 //! robot that leaves the team (`_team/members`) loses its frontier to the others.
 
@@ -17,7 +19,10 @@ use petrel_actors::{
 
 use super::count;
 use super::team_member::MemberNames;
-use crate::nav::{explore, merge_maps, Allocator, Change, Exploration, FrontierParams, TeamLog};
+use crate::nav::{
+    explore_searched, merge_maps, merge_searched, Allocator, Change, Exploration, FrontierParams,
+    TeamLog,
+};
 
 /// The module type `params/members` must name.
 const MEMBER_TYPE: &str = "nav.team_member";
@@ -33,6 +38,7 @@ pub struct TeamSearch {
     blacklist_radius: Input<f64>,
     timeout_s: Input<f64>,
     map: Output<OccupancyGrid>,
+    searched: Output<OccupancyGrid>,
     frontiers: Output<i64>,
     done: Output<bool>,
     reassigned: Output<i64>,
@@ -43,6 +49,7 @@ pub struct TeamSearch {
 struct Member {
     name: String,
     map: PropertyHandle<OccupancyGrid>,
+    searched: PropertyHandle<OccupancyGrid>,
     pose: PropertyHandle<Pose2>,
     given_up: PropertyHandle<Path2>,
     target: RemoteValue,
@@ -61,7 +68,7 @@ struct State {
 impl Module for TeamSearch {
     const TYPE: &'static str = "nav.team_search";
     const DESCRIPTION: &'static str =
-        "A team's shared search: merges its robots' maps, allocates the merged map's frontiers to the robots (nearest unclaimed, none shared), reassigns a departed robot's frontier.";
+        "A team's shared search: merges its robots' maps and searched floor, allocates the merged map's frontiers (unknown space, floor no camera searched) to the robots (nearest unclaimed, none shared), reassigns a departed robot's frontier.";
 
     fn declare(ports: &mut Ports) -> Self {
         TeamSearch {
@@ -74,6 +81,7 @@ impl Module for TeamSearch {
             blacklist_radius: ports.param_in("params/blacklist_radius", 0.6, Range::new(0.01, 100.0), "frontiers this close to a target a robot gave up are skipped, m"),
             timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time at which the search ends even with frontiers left (frontiers no robot manages to see), s; 0 = never"),
             map: ports.output("out/map", OccupancyGrid::default(), "the merged map of the team"),
+            searched: ports.output("out/searched", OccupancyGrid::default(), "the floor any robot's camera searched, on the merged map's cells: 0 searched, -1 not (empty until a robot's in/searched arrives)"),
             frontiers: ports.output("out/frontiers", 0, "frontiers of the merged map reachable by a robot, at the last allocation"),
             done: ports.output("out/done", false, "the search is over: no robot can reach a frontier of the merged map"),
             reassigned: ports.output("out/reassigned", 0, "frontiers of departed robots given to others"),
@@ -133,6 +141,10 @@ impl Module for TeamSearch {
         let Some((merged, _)) = merge_maps(&refs, state.params.occupied_threshold) else {
             return Ok(());
         };
+        let searched: Vec<Arc<OccupancyGrid>> =
+            state.members.iter().map(|m| m.searched.get()).collect();
+        let refs: Vec<&OccupancyGrid> = searched.iter().map(|m| m.as_ref()).collect();
+        let searched = merge_searched(&refs, &merged);
         let blacklist: Vec<Point2> = state
             .members
             .iter()
@@ -148,7 +160,8 @@ impl Module for TeamSearch {
                     state.allocator.release(&m.name);
                 }
             }
-            match explore(&merged, m.pose.value(), &blacklist, &state.params) {
+            let pose = m.pose.value();
+            match explore_searched(&merged, searched.as_ref(), pose, &blacklist, &state.params) {
                 Exploration::Waiting => waiting = true,
                 Exploration::Done => {
                     candidates.insert(m.name.clone(), Vec::new());
@@ -158,11 +171,22 @@ impl Module for TeamSearch {
                 }
             }
         }
-        let reachable = distinct(&candidates, self.keep_radius.value());
+        let left = distinct(&candidates, self.keep_radius.value());
+        let reachable = left.len();
         self.frontiers.set(reachable as i64);
         self.map.set(merged);
+        if let Some(searched) = searched {
+            self.searched.set(searched);
+        }
         for change in state.allocator.allocate(&candidates) {
             if let Change::Assigned { robot, target } = &change {
+                tracing::debug!(
+                    robot,
+                    x = target.0.x,
+                    y = target.0.y,
+                    t,
+                    "frontier assigned"
+                );
                 if let Some(line) = state.log.assigned(robot, *target, t) {
                     petrel_actors::outln!("[{}] t = {t:6.1} s  {line}", ctx.module());
                     self.reassigned.set(self.reassigned.value() + 1);
@@ -191,7 +215,12 @@ impl Module for TeamSearch {
                 frontiers = reachable,
                 "the team search ends at its time limit with frontiers left"
             );
-            petrel_actors::outln!("[{}] t = {t:6.1} s  search ended at its time limit (params/timeout_s): {reachable} frontier(s) left", ctx.module());
+            let at: Vec<String> = left
+                .iter()
+                .take(5)
+                .map(|p| format!("({:.2}, {:.2})", p.0.x, p.0.y))
+                .collect();
+            petrel_actors::outln!("[{}] t = {t:6.1} s  search ended at its time limit (params/timeout_s): {reachable} frontier(s) left, at {}{}", ctx.module(), at.join(", "), if reachable > 5 { ", ..." } else { "" });
         } else if !waiting && !candidates.is_empty() && reachable == 0 {
             self.done.set(true);
             state.log.done(t);
@@ -224,14 +253,14 @@ fn present(state: &State) -> Vec<String> {
 }
 
 /// Frontiers reachable by some robot, those within `radius` of each other counted once.
-fn distinct(candidates: &BTreeMap<String, Vec<crate::nav::Frontier>>, radius: f64) -> usize {
+fn distinct(candidates: &BTreeMap<String, Vec<crate::nav::Frontier>>, radius: f64) -> Vec<Point2> {
     let mut seen: Vec<Point2> = Vec::new();
     for f in candidates.values().flatten() {
         if !seen.iter().any(|p| (p.0 - f.target.0).norm() <= radius) {
             seen.push(f.target);
         }
     }
-    seen.len()
+    seen
 }
 
 /// Binds the ports of each `nav.team_member` named in `params/members`.
@@ -255,6 +284,7 @@ async fn bind_members(ctx: &Context, names: &[String]) -> anyhow::Result<Vec<Mem
         members.push(Member {
             name: name.clone(),
             map: bb.handle(&at("in/map")).await?,
+            searched: bb.handle(&at("in/searched")).await?,
             pose: bb.handle(&at("in/pose")).await?,
             given_up: bb.handle(&at("in/givenUp")).await?,
             target,
