@@ -17,6 +17,7 @@ pub mod planner;
 pub mod scan_matcher;
 pub mod searched;
 pub mod sequencer;
+pub mod stall;
 pub mod team_log;
 pub mod team_map;
 #[cfg(test)]
@@ -33,5 +34,6 @@ pub use planner::{Planner, PlannerOutput, PlannerParams};
 pub use scan_matcher::{ScanLocalizer, ScanMatcher, ScanMatcherParams, ScanOutcome};
 pub use searched::{SearchParams, SearchedMap};
 pub use sequencer::{GoalSequencer, SequencerOutput};
+pub use stall::StallWatch;
 pub use team_log::{Reassignment, TeamLog};
 pub use team_map::{merge_maps, merge_searched};

@@ -1,5 +1,6 @@
 //! What a team's search did, for its summary (pure): who explored how many frontiers, who
-//! left the team when, and which frontier of a departed robot went to whom, how long after.
+//! left the team when, who stalled, and which frontier of a departed robot went to whom, how
+//! long after.
 
 use petrel_actors::Point2;
 
@@ -25,6 +26,7 @@ struct RobotLog {
     left_at: Option<f64>,
     assigned: usize,
     taken_over: usize,
+    stalled: usize,
 }
 
 /// The log of one search.
@@ -111,6 +113,17 @@ impl TeamLog {
         Some(line)
     }
 
+    /// `robot` stalled holding `target` (see [`super::StallWatch`]); the line that says so.
+    pub fn stalled(&mut self, robot: &str, target: Point2, stall_s: f64) -> String {
+        if let Some(r) = self.robot_mut(robot) {
+            r.stalled += 1;
+        }
+        format!(
+            "{robot} stalled: it did not move for {stall_s:.0} s; its frontier ({:.2}, {:.2}) goes to another robot, and it gets none for {stall_s:.0} s",
+            target.0.x, target.0.y
+        )
+    }
+
     /// The search ended at `t`.
     pub fn done(&mut self, t: f64) {
         self.done_at.get_or_insert(t);
@@ -131,6 +144,9 @@ impl TeamLog {
             out += &format!("  {}: {} frontier(s)", r.name, r.assigned);
             if r.taken_over > 0 {
                 out += &format!(", {} taken over", r.taken_over);
+            }
+            if r.stalled > 0 {
+                out += &format!(", stalled {} time(s)", r.stalled);
             }
             if let Some(t) = r.left_at {
                 out += &format!(", left the team at t = {t:.1} s");
@@ -195,5 +211,13 @@ mod tests {
         log.released("r1", Point2::new(1.0, 1.0), false);
         assert_eq!(log.assigned("r2", Point2::new(1.0, 1.0), 3.0), None);
         assert!(log.reassignments().is_empty());
+        let line = log.stalled("r1", Point2::new(2.0, 3.0), 20.0);
+        assert_eq!(line, "r1 stalled: it did not move for 20 s; its frontier (2.00, 3.00) goes to another robot, and it gets none for 20 s");
+        assert!(
+            log.summary()
+                .contains("  r1: 0 frontier(s), stalled 1 time(s)\n"),
+            "{}",
+            log.summary()
+        );
     }
 }

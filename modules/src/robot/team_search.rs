@@ -4,7 +4,8 @@
 //! space, and reachable floor no camera searched yet) and hands them out, one
 //! per robot, nearest unclaimed first ([`Allocator`]).
 //! Each robot is a `nav.team_member` module of this agent, named as the robot's agent: a
-//! robot that leaves the team (`_team/members`) loses its frontier to the others.
+//! robot that leaves the team (`_team/members`) loses its frontier to the others, and so,
+//! for a while, does a robot that holds one without moving ([`StallWatch`]).
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -21,8 +22,12 @@ use super::count;
 use super::team_member::MemberNames;
 use crate::nav::{
     explore_searched, merge_maps, merge_searched, Allocator, Change, Exploration, FrontierParams,
-    TeamLog,
+    StallWatch, TeamLog,
 };
+
+/// Moving less than this while holding a frontier is no progress, m (less than a robot's
+/// size: turning in place and jitter do not count).
+const MIN_PROGRESS_M: f64 = 0.3;
 
 /// The module type `params/members` must name.
 const MEMBER_TYPE: &str = "nav.team_member";
@@ -37,6 +42,7 @@ pub struct TeamSearch {
     min_frontier_cells: Input<i64>,
     blacklist_radius: Input<f64>,
     timeout_s: Input<f64>,
+    stall_s: Input<f64>,
     map: Output<OccupancyGrid>,
     searched: Output<OccupancyGrid>,
     frontiers: Output<i64>,
@@ -61,6 +67,7 @@ struct State {
     team: Option<AnyHandle>,
     params: FrontierParams,
     allocator: Allocator,
+    stalls: StallWatch,
     log: TeamLog,
     last_plan: f64,
 }
@@ -80,6 +87,7 @@ impl Module for TeamSearch {
             min_frontier_cells: ports.param_in("params/min_frontier_cells", 4, Range::new(1.0, 1e6), "smaller frontiers are ignored, cells"),
             blacklist_radius: ports.param_in("params/blacklist_radius", 0.6, Range::new(0.01, 100.0), "frontiers this close to a target a robot gave up are skipped, m"),
             timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time at which the search ends even with frontiers left (frontiers no robot manages to see), s; 0 = never"),
+            stall_s: ports.param_in("params/stall_s", 20.0, Range::new(0.0, 1e4), "a robot that holds a frontier and moves less than 0.3 m in this long (wedged, or failing to follow its path) loses it and gets none for as long again, so the others take it over, simulated s; 0 = never"),
             map: ports.output("out/map", OccupancyGrid::default(), "the merged map of the team"),
             searched: ports.output("out/searched", OccupancyGrid::default(), "the floor any robot's camera searched, on the merged map's cells: 0 searched, -1 not (empty until a robot's in/searched arrives)"),
             frontiers: ports.output("out/frontiers", 0, "frontiers of the merged map reachable by a robot, at the last allocation"),
@@ -112,6 +120,7 @@ impl Module for TeamSearch {
             team: ctx.blackboard().any_handle("_team/members").await.ok(),
             params,
             allocator: Allocator::new(self.keep_radius.value()),
+            stalls: StallWatch::new(self.stall_s.value(), MIN_PROGRESS_M),
             log: TeamLog::new(names.iter().cloned(), self.keep_radius.value()),
             last_plan: f64::NEG_INFINITY,
         });
@@ -161,12 +170,25 @@ impl Module for TeamSearch {
                 }
             }
             let pose = m.pose.value();
+            let at = Point2::new(pose.x(), pose.y());
+            let claim = state.allocator.claim_of(&m.name);
+            if let Some(claim) = state.stalls.observe(&m.name, at, claim, t) {
+                state.allocator.release(&m.name);
+                state.log.released(&m.name, claim, false);
+                let line = state.log.stalled(&m.name, claim, self.stall_s.value());
+                petrel_actors::outln!("[{}] t = {t:6.1} s  {line}", ctx.module());
+            }
+            if state.stalls.benched(&m.name, t) {
+                continue;
+            }
             match explore_searched(&merged, searched.as_ref(), pose, &blacklist, &state.params) {
                 Exploration::Waiting => waiting = true,
                 Exploration::Done => {
                     candidates.insert(m.name.clone(), Vec::new());
                 }
-                Exploration::Frontiers(list) => {
+                Exploration::Frontiers(mut list) => {
+                    let keep = self.keep_radius.value();
+                    list.retain(|f| !state.stalls.avoids(&m.name, f.target, keep));
                     candidates.insert(m.name.clone(), list);
                 }
             }
