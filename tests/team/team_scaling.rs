@@ -214,7 +214,9 @@ fn run(n: usize) -> Figures {
         .lines()
         .find_map(|l| l.strip_prefix("team search: done at t = "))
         .and_then(|t| t.trim_end_matches(" s").parse().ok());
-    // `[victims] victim 3 at (x, y), found by robot_2 at t = 41.0 s`: when each was found.
+    // `[victims] victim 3 at (x, y), found by robot_2 at t = 41.0 s`, and `... at (x, y) from 2
+    // reports, the last by robot_1 at t = 50.2 s` as more reports refine it: a victim counts as
+    // found when the team's list first puts it within 1.5 m.
     let found: Vec<((f64, f64), f64)> = stdout
         .lines()
         .filter(|l| l.starts_with("[victims] victim ") && l.contains(" at t = "))

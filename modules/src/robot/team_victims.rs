@@ -69,24 +69,37 @@ impl Module for TeamVictimsModule {
                 tracing::warn!(from = %item.from, body = %item.body, "not a victim report; expected `x y` in metres");
                 continue;
             };
-            if let Report::New(i) = core.report(robot, p) {
-                let t = self.clock.value();
-                let when = match t >= 0.0 {
-                    true => format!(" at t = {t:.1} s"),
-                    false => String::new(),
-                };
-                petrel_actors::outln!(
-                    "[{}] victim {} at ({:.2}, {:.2}), found by {robot}{when}",
-                    ctx.module(),
-                    i + 1,
-                    p.0.x,
-                    p.0.y
-                );
-                self.found.set(i as i64 + 1);
+            let t = self.clock.value();
+            let when = match t >= 0.0 {
+                true => format!(" at t = {t:.1} s"),
+                false => String::new(),
+            };
+            match core.report(robot, p) {
+                Report::New(i) => {
+                    petrel_actors::outln!(
+                        "[{}] victim {} at ({:.2}, {:.2}), found by {robot}{when}",
+                        ctx.module(),
+                        i + 1,
+                        p.0.x,
+                        p.0.y
+                    );
+                    self.found.set(i as i64 + 1);
+                }
+                Report::Known(i) => {
+                    let v = &core.victims()[i];
+                    petrel_actors::outln!(
+                        "[{}] victim {} at ({:.2}, {:.2}) from {} reports, the last by {robot}{when}",
+                        ctx.module(),
+                        i + 1,
+                        v.position.0.x,
+                        v.position.0.y,
+                        v.reports
+                    );
+                }
             }
         }
         let list: Vec<Point2> = core.victims().iter().map(|v| v.position).collect();
-        if list.len() != self.victims.get().0.len() {
+        if list[..] != self.victims.get().0[..] {
             self.victims.set(list.into());
         }
         Ok(())
