@@ -1,5 +1,5 @@
 //! `record_throughput`: petrel's recording core writing N laser scans (encoding each, then
-//! writing it chunked and LZ4-compressed) against the raw `mcap::Writer` writing the same
+//! writing it chunked and zstd-compressed) against the raw `mcap::Writer` writing the same
 //! encoded bytes with the same options, in the same run.
 
 mod common;
@@ -11,7 +11,7 @@ use std::sync::Arc;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use mcap::records::MessageHeader;
 use petrel::actors::{AnyValue, LaserScan, TypeInfo};
-use petrel::record::sink::CHUNK_BYTES;
+use petrel::record::sink::{CHUNK_BYTES, ZSTD_LEVEL};
 use petrel::record::{ChannelSpec, Codec, Entry, Format, Sink, SplitPolicy, Stamp};
 
 const SCANS: u64 = 1000;
@@ -81,7 +81,9 @@ fn raw_mcap(
     let schema = codec.schema("LaserScan");
     let file = std::io::BufWriter::new(std::fs::File::create(dir.join("raw.mcap")).unwrap());
     let mut w = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Lz4))
+        .compression(Some(mcap::Compression::Zstd))
+        .compression_level(ZSTD_LEVEL)
+        .compression_threads(0)
         .chunk_size(Some(CHUNK_BYTES))
         .create(file)
         .unwrap();
