@@ -19,8 +19,8 @@ use crate::select::{split_path, SplitPolicy};
 /// Chunk size target: small enough that a killed run loses little, large enough to compress.
 pub const CHUNK_BYTES: u64 = 512 * 1024;
 
-/// zstd level of the chunks: level 1 is the fastest of the standard levels, and on recorded
-/// maps and scans it still compresses better than LZ4 did, without LZ4's frame checksum.
+/// zstd level of the chunks: the fastest standard level, and cheaper in CPU than the `mcap`
+/// crate's LZ4 frames, whose XXH32 content checksum its options cannot turn off (BENCHMARKS.md).
 pub const ZSTD_LEVEL: u32 = 1;
 
 /// Name of the metadata record holding the drop counts (per topic) of a file.
