@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use std::io::Read;
+use std::io::{self, Read};
 
 use mcap::records::{op, ChunkHeader, Record};
 
@@ -254,7 +254,7 @@ impl Recording {
     }
 }
 
-/// A chunk's records, decompressed (LZ4 frames or none), refusing sizes out of reason.
+/// A chunk's records, decompressed (zstd, LZ4 frames or none), refusing sizes out of reason.
 fn decompress(header: &ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
     let size = header.uncompressed_size;
     if size > MAX_CHUNK_BYTES {
@@ -264,21 +264,26 @@ fn decompress(header: &ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
     }
     match header.compression.as_str() {
         "" => Ok(data.to_vec()),
-        "lz4" => {
-            let mut out = Vec::with_capacity(size as usize);
-            lz4::Decoder::new(data)
-                .and_then(|d| d.take(size).read_to_end(&mut out))
-                .map_err(|e| format!("an LZ4 chunk: {e}"))?;
-            if out.len() as u64 != size {
-                return Err(format!(
-                    "an LZ4 chunk of {size} bytes, it decompresses to {}",
-                    out.len()
-                ));
-            }
-            Ok(out)
-        }
+        "zstd" => read_bounded(zstd::stream::read::Decoder::new(data), size, "zstd"),
+        // Recordings written before petrel chose zstd.
+        "lz4" => read_bounded(lz4::Decoder::new(data), size, "LZ4"),
         other => Err(format!(
-            "a chunk compressed with lz4 or not at all, got `{other}` (petrel reads what it writes)"
+            "a chunk compressed with zstd, lz4 or not at all, got `{other}` (petrel reads what it writes)"
         )),
     }
+}
+
+/// Reads exactly `size` bytes from a decoder (no more, whatever the data claims).
+fn read_bounded(decoder: io::Result<impl Read>, size: u64, what: &str) -> Result<Vec<u8>, String> {
+    let mut out = Vec::with_capacity(size as usize);
+    decoder
+        .and_then(|d| d.take(size).read_to_end(&mut out))
+        .map_err(|e| format!("a {what} chunk: {e}"))?;
+    if out.len() as u64 != size {
+        return Err(format!(
+            "a {what} chunk of {size} bytes, it decompresses to {}",
+            out.len()
+        ));
+    }
+    Ok(out)
 }

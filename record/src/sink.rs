@@ -1,4 +1,4 @@
-//! The writer core: recorded values → MCAP files through the `mcap` crate. Chunked, LZ4
+//! The writer core: recorded values → MCAP files through the `mcap` crate. Chunked, zstd
 //! compressed, indexed; files split by the [`SplitPolicy`]; drops counted per channel and
 //! written in the summary. Synchronous: the recorder runs it on its own thread.
 
@@ -18,6 +18,10 @@ use crate::select::{split_path, SplitPolicy};
 
 /// Chunk size target: small enough that a killed run loses little, large enough to compress.
 pub const CHUNK_BYTES: u64 = 512 * 1024;
+
+/// zstd level of the chunks: the fastest standard level, and cheaper in CPU than the `mcap`
+/// crate's LZ4 frames, whose XXH32 content checksum its options cannot turn off (BENCHMARKS.md).
+pub const ZSTD_LEVEL: u32 = 1;
 
 /// Name of the metadata record holding the drop counts (per topic) of a file.
 pub const DROPPED_METADATA: &str = "petrel.dropped";
@@ -165,7 +169,10 @@ impl Sink {
             Format::Foxglove => "",
         };
         let mut writer = WriteOptions::new()
-            .compression(Some(Compression::Lz4))
+            .compression(Some(Compression::Zstd))
+            .compression_level(ZSTD_LEVEL)
+            // On the writer thread itself: zstd's worker threads would add CPU, not save it.
+            .compression_threads(0)
             .chunk_size(Some(CHUNK_BYTES))
             .profile(profile)
             .library(concat!("petrel-record/", env!("CARGO_PKG_VERSION")))

@@ -134,6 +134,10 @@ impl Channels {
 /// Records a value's changes until `stop`, then its last change if not yet sent.
 async fn record_value(tap: ValueTap, out: Out, mut stop: watch::Receiver<bool>) {
     let mut last = None;
+    // Made once, not per wake-up: a fresh `wait_for` registers with the stop channel and
+    // unregisters again on every change, a cost the agent's thread paid per recorded value.
+    let stopped = stop.wait_for(|&stop| stop);
+    tokio::pin!(stopped);
     loop {
         let (value, version, written) = tap.read();
         if last != Some(version) {
@@ -142,7 +146,7 @@ async fn record_value(tap: ValueTap, out: Out, mut stop: watch::Receiver<bool>) 
         }
         tokio::select! {
             biased;
-            _ = stop.wait_for(|&stop| stop) => break,
+            _ = &mut stopped => break,
             _ = tap.changed() => {}
         }
     }
@@ -156,6 +160,9 @@ async fn record_value(tap: ValueTap, out: Out, mut stop: watch::Receiver<bool>) 
 async fn record_queue(mut tap: QueueTap, out: Out, mut stop: watch::Receiver<bool>) {
     let mut lost = 0;
     let mut stopping = false;
+    // Made once, as in `record_value`.
+    let stopped = stop.wait_for(|&stop| stop);
+    tokio::pin!(stopped);
     loop {
         let items = tap.take(BATCH);
         let full = items.len() == BATCH;
@@ -175,7 +182,7 @@ async fn record_queue(mut tap: QueueTap, out: Out, mut stop: watch::Receiver<boo
         }
         tokio::select! {
             biased;
-            _ = stop.wait_for(|&stop| stop) => stopping = true,
+            _ = &mut stopped, if !stopping => stopping = true,
             _ = tap.changed() => {}
         }
     }

@@ -116,7 +116,10 @@ fn every_kind_round_trips_through_the_mcap_reader() {
         let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
         assert_eq!(summary.channels.len(), 8);
         assert!(!summary.chunk_indexes.is_empty(), "chunked and indexed");
-        assert!(summary.chunk_indexes.iter().all(|c| c.compression == "lz4"));
+        assert!(summary
+            .chunk_indexes
+            .iter()
+            .all(|c| c.compression == "zstd"));
         assert_eq!(summary.stats.as_ref().unwrap().message_count, 24);
         let wanted: BTreeMap<String, (ChannelSpec, AnyValue)> = samples()
             .into_iter()

@@ -234,7 +234,8 @@ pub fn read_pose_in_frame(data: &[u8]) -> Result<Pose2, String> {
 
 /// Encodes a grid as `foxglove.Grid` with one `INT8` field, `occupancy`.
 pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
-    let cells: Vec<u8> = g.data.iter().map(|&c| c as u8).collect();
+    // Cells are `INT8`: their bytes, without a copy.
+    let cells: &[u8] = bytemuck::cast_slice(&g.data);
     write_with_data(
         out,
         &Grid {
@@ -255,7 +256,7 @@ pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
             }],
             data: String::new(),
         },
-        &cells,
+        cells,
     );
 }
 

@@ -202,8 +202,8 @@ pub fn occupancy_grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame:
     w.u32(g.width);
     w.u32(g.height);
     pose(&mut w, &g.origin);
-    let cells: Vec<u8> = g.data.iter().map(|&c| c as u8).collect();
-    w.bytes(&cells);
+    // Cells are `int8`, written as their bytes without a copy.
+    w.bytes(bytemuck::cast_slice(&g.data));
 }
 
 /// Decodes a `nav_msgs/msg/OccupancyGrid`.
