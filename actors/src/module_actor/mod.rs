@@ -336,7 +336,7 @@ impl<M: Module> Running<M> {
             .instrument(tracing::trace_span!("step"))
             .await;
         drop(in_step);
-        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now()) {
+        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now) {
             let woken_by_itself = raised.waker == self.signal.id();
             let hint = self.module.loop_hint();
             let blackboard = self.ctx.blackboard().clone();
@@ -419,6 +419,10 @@ impl<M: Module> Running<M> {
         }
     }
 
+    /// Publishes `status`, and the stats with it when they are due or the module is leaving its
+    /// step loop. An action that enables and disables a module at every plan reaction changes
+    /// its status twice a reaction: writing four stats each time cost more than the reaction's
+    /// own hand-overs.
     fn publish(&mut self, status: &str) {
         if *self.builtins.status.get() != status {
             self.builtins.status.set(status.to_string());
@@ -427,7 +431,10 @@ impl<M: Module> Running<M> {
                 _ => tracing::debug!(status, "status"),
             });
         }
-        self.publish_stats();
+        let leaving = matches!(status, status::STOPPED | status::FAILED);
+        if leaving || self.stats.due(Instant::now()) {
+            self.publish_stats();
+        }
     }
 
     fn publish_stats(&mut self) {
