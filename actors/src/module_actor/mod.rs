@@ -22,6 +22,7 @@ use crate::panic_report::catching;
 use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
 use crate::step_probe::StepMark;
+use crate::supervision::LongStepWatch;
 
 mod builtins;
 mod loops;
@@ -49,6 +50,8 @@ pub(crate) struct ModuleArgs {
     pub stop: Arc<StopRequest>,
     /// Odd while a step runs, for a watchdog outside the runtime.
     pub step_mark: Arc<StepMark>,
+    /// On the agent's own thread: the mean step above which the module asks to be moved.
+    pub step_budget: Option<crate::config::StepBudget>,
 }
 
 pub(crate) struct ModuleActor<M>(PhantomData<fn() -> M>);
@@ -74,6 +77,11 @@ pub(crate) struct Running<M> {
     span: tracing::Span,
     stats: StepStats,
     loops: LoopWatch,
+    /// Steps against the agent's `step_budget`, on the agent's own thread only.
+    long_steps: Option<LongStepWatch>,
+    /// Who to ask for a move, and who is asking.
+    supervisor: ActorRef<crate::supervisor::SupervisorMsg>,
+    me: ractor::ActorId,
 }
 
 /// Why module code failed, if it did: its error, or the panic the hook reported.
@@ -95,7 +103,7 @@ impl<M: Module> Actor for ModuleActor<M> {
 
     async fn pre_start(
         &self,
-        _me: ActorRef<RunLoop>,
+        me: ActorRef<RunLoop>,
         args: ModuleArgs,
     ) -> Result<Running<M>, ActorProcessingErr> {
         let span = tracing::info_span!(parent: None, "module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
@@ -112,6 +120,8 @@ impl<M: Module> Actor for ModuleActor<M> {
         for reader in &readers {
             reader.rewind();
         }
+        let supervisor = args.modules.supervisor.clone();
+        let long_steps = args.step_budget.and_then(LongStepWatch::new);
         let mut ports = Ports::bound(&args.name, binding.handles);
         let builtins = declare_builtins(&mut ports);
         let mut module = M::declare(&mut ports);
@@ -159,6 +169,9 @@ impl<M: Module> Actor for ModuleActor<M> {
             span,
             stats: StepStats::default(),
             loops: LoopWatch::default(),
+            long_steps,
+            supervisor,
+            me: me.get_id(),
         })
     }
 
@@ -356,16 +369,26 @@ impl<M: Module> Running<M> {
             }
             self.ctx.steps += 1;
             if let Some(started) = started {
-                if self
-                    .stats
-                    .record(self.ctx.steps, started, started.elapsed())
-                {
+                let took = started.elapsed();
+                if self.stats.record(self.ctx.steps, started, took) {
                     self.publish_stats();
                 }
+                self.watch_step_budget(took);
             }
         }
         self.ctx.clock.end();
         result
+    }
+
+    /// On the agent's own thread, asks the supervisor to move the module to the shared runtime
+    /// once its steps exceed the agent's `step_budget`; the move stops it at a step boundary.
+    fn watch_step_budget(&mut self, took: Duration) {
+        let Some(mean) = self.long_steps.as_mut().and_then(|w| w.observe(took)) else {
+            return;
+        };
+        let msg = crate::supervisor::SupervisorMsg::Move(self.me, mean);
+        // A supervisor that is gone is stopping the agent: nothing left to move.
+        let _ = self.supervisor.cast(msg);
     }
 
     /// Runs the module's step (or the fault injected), under its watchdog if it has one.

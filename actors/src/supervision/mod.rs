@@ -20,8 +20,10 @@
 //! parameters, state and outputs are as the failed instance left them; its queue readers rewind
 //! to their last acknowledged item (see [`QueueReader`](crate::QueueReader) for the guarantee).
 
+mod long_steps;
 mod policy;
 
+pub(crate) use long_steps::LongStepWatch;
 pub(crate) use policy::{plan_restart, Member, RestartPlan};
 pub use policy::{Backoff, Intensity};
 
