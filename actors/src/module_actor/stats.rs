@@ -78,7 +78,7 @@ impl StepStats {
     }
 
     /// Whether stats not published since [`STATS_INTERVAL`] before `now` (or never) are due.
-    pub fn due(&self, now: Instant) -> bool {
+    fn due(&self, now: Instant) -> bool {
         self.published
             .is_none_or(|p| now.duration_since(p) >= STATS_INTERVAL)
     }

@@ -156,7 +156,8 @@ pub struct SupervisorEvent {
     pub time_s: f64,
     /// The module concerned (or the group, for `escalated`).
     pub module: String,
-    /// `failed`, `restarted`, `escalated`, `gave_up` or `stopped`.
+    /// `failed`, `restarted`, `escalated`, `gave_up`, `stopped`, `added`, `removed`, or
+    /// `moved` (off its agent's thread: its steps exceeded the agent's `step_budget`).
     pub kind: String,
     /// The panic message, error or explanation.
     pub reason: String,

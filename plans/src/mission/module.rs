@@ -139,10 +139,12 @@ impl Module for Mission {
             return Ok(());
         }
         let may_step = run.team.take_news(&self.inbox);
-        publish(
-            &self.robot_conditions,
-            &run.team.dispatch.conditions_shown(),
-        );
+        if run.team.dispatch.has_conditions() {
+            publish(
+                &self.robot_conditions,
+                &run.team.dispatch.conditions_shown(),
+            );
+        }
         if !may_step {
             // Waiting for robots' conditions: the watches must still go out (and be answered).
             run.answer_watches(now, secs, &self.flags.get());
@@ -175,18 +177,22 @@ impl Module for Mission {
         if fired > 0 {
             // Once per step, however many rounds fired: what the plan left.
             run.save(&self.memory);
-            let texts = run.shown.texts(&run.plan, &run.state, &run.memory.marking);
-            publish(&self.running, &texts.running);
+            let news = run.shown.news(&run.plan, &run.state, &run.memory.marking);
+            if news.running {
+                self.running.set(news.texts.running.clone());
+            }
             // Before the marking: a reader following the marking reads the count with it.
             self.fired.set(self.fired.value() + fired as i64);
             if !fired_labels.is_empty() {
                 self.firings.push(PlanFiring {
                     time_s: secs,
                     transitions: fired_labels,
-                    marking: texts.marking.clone(),
+                    marking: news.texts.marking.clone(),
                 });
             }
-            publish(&self.marking, &texts.marking);
+            if news.marking {
+                self.marking.set(news.texts.marking.clone());
+            }
         }
         let status = run.state.status(&run.plan);
         if status != PlanStatus::Running {

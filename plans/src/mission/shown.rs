@@ -6,8 +6,6 @@
 //! then joined) cost as much as the plan step. Plans come back to the same markings (a loop,
 //! a waiting place), so the texts are kept by marking.
 
-use std::collections::HashMap;
-
 use crate::exec::PlanState;
 use crate::model::{Plan, Transition};
 
@@ -28,7 +26,19 @@ pub(super) struct Texts {
 #[derive(Debug, Default)]
 pub(super) struct Shown {
     labels: Vec<String>,
-    texts: HashMap<Vec<u32>, Texts>,
+    texts: foldhash::HashMap<Vec<u32>, Texts>,
+    /// The marking key whose texts were published last (its buffer reused).
+    published: Option<Vec<u32>>,
+}
+
+/// What a step has to publish (see [`Shown::news`]).
+pub(super) struct News<'a> {
+    /// The texts of the marking the step left.
+    pub texts: &'a Texts,
+    /// The marking text differs from the one published last (or none was).
+    pub marking: bool,
+    /// So does the running text.
+    pub running: bool,
 }
 
 impl Shown {
@@ -36,13 +46,37 @@ impl Shown {
     pub fn new(plan: &Plan) -> Shown {
         Shown {
             labels: plan.transitions().iter().map(shown).collect(),
-            texts: HashMap::new(),
+            texts: foldhash::HashMap::default(),
+            published: None,
         }
     }
 
     /// Transition `t` as the log and `out/firings` show it.
     pub fn label(&self, t: usize) -> &str {
         &self.labels[t]
+    }
+
+    /// The texts of `state` (marking key `key`), and which of them changed since the last
+    /// call: the mission writes only those, without reading back what it wrote (a write wakes
+    /// every reader; a read and compare per output cost as much as the write).
+    pub fn news(&mut self, plan: &Plan, state: &PlanState, key: &[u32]) -> News<'_> {
+        self.texts(plan, state, key);
+        let mut published = self.published.take().unwrap_or_default();
+        let texts = &self.texts[key];
+        // The texts published last, if still kept (the memo may have started over).
+        let (marking, running) = match self.texts.get(&published) {
+            _ if published == key => (false, false),
+            Some(last) => (true, last.running != texts.running),
+            None => (true, true),
+        };
+        published.clear();
+        published.extend_from_slice(key);
+        self.published = Some(published);
+        News {
+            texts,
+            marking,
+            running,
+        }
     }
 
     /// The texts of `state`, whose marking key ([`PlanState::save`]) is `key`.
@@ -115,6 +149,25 @@ mod tests {
         assert_ne!(second.marking, first.marking);
         assert!(second.marking.ends_with("*2"), "{}", second.marking);
         assert_eq!(shown.texts(&plan, &state, &key), &first);
+    }
+
+    #[test]
+    fn news_names_only_the_texts_that_changed_since_the_last_call() {
+        let plan = plan("a; b\n");
+        let mut shown = Shown::new(&plan);
+        let state = PlanState::new(&plan);
+        let key = state.save();
+        let first = shown.news(&plan, &state, &key);
+        assert!(first.marking && first.running, "nothing was published yet");
+        let again = shown.news(&plan, &state, &key);
+        assert!(!again.marking && !again.running, "same marking");
+        // Another marking with no action running: the running text stays empty.
+        let mut other = state.clone();
+        let last = plan.places().len() as u32 - 1;
+        other.restore(&plan, &[1, last, 1]).unwrap();
+        let next = shown.news(&plan, &other, &other.save());
+        assert!(next.marking && !next.running, "{:?}", next.texts);
+        assert_eq!(next.texts.marking, marking(&plan, &other));
     }
 
     #[test]
