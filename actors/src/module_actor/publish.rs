@@ -27,9 +27,12 @@ impl<M: Module> Running<M> {
     pub(super) fn publish(&mut self, status: &str) {
         if *self.builtins.status.get() != status {
             self.builtins.status.set(status.to_string());
+            // The module actor's target, as before this code moved here: log filters name it.
             self.span.in_scope(|| match status {
-                status::STOPPED | status::DISABLED => tracing::info!(status, "status"),
-                _ => tracing::debug!(status, "status"),
+                status::STOPPED | status::DISABLED => {
+                    tracing::info!(target: "petrel_actors::module_actor", status, "status")
+                }
+                _ => tracing::debug!(target: "petrel_actors::module_actor", status, "status"),
             });
         }
         if matches!(status, status::STOPPED | status::FAILED) {
