@@ -1,15 +1,17 @@
 //! `pnp_reaction`: a condition property changes → the mission's guard transition fires → the
-//! bound action starts and enables its module → the module steps and answers. Compared with
-//! the `property_wake` petrel round trip (module A writes, B wakes and answers, A wakes)
-//! measured in the same run.
+//! bound action starts and enables its module → the module steps and answers → the action
+//! ends and the plan goes back to waiting → the mission acknowledges. Compared with the
+//! `property_wake` petrel round trip (module A writes, B wakes and answers, A wakes) measured
+//! in the same run.
 //!
 //! The plan loops `LABEL_top; < go ? work; GOTO_LABEL_top : quit ? work >`, `go` bound to
 //! `w/in/go > w/out/done`, `work` enabling `w` until `w/out/done >= w/in/go`; `quit` (never
-//! true here) gives the plan the goal place a mission needs. The module
-//! `bench.trigger` makes the requests (`w/in/go` is linked to its `out/request`), one after
-//! the other. Both functions are timed the same way: a batch of N round trips, from the bench
-//! thread's request to the last answer (so the mission's return to its waiting place between
-//! requests counts, as a real mission's would).
+//! true here) gives the plan the goal place a mission needs. The module `bench.trigger` makes
+//! the requests (`w/in/go` is linked to its `out/request`), one after the other, each answered
+//! by the mission's own acknowledgement: its `out/fired` grown by the four transitions a
+//! request fires (`[go]`, `work.start`, `work.end`, the jump back), the last of which leaves
+//! the plan waiting again. Both functions are timed the same way: a batch of N round trips,
+//! from the bench thread's request to the last answer.
 
 mod common;
 
@@ -25,7 +27,7 @@ const PING_PONG: &str = r#"Agent(name: "bench", modules: [
 fn mission_config(plan: &str) -> String {
     format!(
         r#"Agent(name: "bench", modules: [
-    (name: "t", type: "bench.trigger", links: {{"in/done": "w/out/done", "in/marking": "m/out/marking"}}),
+    (name: "t", type: "bench.trigger", values: {{"params/firings": 4}}, links: {{"in/ack": "m/out/fired"}}),
     (name: "w", type: "bench.work", values: {{"enabled": false}}, links: {{"in/go": "t/out/request"}}),
     (name: "m", type: "mission.pnp", values: {{
         "params/plan": "{plan}",

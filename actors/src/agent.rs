@@ -178,6 +178,7 @@ impl Agent {
             probe: probe.clone(),
             scheduler: cfg.scheduler,
             shared: thread.as_ref().map(AgentThread::shared),
+            step_budget: cfg.step_budget,
         };
         Ok(PreparedAgent {
             pending: Some((args, bb_join)),

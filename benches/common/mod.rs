@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+pub mod mission;
 pub mod team;
 
 use petrel::actors::{
@@ -63,8 +64,8 @@ pub fn registry() -> ModuleRegistry {
         .register::<QueueSink>()
         .register::<Idle>()
         .register::<Crashy>()
-        .register::<Work>()
-        .register::<Trigger>()
+        .register::<mission::Work>()
+        .register::<mission::Trigger>()
         .register::<team::ScanSource>()
         .register::<team::ScanSink>();
     r
@@ -351,98 +352,6 @@ impl Module for Crashy {
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         if ctx.cause().first() {
             self.started.set(self.started.value() + 1);
-        }
-        Ok(())
-    }
-}
-
-/// `bench.work`: when it steps (it must be enabled), copies `in/go` to `out/done`.
-pub struct Work {
-    go: Input<i64>,
-    done: Output<i64>,
-}
-
-impl Module for Work {
-    const TYPE: &'static str = "bench.work";
-    const DESCRIPTION: &'static str = "Copies in/go to out/done when it steps.";
-    fn declare(ports: &mut Ports) -> Self {
-        Work {
-            go: ports.input("in/go", 0, "request number"),
-            done: ports.output("out/done", 0, "last request served"),
-        }
-    }
-    fn schedule(&self) -> Schedule {
-        Schedule::new().on_change(&self.go)
-    }
-    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        self.done.set(self.go.value());
-        Ok(())
-    }
-}
-
-/// `bench.trigger`: when `in/go` is set to N, makes N requests one after the other: bumps
-/// `out/request`, waits until `in/done` equals it, then for `in/marking` to be back to what it
-/// was before the first request; after the last answer bumps `out/batches`.
-pub struct Trigger {
-    go: Input<i64>,
-    done: Input<i64>,
-    marking: Input<String>,
-    request: Output<i64>,
-    batches: Output<i64>,
-    go_seen: u64,
-    remaining: i64,
-    idle: Option<std::sync::Arc<String>>,
-    /// A request is out, not answered yet.
-    waiting: bool,
-}
-
-impl Module for Trigger {
-    const TYPE: &'static str = "bench.trigger";
-    const DESCRIPTION: &'static str = "Times in/go request/answer cycles.";
-    fn declare(ports: &mut Ports) -> Self {
-        Trigger {
-            go: ports.input("in/go", 0, "requests to make"),
-            done: ports.input("in/done", 0, "last request served"),
-            marking: ports.input("in/marking", String::new(), "the mission's marking"),
-            request: ports.output("out/request", 0, "request number"),
-            batches: ports.output("out/batches", 0, "batches finished"),
-            go_seen: 0,
-            remaining: 0,
-            idle: None,
-            waiting: false,
-        }
-    }
-    fn schedule(&self) -> Schedule {
-        Schedule::new()
-            .on_change(&self.go)
-            .on_change(&self.done)
-            .on_change(&self.marking)
-    }
-    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let go = self.go.read();
-        if go.version != self.go_seen {
-            self.go_seen = go.version;
-            self.remaining = *go;
-            // The harness starts the first batch with the mission waiting: remember how that looks.
-            self.idle.get_or_insert_with(|| self.marking.get());
-        }
-        if self.waiting {
-            if self.done.value() < self.request.value() {
-                return Ok(());
-            }
-            self.waiting = false;
-            if self.remaining == 0 {
-                self.batches.set(self.batches.value() + 1);
-            }
-        }
-        let idle = self
-            .idle
-            .as_deref()
-            .is_some_and(|m| *m == *self.marking.get());
-        if self.remaining > 0 && idle {
-            self.remaining -= 1;
-            self.waiting = true;
-            self.request.set(self.request.value() + 1);
         }
         Ok(())
     }

@@ -13,5 +13,6 @@ mod placement;
 mod queues;
 mod scheduling;
 mod snapshot;
+mod step_budget;
 mod supervision;
 mod support;

@@ -32,7 +32,7 @@ mod written;
 
 pub use error::{parse_ron, read_text, ConfigError, ConfigErrors};
 pub use record::RecordSection;
-pub use scheduler::Scheduler;
+pub use scheduler::{Scheduler, StepBudget};
 
 /// One agent's configuration.
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -61,6 +61,9 @@ pub struct AgentConfig {
     /// Where the agent's modules run (default `shared`; see [`Scheduler`]).
     #[serde(default)]
     pub scheduler: Scheduler,
+    /// When a module's steps are too long for its agent's thread (see [`StepBudget`]).
+    #[serde(default)]
+    pub step_budget: StepBudget,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -141,7 +144,7 @@ impl ConfigFile {
     }
 
     /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
-    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`; per module
+    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`; per module
     /// `type`, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
     /// and their `values`, `links` and `capacities` are merged key by key; modules only it
     /// has are appended.
@@ -165,6 +168,9 @@ impl ConfigFile {
         }
         if wrote("scheduler") {
             self.config.scheduler = overlay.config.scheduler;
+        }
+        if wrote("step_budget") {
+            self.config.step_budget = overlay.config.step_budget;
         }
         if wrote("name") && !overlay.config.name.is_empty() {
             self.config.name = overlay.config.name.clone();
@@ -231,6 +237,7 @@ impl ConfigFile {
         registry.keep_settings(&self.config);
         let mut errors = self.check_supervision();
         errors.extend(self.check_scheduler());
+        errors.extend(self.check_step_budget());
         let mut names = HashSet::new();
         for m in &self.config.modules {
             if !names.insert(m.name.as_str()) {

@@ -1,5 +1,5 @@
-//! Where an agent's module actors run: the `scheduler:` field of an agent config and each
-//! module's `long_steps:` (see ARCHITECTURE.md, "Scheduler").
+//! Where an agent's module actors run: the `scheduler:` field of an agent config, its
+//! `step_budget:` and each module's `long_steps:` (see ARCHITECTURE.md, "Scheduler").
 
 use serde::{Deserialize, Serialize};
 
@@ -29,7 +29,87 @@ impl Scheduler {
     }
 }
 
+/// How long a module's steps may be on its agent's thread (`scheduler: agent_thread`) before
+/// the runtime moves it to the shared runtime, as if it were declared `long_steps: true`:
+/// when the mean of `steps` timed steps in a row exceeds `mean_us` µs, the module is restarted
+/// there at its next step boundary (its state lives in the blackboard) and a `moved`
+/// supervisor event says so. `mean_us: 0` never moves a module. Without `agent_thread` it does
+/// nothing (every module is on the shared runtime already).
+///
+/// ```ron
+/// Agent(name: "r", scheduler: agent_thread, step_budget: (mean_us: 1000, steps: 20), modules: [...])
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct StepBudget {
+    /// The longest mean step allowed, µs: 0 (never move) or 50..=60 000 000.
+    pub mean_us: u64,
+    /// Timed steps the mean is taken over: 1..=1 000 000.
+    pub steps: u32,
+}
+
+impl Default for StepBudget {
+    /// 1 ms over 20 steps: a longer mean step holds up the agent's other modules more than a
+    /// cross-thread hand-over (a few µs) would cost the module.
+    fn default() -> Self {
+        StepBudget {
+            mean_us: 1000,
+            steps: 20,
+        }
+    }
+}
+
+/// Smallest non-zero `mean_us`: below it the clock reads of timing would be the budget.
+const MIN_MEAN_US: u64 = 50;
+/// Largest `mean_us` (a minute).
+const MAX_MEAN_US: u64 = 60_000_000;
+/// Largest `steps`.
+const MAX_STEPS: u32 = 1_000_000;
+
 impl ConfigFile {
+    /// The `step_budget` fields out of range, located at the field.
+    pub(super) fn check_step_budget(&self) -> Vec<ConfigError> {
+        let b = self.config.step_budget;
+        let mut errors = Vec::new();
+        if b.mean_us != 0 && !(MIN_MEAN_US..=MAX_MEAN_US).contains(&b.mean_us) {
+            errors.push(self.locate_field(
+                "mean_us",
+                format!(
+                    "step_budget: mean_us is {}; expected 0 (never move a module) or {MIN_MEAN_US}..={MAX_MEAN_US} µs",
+                    b.mean_us
+                ),
+            ));
+        }
+        if !(1..=MAX_STEPS).contains(&b.steps) {
+            errors.push(self.locate_field(
+                "steps",
+                format!(
+                    "step_budget: steps is {}; expected 1..={MAX_STEPS} timed steps",
+                    b.steps
+                ),
+            ));
+        }
+        errors
+    }
+
+    /// An error at `field:` inside the `step_budget:` that sets it (overlays win), else at
+    /// `step_budget:` (a module's `long_steps:` must not be taken for `steps:`).
+    fn locate_field(&self, field: &str, message: String) -> ConfigError {
+        for (file, text) in self.sources.iter().rev() {
+            let Some(start) = text.find("step_budget") else {
+                continue;
+            };
+            let rest = &text[start..];
+            let end = rest.find(')').unwrap_or(rest.len());
+            let at = rest[..end]
+                .match_indices(&format!("{field}:"))
+                .find(|(i, _)| !rest[..*i].ends_with(|c: char| c == '_' || c.is_alphanumeric()))
+                .map_or(start, |(i, _)| start + i);
+            return ConfigError::at(file, text, at, message);
+        }
+        self.locate("step_budget", message)
+    }
+
     /// `long_steps: true` asks for the shared runtime, where a `shared` agent runs every
     /// module already: refused there, so that a config never says something that does nothing.
     pub(super) fn check_scheduler(&self) -> Vec<ConfigError> {

@@ -22,9 +22,11 @@ use crate::panic_report::catching;
 use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
 use crate::step_probe::StepMark;
+use crate::supervision::LongStepWatch;
 
 mod builtins;
 mod loops;
+mod publish;
 mod stats;
 mod stop;
 
@@ -49,6 +51,8 @@ pub(crate) struct ModuleArgs {
     pub stop: Arc<StopRequest>,
     /// Odd while a step runs, for a watchdog outside the runtime.
     pub step_mark: Arc<StepMark>,
+    /// On the agent's own thread: the mean step above which the module asks to be moved.
+    pub step_budget: Option<crate::config::StepBudget>,
 }
 
 pub(crate) struct ModuleActor<M>(PhantomData<fn() -> M>);
@@ -74,6 +78,11 @@ pub(crate) struct Running<M> {
     span: tracing::Span,
     stats: StepStats,
     loops: LoopWatch,
+    /// Steps against the agent's `step_budget`, on the agent's own thread only.
+    long_steps: Option<LongStepWatch>,
+    /// Who to ask for a move, and who is asking.
+    supervisor: ActorRef<crate::supervisor::SupervisorMsg>,
+    me: ractor::ActorId,
 }
 
 /// Why module code failed, if it did: its error, or the panic the hook reported.
@@ -95,7 +104,7 @@ impl<M: Module> Actor for ModuleActor<M> {
 
     async fn pre_start(
         &self,
-        _me: ActorRef<RunLoop>,
+        me: ActorRef<RunLoop>,
         args: ModuleArgs,
     ) -> Result<Running<M>, ActorProcessingErr> {
         let span = tracing::info_span!(parent: None, "module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
@@ -112,6 +121,8 @@ impl<M: Module> Actor for ModuleActor<M> {
         for reader in &readers {
             reader.rewind();
         }
+        let supervisor = args.modules.supervisor.clone();
+        let long_steps = args.step_budget.and_then(LongStepWatch::new);
         let mut ports = Ports::bound(&args.name, binding.handles);
         let builtins = declare_builtins(&mut ports);
         let mut module = M::declare(&mut ports);
@@ -159,6 +170,9 @@ impl<M: Module> Actor for ModuleActor<M> {
             span,
             stats: StepStats::default(),
             loops: LoopWatch::default(),
+            long_steps,
+            supervisor,
+            me: me.get_id(),
         })
     }
 
@@ -336,7 +350,7 @@ impl<M: Module> Running<M> {
             .instrument(tracing::trace_span!("step"))
             .await;
         drop(in_step);
-        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now()) {
+        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now) {
             let woken_by_itself = raised.waker == self.signal.id();
             let hint = self.module.loop_hint();
             let blackboard = self.ctx.blackboard().clone();
@@ -356,12 +370,11 @@ impl<M: Module> Running<M> {
             }
             self.ctx.steps += 1;
             if let Some(started) = started {
-                if self
-                    .stats
-                    .record(self.ctx.steps, started, started.elapsed())
-                {
+                let took = started.elapsed();
+                if self.stats.record(self.ctx.steps, started, took) {
                     self.publish_stats();
                 }
+                self.watch_step_budget(took);
             }
         }
         self.ctx.clock.end();
@@ -417,26 +430,6 @@ impl<M: Module> Running<M> {
                 None
             }
         }
-    }
-
-    fn publish(&mut self, status: &str) {
-        if *self.builtins.status.get() != status {
-            self.builtins.status.set(status.to_string());
-            self.span.in_scope(|| match status {
-                status::STOPPED | status::DISABLED => tracing::info!(status, "status"),
-                _ => tracing::debug!(status, "status"),
-            });
-        }
-        self.publish_stats();
-    }
-
-    fn publish_stats(&mut self) {
-        let s = &mut self.stats;
-        s.published = Some(Instant::now());
-        self.builtins.steps.set(self.ctx.steps as i64);
-        self.builtins.last_step_us.set(s.last.as_secs_f64() * 1e6);
-        self.builtins.mean_step_us.set(s.mean_step_us());
-        self.builtins.mean_interval_ms.set(s.mean_interval_ms());
     }
 }
 

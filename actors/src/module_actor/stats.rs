@@ -74,8 +74,13 @@ impl StepStats {
         }
         self.first.get_or_insert((started, step));
         self.latest = Some((started, step));
+        self.due(started)
+    }
+
+    /// Whether stats not published since [`STATS_INTERVAL`] before `now` (or never) are due.
+    fn due(&self, now: Instant) -> bool {
         self.published
-            .is_none_or(|p| started.duration_since(p) >= STATS_INTERVAL)
+            .is_none_or(|p| now.duration_since(p) >= STATS_INTERVAL)
     }
 
     pub fn mean_step_us(&self) -> f64 {

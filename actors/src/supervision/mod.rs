@@ -20,8 +20,10 @@
 //! parameters, state and outputs are as the failed instance left them; its queue readers rewind
 //! to their last acknowledged item (see [`QueueReader`](crate::QueueReader) for the guarantee).
 
+mod long_steps;
 mod policy;
 
+pub(crate) use long_steps::LongStepWatch;
 pub(crate) use policy::{plan_restart, Member, RestartPlan};
 pub use policy::{Backoff, Intensity};
 
@@ -154,7 +156,8 @@ pub struct SupervisorEvent {
     pub time_s: f64,
     /// The module concerned (or the group, for `escalated`).
     pub module: String,
-    /// `failed`, `restarted`, `escalated`, `gave_up` or `stopped`.
+    /// `failed`, `restarted`, `escalated`, `gave_up`, `stopped`, `added`, `removed`, or
+    /// `moved` (off its agent's thread: its steps exceeded the agent's `step_budget`).
     pub kind: String,
     /// The panic message, error or explanation.
     pub reason: String,

@@ -49,6 +49,34 @@ impl SupervisorState {
         Ok(())
     }
 
+    /// Moves the module instance `actor` off the agent's thread, as `long_steps: true` would:
+    /// stopped at its next step boundary and started again on the shared runtime (its state
+    /// lives in the blackboard), reported as a `moved` event. An instance that ended
+    /// meanwhile, or one already moved, is left alone.
+    pub(super) async fn move_to_shared(&mut self, actor: ractor::ActorId, mean: Duration) {
+        let on_agent_thread = self.shared.is_some();
+        let Some(i) = self.slots.iter().position(|s| {
+            s.state == SlotState::Running && s.actor.as_ref().is_some_and(|a| a.get_id() == actor)
+        }) else {
+            return;
+        };
+        if self.stopping || !on_agent_thread || self.slots[i].spec.long_steps {
+            return;
+        }
+        let name = self.slots[i].spec.name.clone();
+        let reason = format!(
+            "its steps took {:.2} ms on average over {} steps, above the agent's step_budget of {} µs: moved off the agent's thread to the shared runtime, as `long_steps: true` would",
+            mean.as_secs_f64() * 1e3,
+            self.step_budget.steps,
+            self.step_budget.mean_us
+        );
+        tracing::warn!(agent = %self.agent, module = %name, "{reason}");
+        self.stop_slot(i, None).await;
+        self.slots[i].spec.long_steps = true;
+        self.event(&name, "moved", &reason, self.slots[i].restarts);
+        self.spawn(i).await;
+    }
+
     /// Adds a module instance while running: declared in the blackboard, then started.
     async fn add(&mut self, config: ModuleConfig) -> Result<(), String> {
         if self.find(&config.name).is_ok() {

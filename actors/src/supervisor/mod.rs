@@ -15,7 +15,7 @@ use tokio::time::Instant;
 
 use crate::agent::{AgentControl, ModuleControl};
 use crate::blackboard::Blackboard;
-use crate::config::{ModuleConfig, Scheduler};
+use crate::config::{ModuleConfig, Scheduler, StepBudget};
 use crate::handle::QueueWriter;
 use crate::module_actor::status;
 use crate::module_actor::{ModuleArgs, StopRequest};
@@ -111,6 +111,8 @@ pub(crate) struct SupervisorArgs {
     /// The shared runtime, when the agent's actors run on a thread of their own: modules with
     /// `long_steps` are spawned there.
     pub shared: Option<tokio::runtime::Handle>,
+    /// Modules on the agent's thread whose steps exceed it are moved to `shared`.
+    pub step_budget: StepBudget,
 }
 
 pub(crate) struct SupervisorState {
@@ -130,6 +132,7 @@ pub(crate) struct SupervisorState {
     probe: StepProbe,
     scheduler: Scheduler,
     shared: Option<tokio::runtime::Handle>,
+    step_budget: StepBudget,
 }
 
 /// A runtime request about one module.
@@ -154,6 +157,9 @@ pub(crate) enum SupervisorMsg {
     StartFailed(usize, u64, crate::module_types::SpawnFailure),
     /// Stop, start or restart a module on request.
     Control(ControlRequest, RpcReplyPort<Result<(), String>>),
+    /// A module instance on the agent's thread found its mean step above the agent's
+    /// `step_budget` (the mean it measured): move it to the shared runtime.
+    Move(ractor::ActorId, Duration),
 }
 
 pub(crate) struct AgentSupervisor;
@@ -197,6 +203,7 @@ impl Actor for AgentSupervisor {
             probe: args.probe,
             scheduler: args.scheduler,
             shared: args.shared,
+            step_budget: args.step_budget,
         };
         for i in 0..state.slots.len() {
             state.spawn(i).await;
@@ -232,6 +239,7 @@ impl Actor for AgentSupervisor {
             SupervisorMsg::Control(request, reply) => {
                 let _ = reply.send(state.control_request(request).await);
             }
+            SupervisorMsg::Move(actor, mean) => state.move_to_shared(actor, mean).await,
         }
         Ok(())
     }
@@ -318,6 +326,11 @@ impl SupervisorState {
             control: self.control.clone(),
             stop: slot.stop.clone(),
             step_mark: self.probe.mark(&slot.spec.name),
+            // Only a module on the agent's own thread can hold up the others.
+            step_budget: match (&self.shared, slot.spec.long_steps) {
+                (Some(_), false) => Some(self.step_budget),
+                _ => None,
+            },
         };
         slot.backoff.started(Instant::now());
         let spawning = slot.spec.module_type.spawn(args, self.me.get_cell());

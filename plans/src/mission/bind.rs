@@ -51,10 +51,11 @@ pub(crate) struct Bound {
     pub exprs: ExprSet,
     /// Every property an expression reads, with the version last fed to `exprs`.
     pub watched: Vec<(PropId, AnyHandle, Option<u64>)>,
-    pub conditions: HashMap<String, ExprId>,
+    /// Looked up by name at every plan round: a fast hasher (names come from the plan file).
+    pub conditions: foldhash::HashMap<String, ExprId>,
     /// Atoms with no expression: read from the mission's `in/conditions`.
     pub defaults: Vec<String>,
-    pub actions: HashMap<String, BoundAction>,
+    pub actions: foldhash::HashMap<String, BoundAction>,
     /// Relinks that actions' calls asked for, in order, carried out after the plan step
     /// (linking is a blackboard request, which a plan step cannot wait for).
     pub relinks: Vec<Relink>,
@@ -366,7 +367,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
         exprs: ExprSet::new(),
         errors: Vec::new(),
     };
-    let mut actions = HashMap::new();
+    let mut actions = foldhash::HashMap::default();
     let mut unbound = Vec::new();
     for full in &action_names {
         match b.action(full, &p).await {
@@ -392,7 +393,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
         b.problem("params/actions", message);
     }
     let warnings = unused_bindings(p.module, p.actions, &action_names);
-    let mut conditions = HashMap::new();
+    let mut conditions = foldhash::HashMap::default();
     let mut defaults = Vec::new();
     for atom in &cond_names {
         // This agent's own `me#cond` may be bound as `cond`, so robot configs need not name

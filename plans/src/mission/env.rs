@@ -83,7 +83,14 @@ impl MissionEnv<'_> {
 
     /// Counts a call in the action's record and keeps its start time while it runs.
     fn remember(&mut self, name: &str, kind: CallKind) {
-        let stats = self.memory.actions.entry(name.to_string()).or_default();
+        if !self.memory.actions.contains_key(name) {
+            self.memory
+                .actions
+                .insert(name.to_string(), Default::default());
+        }
+        let Some(stats) = self.memory.actions.get_mut(name) else {
+            return;
+        };
         match kind {
             CallKind::Start | CallKind::Resume => {
                 stats.starts += 1;

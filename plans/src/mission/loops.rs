@@ -59,18 +59,20 @@ impl LoopFinder {
 
     /// Notes a round that fired something; `round` gives, only when asked, the marking it left
     /// (a [`PlanState::save`] key) and the labels it fired. Returns a loop to report when one
-    /// is due.
+    /// is due. The clock (`now`) is read only once the rounds look like a loop: a plan that
+    /// waits now and then never pays for it.
     ///
     /// [`PlanState::save`]: crate::PlanState::save
     pub fn fired(
         &mut self,
-        now: Instant,
+        now: impl FnOnce() -> Instant,
         round: impl FnOnce() -> (Vec<u32>, Vec<String>),
     ) -> Option<PlanLoop> {
         self.streak += 1;
         if !self.looping() {
             return None;
         }
+        let now = now();
         if self
             .last_report
             .is_some_and(|t| now.duration_since(t) < REPORT_EVERY)
@@ -112,9 +114,10 @@ mod tests {
         (0..rounds)
             .filter_map(|r| {
                 let i = (r % 3) as usize;
-                finder.fired(now, || {
-                    (vec![i as u32], vec![["a", "b", "c"][i].to_string()])
-                })
+                finder.fired(
+                    || now,
+                    || (vec![i as u32], vec![["a", "b", "c"][i].to_string()]),
+                )
             })
             .collect()
     }
@@ -150,7 +153,7 @@ mod tests {
         let mut finder = LoopFinder::default();
         let t0 = Instant::now();
         let found: Vec<_> = (0..3 * LOOP_ROUNDS as u32)
-            .filter_map(|r| finder.fired(t0, || (vec![r], vec!["step".to_string()])))
+            .filter_map(|r| finder.fired(|| t0, || (vec![r], vec!["step".to_string()])))
             .collect();
         assert!(found.is_empty());
     }

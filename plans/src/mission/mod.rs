@@ -59,6 +59,7 @@ mod memory;
 mod module;
 mod prepare;
 mod run;
+mod shown;
 mod team;
 
 pub use bind::BindingProblem;

@@ -16,7 +16,8 @@ use super::bind::{plan_names, Relink};
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
 use super::memory::{MissionMemory, PlanFiring};
 use super::prepare::{prepare, Problems, Setup};
-use super::run::{marking, Run, MAX_ROUNDS};
+use super::run::{Run, MAX_ROUNDS};
+use super::shown::{marking, Shown};
 use super::team::{is_serve, TeamIo, RUN};
 use crate::exec::{PlanState, PlanStatus};
 use crate::remote::Dispatch;
@@ -138,7 +139,12 @@ impl Module for Mission {
             return Ok(());
         }
         let may_step = run.team.take_news(&self.inbox);
-        publish(&self.robot_conditions, run.team.dispatch.conditions_shown());
+        if run.team.dispatch.has_conditions() {
+            publish(
+                &self.robot_conditions,
+                &run.team.dispatch.conditions_shown(),
+            );
+        }
         if !may_step {
             // Waiting for robots' conditions: the watches must still go out (and be answered).
             run.answer_watches(now, secs, &self.flags.get());
@@ -150,6 +156,7 @@ impl Module for Mission {
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
         let mut fired_labels = Vec::new();
         for round in 1.. {
+            // Read at every round: an action's `set` may write the mission's own flags.
             let (report, labels) = run.round(now, secs, &self.flags.get());
             relink(ctx, &mut run.bound.relinks).await;
             fired += report.fired.len();
@@ -168,21 +175,24 @@ impl Module for Mission {
             set_deadline(&run.timer, run.bound.exprs.next_deadline());
         }
         if fired > 0 {
+            // Once per step, however many rounds fired: what the plan left.
             run.save(&self.memory);
-            let shown = marking(&run.plan, &run.state);
-            publish(
-                &self.running,
-                run.state.running_actions(&run.plan).join(", "),
-            );
+            let news = run.shown.news(&run.plan, &run.state, &run.memory.marking);
+            if news.running {
+                self.running.set(news.texts.running.clone());
+            }
+            // Before the marking: a reader following the marking reads the count with it.
             self.fired.set(self.fired.value() + fired as i64);
             if !fired_labels.is_empty() {
                 self.firings.push(PlanFiring {
                     time_s: secs,
                     transitions: fired_labels,
-                    marking: shown.clone(),
+                    marking: news.texts.marking.clone(),
                 });
             }
-            publish(&self.marking, shown);
+            if news.marking {
+                self.marking.set(news.texts.marking.clone());
+            }
         }
         let status = run.state.status(&run.plan);
         if status != PlanStatus::Running {
@@ -284,6 +294,7 @@ impl Mission {
         };
         let team = TeamIo::connect(ctx, dispatch, serve).await?;
         let state = PlanState::new(&plan);
+        let shown = Shown::new(&plan);
         let mut run = Run {
             team,
             state,
@@ -295,6 +306,7 @@ impl Mission {
             clock,
             memory: MissionMemory::default(),
             loops: Default::default(),
+            shown,
         };
         let memory = self.memory.get();
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {
@@ -308,7 +320,7 @@ impl Mission {
             }
         }
         run.done = run.state.status(&run.plan) != PlanStatus::Running;
-        publish(&self.marking, marking(&run.plan, &run.state));
+        publish(&self.marking, &marking(&run.plan, &run.state));
         self.run = Some(run);
         Ok(())
     }
@@ -329,9 +341,10 @@ async fn relink(ctx: &Context, relinks: &mut Vec<Relink>) {
     }
 }
 
-fn publish(out: &Output<String>, v: String) {
+/// Writes `v` unless the output shows it already (a write wakes every reader).
+fn publish(out: &Output<String>, v: &str) {
     if *out.get() != v {
-        out.set(v);
+        out.set(v.to_string());
     }
 }
 

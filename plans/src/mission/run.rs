@@ -11,6 +11,7 @@ use super::bind::Bound;
 use super::config::Flags;
 use super::env::MissionEnv;
 use super::memory::MissionMemory;
+use super::shown::{marking, Shown};
 use super::team::TeamIo;
 use crate::exec::{step, PlanState};
 use crate::model::Plan;
@@ -32,6 +33,8 @@ pub(super) struct Run {
     pub team: TeamIo,
     /// Rounds that fire in a circle without waiting (see `loops.rs`).
     pub loops: super::loops::LoopFinder,
+    /// Transition labels and marking texts, kept (see `shown.rs`).
+    pub shown: Shown,
 }
 
 /// Plan steps run back to back in one module step at most (see [`Mission::step`]).
@@ -81,16 +84,16 @@ impl Run {
         report
             .fired
             .iter()
-            .map(|&t| shown(&self.plan.transitions()[t]))
+            .map(|&t| self.shown.label(t).to_string())
             .collect()
     }
 
     /// Reports the plan when its rounds fire in a circle without ever waiting.
     fn note_loop(&mut self, report: &crate::exec::StepReport) {
-        let (plan, state) = (&self.plan, &self.state);
-        let found = self.loops.fired(std::time::Instant::now(), || {
+        let (shown, state) = (&self.shown, &self.state);
+        let found = self.loops.fired(std::time::Instant::now, || {
             let labels = report.fired.iter();
-            let labels = labels.map(|&t| shown(&plan.transitions()[t]));
+            let labels = labels.map(|&t| shown.label(t).to_string());
             (state.save(), labels.collect())
         });
         if let Some(found) = found {
@@ -192,34 +195,6 @@ impl Run {
         self.memory = memory.clone();
         Ok(())
     }
-}
-
-/// A transition as the log shows it: its label, or its id when it has none (a jump).
-fn shown(t: &crate::model::Transition) -> String {
-    match t.label.trim() {
-        "" => t.id.clone(),
-        label => label.to_string(),
-    }
-}
-
-pub(super) fn marking(plan: &Plan, state: &PlanState) -> String {
-    let places = plan.places();
-    let shown: Vec<String> = state
-        .marked()
-        .map(|(p, n)| {
-            let l = if places[p].label.is_empty() {
-                &places[p].id
-            } else {
-                &places[p].label
-            };
-            if n == 1 {
-                l.clone()
-            } else {
-                format!("{l}*{n}")
-            }
-        })
-        .collect();
-    shown.join(", ")
 }
 
 impl Run {

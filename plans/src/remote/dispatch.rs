@@ -119,6 +119,11 @@ impl Dispatch {
         self.actions.contains_key(full)
     }
 
+    /// Whether the plan reads other robots' conditions at all.
+    pub fn has_conditions(&self) -> bool {
+        !self.conditions.is_empty()
+    }
+
     /// Whether `full` is another robot's condition.
     pub fn has_condition(&self, full: &str) -> bool {
         self.conditions.contains_key(full)

@@ -1,10 +1,11 @@
-//! What a config says beyond properties — supervision, groups, recording, the scheduler, and
-//! each module's group, restart policy, watchdog, stop timeout and `long_steps` — kept with the registry so that a snapshot
-//! writes it back and a snapshot run behaves like the run it froze.
+//! What a config says beyond properties — supervision, groups, recording, the scheduler and
+//! step budget, and each module's group, restart policy, watchdog, stop timeout and
+//! `long_steps` — kept with the registry so that a snapshot writes it back and a snapshot run
+//! behaves like the run it froze.
 
 use std::collections::HashMap;
 
-use crate::config::{AgentConfig, ModuleConfig, RecordSection, Scheduler};
+use crate::config::{AgentConfig, ModuleConfig, RecordSection, Scheduler, StepBudget};
 use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
 
 /// The agent's settings that live outside the blackboard.
@@ -14,6 +15,7 @@ pub(crate) struct Settings {
     groups: Vec<GroupConfig>,
     record: Option<RecordSection>,
     scheduler: Scheduler,
+    step_budget: StepBudget,
     modules: HashMap<String, ModuleSettings>,
 }
 
@@ -34,6 +36,7 @@ impl Settings {
             groups: config.groups.clone(),
             record: config.record.clone(),
             scheduler: config.scheduler,
+            step_budget: config.step_budget,
             modules: config
                 .modules
                 .iter()
@@ -62,6 +65,9 @@ impl Settings {
         }
         if self.scheduler != Scheduler::default() {
             fields.push(format!("scheduler: {}", self.scheduler.name()));
+        }
+        if self.step_budget != StepBudget::default() {
+            fields.push(format!("step_budget: {}", ron_text(&self.step_budget)));
         }
         fields
     }

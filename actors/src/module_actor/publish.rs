@@ -1,0 +1,51 @@
+//! What a module actor publishes about itself besides its step: its status and stats, and the
+//! request to leave its agent's thread when its steps exceed the agent's `step_budget`.
+
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use super::{status, Running};
+use crate::module::Module;
+
+impl<M: Module> Running<M> {
+    /// On the agent's own thread, asks the supervisor to move the module to the shared runtime
+    /// once its steps exceed the agent's `step_budget`; the move stops it at a step boundary.
+    pub(super) fn watch_step_budget(&mut self, took: Duration) {
+        let Some(mean) = self.long_steps.as_mut().and_then(|w| w.observe(took)) else {
+            return;
+        };
+        let msg = crate::supervisor::SupervisorMsg::Move(self.me, mean);
+        // A supervisor that is gone is stopping the agent: nothing left to move.
+        let _ = self.supervisor.cast(msg);
+    }
+
+    /// Publishes `status`, and the stats with it when the module is leaving its step loop
+    /// (steps publish them at most every 100 ms). An action that enables and disables a module
+    /// at every plan reaction changes its status twice a reaction: writing four stats (and
+    /// reading the clock for each) cost more than the reaction's own hand-overs.
+    pub(super) fn publish(&mut self, status: &str) {
+        if *self.builtins.status.get() != status {
+            self.builtins.status.set(status.to_string());
+            // The module actor's target, as before this code moved here: log filters name it.
+            self.span.in_scope(|| match status {
+                status::STOPPED | status::DISABLED => {
+                    tracing::info!(target: "petrel_actors::module_actor", status, "status")
+                }
+                _ => tracing::debug!(target: "petrel_actors::module_actor", status, "status"),
+            });
+        }
+        if matches!(status, status::STOPPED | status::FAILED) {
+            self.publish_stats();
+        }
+    }
+
+    pub(super) fn publish_stats(&mut self) {
+        let s = &mut self.stats;
+        s.published = Some(Instant::now());
+        self.builtins.steps.set(self.ctx.steps as i64);
+        self.builtins.last_step_us.set(s.last.as_secs_f64() * 1e6);
+        self.builtins.mean_step_us.set(s.mean_step_us());
+        self.builtins.mean_interval_ms.set(s.mean_interval_ms());
+    }
+}
