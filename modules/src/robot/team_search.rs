@@ -161,6 +161,7 @@ impl Module for TeamSearch {
             .collect();
         let mut candidates = BTreeMap::new();
         let mut waiting = false;
+        let keep = self.keep_radius.value();
         for m in state.members.iter().filter(|m| present.contains(&m.name)) {
             // A target the robot gave up is never its claim again.
             if let Some(claim) = state.allocator.claim_of(&m.name) {
@@ -174,7 +175,6 @@ impl Module for TeamSearch {
             let claim = state.allocator.claim_of(&m.name);
             if let Some(claim) = state.stalls.observe(&m.name, at, claim, t) {
                 state.allocator.release(&m.name);
-                state.log.released(&m.name, claim, false);
                 let line = state.log.stalled(&m.name, claim, self.stall_s.value());
                 petrel_actors::outln!("[{}] t = {t:6.1} s  {line}", ctx.module());
             }
@@ -187,13 +187,12 @@ impl Module for TeamSearch {
                     candidates.insert(m.name.clone(), Vec::new());
                 }
                 Exploration::Frontiers(mut list) => {
-                    let keep = self.keep_radius.value();
                     list.retain(|f| !state.stalls.avoids(&m.name, f.target, keep));
                     candidates.insert(m.name.clone(), list);
                 }
             }
         }
-        let left = distinct(&candidates, self.keep_radius.value());
+        let left = distinct(&candidates, keep);
         let reachable = left.len();
         self.frontiers.set(reachable as i64);
         self.map.set(merged);
