@@ -16,6 +16,7 @@ use crate::supervision::Intensity;
 use crate::supervisor::{
     AgentSupervisor, ControlRequest, GroupSpec, ModuleSpec, SupervisorArgs, SupervisorMsg,
 };
+use crate::thread_hold::HoldWatcher;
 
 /// How long a module gets to finish its step and cleanup when the agent stops, before it is killed.
 pub const DEFAULT_STOP_TIMEOUT: Duration = Duration::from_secs(5);
@@ -118,6 +119,7 @@ impl Agent {
         crate::panic_report::install();
         let registry = config.build(types)?;
         let events = registry.events_writer();
+        let hold_events = registry.events_writer();
         let cfg = &config.config;
         let ms = Duration::from_millis;
         let groups = cfg
@@ -164,6 +166,16 @@ impl Agent {
         let (blackboard, bb_join) = spawned
             .map_err(StartError::Spawn)?
             .map_err(|e| StartError::Spawn(e.to_string()))?;
+        // Only an agent's own thread can be held by one module for all the others.
+        let hold_watcher = match (&thread, cfg.step_budget.held_ms) {
+            (Some(_), held_ms) if held_ms > 0 => Some(HoldWatcher {
+                hold: Arc::default(),
+                held: ms(held_ms),
+                events: hold_events,
+                agent: Arc::from(name.as_str()),
+            }),
+            _ => None,
+        };
         let control = AgentControl::new();
         let probe = StepProbe::default();
         let args = SupervisorArgs {
@@ -179,11 +191,13 @@ impl Agent {
             scheduler: cfg.scheduler,
             shared: thread.as_ref().map(AgentThread::shared),
             step_budget: cfg.step_budget,
+            hold: hold_watcher.as_ref().map(|w| w.hold.clone()),
         };
         Ok(PreparedAgent {
             pending: Some((args, bb_join)),
             blackboard,
             thread,
+            hold_watcher,
         })
     }
 
@@ -278,6 +292,7 @@ pub struct PreparedAgent {
     pending: Option<(SupervisorArgs, JoinHandle<()>)>,
     blackboard: Blackboard,
     thread: Option<AgentThread>,
+    hold_watcher: Option<HoldWatcher>,
 }
 
 impl PreparedAgent {
@@ -307,6 +322,9 @@ impl PreparedAgent {
                 return Err(StartError::Spawn(e));
             }
         };
+        if let Some(watcher) = self.hold_watcher.take() {
+            crate::thread_hold::watch(watcher, supervisor.clone());
+        }
         Ok(Agent {
             control,
             probe,

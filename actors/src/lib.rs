@@ -33,6 +33,7 @@ pub mod supervision;
 mod supervisor;
 pub mod team;
 mod text_position;
+mod thread_hold;
 pub mod types;
 pub mod url;
 mod value;

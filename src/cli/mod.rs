@@ -242,8 +242,9 @@ pub(crate) struct RunArgs {
     /// Log format on standard error (filter with RUST_LOG, default `info`).
     #[arg(long, value_enum, default_value_t = LogFormat::Pretty)]
     log_format: LogFormat,
-    /// Worker threads the modules run on (default: one per core). One keeps a serial chain of
-    /// modules on one core, where a hand-over between modules costs no thread wake-up.
+    /// Threads of the shared runtime (default: one per core): where modules with long steps,
+    /// agents with `scheduler: shared`, teams, the console and tools run. Each agent's other
+    /// modules run on the agent's own thread.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..=MAX_WORKERS as i64))]
     workers: Option<u16>,
     /// Do not join the teams the configs name (links to other agents stay `waiting`), and

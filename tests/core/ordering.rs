@@ -18,8 +18,8 @@ use crate::support::config;
 /// The longest any wait of these tests may take before the test fails.
 const DEADLINE: Duration = Duration::from_secs(20);
 
-/// Where the agent's modules run: `Shared` on the test's runtime, `AgentThread` with
-/// `scheduler: agent_thread`.
+/// Where the agent's modules run: `Shared` on the test's runtime (`scheduler: shared`),
+/// `AgentThread` with `scheduler: agent_thread` (the default).
 #[derive(Clone, Copy, PartialEq)]
 enum On {
     Shared,
@@ -28,14 +28,15 @@ enum On {
 
 /// Starts agent `r` from `text` (which begins `Agent(name: "r", `), scheduled as `on` says.
 async fn start(on: On, text: &str) -> Agent {
-    let text = match on {
-        On::Shared => text.to_string(),
-        On::AgentThread => text.replacen(
-            r#"Agent(name: "r", "#,
-            r#"Agent(name: "r", scheduler: agent_thread, "#,
-            1,
-        ),
+    let scheduler = match on {
+        On::Shared => "shared",
+        On::AgentThread => "agent_thread",
     };
+    let text = text.replacen(
+        r#"Agent(name: "r", "#,
+        &format!(r#"Agent(name: "r", scheduler: {scheduler}, "#),
+        1,
+    );
     Agent::start(&config(&text), &registry())
         .await
         .unwrap_or_else(|e| panic!("agent should start:\n{e}"))
@@ -260,6 +261,48 @@ async fn a_blocking_step_declared_long_does_not_hold_up_the_agents_thread() {
         "a_blocking_step_declared_long_does_not_hold_up_the_agents_thread",
     )
     .await;
+}
+
+/// Under the default scheduler a module not declared `long_steps` whose step blocks holds the
+/// agent's thread, and every other module of the agent with it: the watcher outside the thread
+/// names it while it still holds (a `held` event, read here by a module on the shared runtime),
+/// and once the step returns the supervisor moves it off the thread (a `moved` event), where
+/// its steps run from then on.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_step_holding_the_agents_thread_is_named_while_it_holds_and_its_module_moved() {
+    let gate = "a_step_holding_the_agents_thread_is_named";
+    let text = format!(
+        r#"Agent(name: "r", step_budget: (mean_us: 0, steps: 20, held_ms: 50), modules: [
+            (name: "log", type: "test.event_log", long_steps: true, links: {{"in/events": "_supervisor/events"}}),
+            (name: "b", type: "test.blocker", values: {{"params/gate": "{gate}"}}),
+            (name: "c", type: "demo.counter", values: {{"params/period_ms": 10}}),
+        ])"#
+    );
+    let agent = Agent::start(&config(&text), &registry())
+        .await
+        .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
+    // Handles go straight to the cells: they work while the agent's thread is held.
+    let go = handle::<i64>(&agent, "b/in/go").await;
+    let blocked = handle::<bool>(&agent, "b/out/blocked").await;
+    let released = handle::<String>(&agent, "b/out/released").await;
+    let kinds = handle::<String>(&agent, "log/out/kinds").await;
+    go.set(1);
+    wait_until(&blocked, "b/out/blocked", |b| *b).await;
+    wait_until(&kinds, "log/out/kinds", |k| k.contains("held:b")).await;
+    assert_eq!(
+        *released.get(),
+        "",
+        "named while b is still inside its step"
+    );
+    Gate::named(gate).open();
+    wait_until(&released, "b/out/released", |r| r == "opened").await;
+    wait_until(&kinds, "log/out/kinds", |k| k.contains("moved:b")).await;
+    let kinds = kinds.get();
+    assert!(
+        !kinds.contains("moved:c") && !kinds.contains("failed"),
+        "only b moves, and a move is no failure: {kinds}"
+    );
+    assert_all_stopped(&stop(agent).await);
 }
 
 /// `w` writes in a tight loop for up to 20 s; beside it the echo answers, the periodic module

@@ -32,14 +32,18 @@ impl Module for Where {
 }
 
 /// The threads modules `a` (`test.where`) and `long` (`test.where`, `long_steps` under an
-/// agent thread) of agent `r` stepped on, scheduled as `scheduler` says.
+/// agent thread) of agent `r` stepped on, scheduled as `scheduler` says (`""`: not said).
 async fn threads(scheduler: &str) -> (String, String) {
     let long_steps = match scheduler {
-        "agent_thread" => "long_steps: true",
+        "agent_thread" | "" => "long_steps: true",
         _ => "",
     };
+    let scheduler = match scheduler {
+        "" => String::new(),
+        said => format!("scheduler: {said}, "),
+    };
     let text = format!(
-        r#"Agent(name: "r", scheduler: {scheduler}, modules: [
+        r#"Agent(name: "r", {scheduler}modules: [
             (name: "a", type: "test.where"),
             (name: "long", type: "test.where", {long_steps}),
         ])"#
@@ -75,6 +79,13 @@ async fn under_agent_thread_modules_step_on_the_agents_thread_and_long_steps_do_
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn by_default_an_agent_has_a_thread_of_its_own() {
+    let (a, long) = threads("").await;
+    assert_eq!(a, "thread `petrel-agent-r`");
+    assert_ne!(long, a, "a long-step module runs on the shared runtime");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn under_the_shared_scheduler_no_module_has_an_agent_thread() {
     let (a, long) = threads("shared").await;
     assert!(!a.contains("petrel-agent"), "{a}");
@@ -82,8 +93,8 @@ async fn under_the_shared_scheduler_no_module_has_an_agent_thread() {
 }
 
 #[test]
-fn long_steps_without_an_agent_thread_is_refused_where_it_is_written() {
-    let text = "Agent(name: \"r\", modules: [\n    (name: \"a\", type: \"demo.counter\", long_steps: true),\n])";
+fn long_steps_under_the_shared_scheduler_is_refused_where_it_is_written() {
+    let text = "Agent(name: \"r\", scheduler: shared, modules: [\n    (name: \"a\", type: \"demo.counter\", long_steps: true),\n])";
     let file = ConfigFile::parse("bad.ron", text).unwrap();
     let Err(errors) = file.build(&registry()) else {
         panic!("a config with long_steps and no agent thread should be refused");

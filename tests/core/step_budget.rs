@@ -122,19 +122,23 @@ async fn a_module_over_the_step_budget_moves_and_its_blocking_steps_hold_up_no_o
 
 #[test]
 fn a_step_budget_out_of_range_is_refused_where_it_is_written() {
-    let text = "Agent(name: \"r\", scheduler: agent_thread,\n    step_budget: (mean_us: 10, steps: 0),\n    modules: [])";
+    let text = "Agent(name: \"r\", scheduler: agent_thread,\n    step_budget: (mean_us: 10, steps: 0, held_ms: 5),\n    modules: [])";
     let file = ConfigFile::parse("bad.ron", text).unwrap();
     let Err(errors) = file.build(&registry()) else {
         panic!("a step budget out of range should be refused");
     };
     let errors: Vec<String> = errors.0.iter().map(|e| e.to_string()).collect();
-    assert_eq!(errors.len(), 2, "{errors:?}");
+    assert_eq!(errors.len(), 3, "{errors:?}");
     assert!(
         errors[0].starts_with("bad.ron:2:19") && errors[0].contains("mean_us is 10; expected 0"),
         "{errors:?}"
     );
     assert!(
         errors[1].starts_with("bad.ron:2:") && errors[1].contains("steps is 0; expected 1.."),
+        "{errors:?}"
+    );
+    assert!(
+        errors[2].starts_with("bad.ron:2:42") && errors[2].contains("held_ms is 5; expected 0"),
         "{errors:?}"
     );
     let unknown = ConfigFile::parse("bad.ron", "Agent(name: \"r\", step_budget: (mean_ms: 1))")

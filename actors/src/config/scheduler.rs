@@ -9,13 +9,16 @@ use super::{ConfigError, ConfigFile};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Scheduler {
-    /// Every module is a task of the process's shared multi-thread runtime (`--workers`).
-    #[default]
+    /// Every module is a task of the process's shared multi-thread runtime (`--workers`):
+    /// a hand-over that wakes a reader may cost a cross-thread wake, and a step that blocks
+    /// holds one worker rather than the agent's thread.
     Shared,
-    /// The agent gets an OS thread of its own with a current-thread runtime, where its
-    /// blackboard, supervisor and modules run, so a hand-over between two of its modules is a
-    /// same-thread task wake; modules declared `long_steps: true` run on the shared runtime.
-    /// On a current-thread runtime (one worker, paused-clock tests) the agent runs in place.
+    /// The default. The agent gets an OS thread of its own with a current-thread runtime,
+    /// where its blackboard, supervisor and modules run, so a hand-over between two of its
+    /// modules is a same-thread task wake; modules declared `long_steps: true`, and those the
+    /// agent's `step_budget` moves, run on the shared runtime. On a current-thread runtime (one
+    /// worker, paused-clock tests) the agent runs in place.
+    #[default]
     AgentThread,
 }
 
@@ -33,11 +36,13 @@ impl Scheduler {
 /// the runtime moves it to the shared runtime, as if it were declared `long_steps: true`:
 /// when the mean of `steps` timed steps in a row exceeds `mean_us` µs, the module is restarted
 /// there at its next step boundary (its state lives in the blackboard) and a `moved`
-/// supervisor event says so. `mean_us: 0` never moves a module. Without `agent_thread` it does
-/// nothing (every module is on the shared runtime already).
+/// supervisor event says so. A single step that holds the thread for `held_ms` without yielding
+/// (it blocks, or computes in one go) is reported at once as a `held` event and the module moved
+/// when that step returns. `mean_us: 0` and `held_ms: 0` turn each rule off. Without
+/// `agent_thread` it does nothing (every module is on the shared runtime already).
 ///
 /// ```ron
-/// Agent(name: "r", scheduler: agent_thread, step_budget: (mean_us: 1000, steps: 20), modules: [...])
+/// Agent(name: "r", step_budget: (mean_us: 1000, steps: 20, held_ms: 100), modules: [...])
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(default, deny_unknown_fields)]
@@ -46,15 +51,20 @@ pub struct StepBudget {
     pub mean_us: u64,
     /// Timed steps the mean is taken over: 1..=1 000 000.
     pub steps: u32,
+    /// The longest one step may hold the agent's thread, ms: 0 (never move a module for it)
+    /// or 10..=60 000.
+    pub held_ms: u64,
 }
 
 impl Default for StepBudget {
     /// 1 ms over 20 steps: a longer mean step holds up the agent's other modules more than a
-    /// cross-thread hand-over (a few µs) would cost the module.
+    /// cross-thread hand-over (a few µs) would cost the module. 100 ms in one step: a 1 kHz
+    /// module beside it would miss a hundred periods.
     fn default() -> Self {
         StepBudget {
             mean_us: 1000,
             steps: 20,
+            held_ms: 100,
         }
     }
 }
@@ -65,6 +75,10 @@ const MIN_MEAN_US: u64 = 50;
 const MAX_MEAN_US: u64 = 60_000_000;
 /// Largest `steps`.
 const MAX_STEPS: u32 = 1_000_000;
+/// Smallest non-zero `held_ms`: the watcher samples the thread four times per `held_ms`.
+const MIN_HELD_MS: u64 = 10;
+/// Largest `held_ms` (a minute).
+const MAX_HELD_MS: u64 = 60_000;
 
 impl ConfigFile {
     /// The `step_budget` fields out of range, located at the field.
@@ -86,6 +100,15 @@ impl ConfigFile {
                 format!(
                     "step_budget: steps is {}; expected 1..={MAX_STEPS} timed steps",
                     b.steps
+                ),
+            ));
+        }
+        if b.held_ms != 0 && !(MIN_HELD_MS..=MAX_HELD_MS).contains(&b.held_ms) {
+            errors.push(self.locate_field(
+                "held_ms",
+                format!(
+                    "step_budget: held_ms is {}; expected 0 (never move a module for one long step) or {MIN_HELD_MS}..={MAX_HELD_MS} ms",
+                    b.held_ms
                 ),
             ));
         }

@@ -23,6 +23,7 @@ use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
 use crate::step_probe::StepMark;
 use crate::supervision::LongStepWatch;
+use crate::thread_hold::ThreadHold;
 
 mod builtins;
 mod loops;
@@ -53,6 +54,8 @@ pub(crate) struct ModuleArgs {
     pub step_mark: Arc<StepMark>,
     /// On the agent's own thread: the mean step above which the module asks to be moved.
     pub step_budget: Option<crate::config::StepBudget>,
+    /// On the agent's own thread: where its polls are marked, and its slot.
+    pub hold: Option<(Arc<ThreadHold>, usize)>,
 }
 
 pub(crate) struct ModuleActor<M>(PhantomData<fn() -> M>);
@@ -80,6 +83,8 @@ pub(crate) struct Running<M> {
     loops: LoopWatch,
     /// Steps against the agent's `step_budget`, on the agent's own thread only.
     long_steps: Option<LongStepWatch>,
+    /// On the agent's own thread: where its step's polls are marked (`thread_hold.rs`).
+    hold: Option<(Arc<ThreadHold>, usize)>,
     /// Who to ask for a move, and who is asking.
     supervisor: ActorRef<crate::supervisor::SupervisorMsg>,
     me: ractor::ActorId,
@@ -171,6 +176,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             stats: StepStats::default(),
             loops: LoopWatch::default(),
             long_steps,
+            hold: args.hold,
             supervisor,
             me: me.get_id(),
         })
@@ -346,9 +352,15 @@ impl<M: Module> Running<M> {
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
         let mark = self.step_mark.clone();
         let in_step = mark.enter();
-        let result = loop_watch::in_step(hops, self.signal.id(), self.run_step())
-            .instrument(tracing::trace_span!("step"))
-            .await;
+        // Taken for the step rather than cloned: no reference count traffic per step.
+        let hold = self.hold.take();
+        let step = loop_watch::in_step(hops, self.signal.id(), self.run_step())
+            .instrument(tracing::trace_span!("step"));
+        let result = match &hold {
+            Some((hold, slot)) => hold.polls(*slot, step).await,
+            None => step.await,
+        };
+        self.hold = hold;
         drop(in_step);
         if let Some(steps) = self.loops.observe(hops, std::time::Instant::now) {
             let woken_by_itself = raised.waker == self.signal.id();

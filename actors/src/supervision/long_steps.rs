@@ -55,7 +55,12 @@ mod tests {
     use super::*;
 
     fn watch(mean_us: u64, steps: u32) -> LongStepWatch {
-        LongStepWatch::new(StepBudget { mean_us, steps }).unwrap()
+        LongStepWatch::new(StepBudget {
+            mean_us,
+            steps,
+            held_ms: 0,
+        })
+        .unwrap()
     }
 
     #[test]
@@ -101,7 +106,8 @@ mod tests {
     fn a_zero_budget_watches_nothing() {
         assert!(LongStepWatch::new(StepBudget {
             mean_us: 0,
-            steps: 20
+            steps: 20,
+            held_ms: 0
         })
         .is_none());
     }

@@ -156,8 +156,10 @@ pub struct SupervisorEvent {
     pub time_s: f64,
     /// The module concerned (or the group, for `escalated`).
     pub module: String,
-    /// `failed`, `restarted`, `escalated`, `gave_up`, `stopped`, `added`, `removed`, or
-    /// `moved` (off its agent's thread: its steps exceeded the agent's `step_budget`).
+    /// `failed`, `restarted`, `escalated`, `gave_up`, `stopped`, `added`, `removed`,
+    /// `held` (one step of it is holding its agent's thread past the agent's
+    /// `step_budget.held_ms`; written while it holds), or `moved` (off its agent's thread: its
+    /// steps exceeded the agent's `step_budget`).
     pub kind: String,
     /// The panic message, error or explanation.
     pub reason: String,

@@ -54,22 +54,44 @@ impl SupervisorState {
     /// lives in the blackboard), reported as a `moved` event. An instance that ended
     /// meanwhile, or one already moved, is left alone.
     pub(super) async fn move_to_shared(&mut self, actor: ractor::ActorId, mean: Duration) {
-        let on_agent_thread = self.shared.is_some();
         let Some(i) = self.slots.iter().position(|s| {
             s.state == SlotState::Running && s.actor.as_ref().is_some_and(|a| a.get_id() == actor)
         }) else {
             return;
         };
-        if self.stopping || !on_agent_thread || self.slots[i].spec.long_steps {
-            return;
-        }
-        let name = self.slots[i].spec.name.clone();
         let reason = format!(
             "its steps took {:.2} ms on average over {} steps, above the agent's step_budget of {} µs: moved off the agent's thread to the shared runtime, as `long_steps: true` would",
             mean.as_secs_f64() * 1e3,
             self.step_budget.steps,
             self.step_budget.mean_us
         );
+        self.move_slot(i, reason).await;
+    }
+
+    /// Moves slot `i`'s module off the agent's thread after one of its steps held the thread
+    /// for over `held` (the step has returned: this runs on that thread).
+    pub(super) async fn move_held(&mut self, i: usize, held: Duration) {
+        if self
+            .slots
+            .get(i)
+            .is_none_or(|s| s.state != SlotState::Running)
+        {
+            return;
+        }
+        let reason = format!(
+            "one of its steps held the agent's thread for over {} ms without yielding (the agent's step_budget allows {} ms): moved off the agent's thread to the shared runtime, as `long_steps: true` would",
+            held.as_millis(),
+            self.step_budget.held_ms
+        );
+        self.move_slot(i, reason).await;
+    }
+
+    async fn move_slot(&mut self, i: usize, reason: String) {
+        let on_agent_thread = self.shared.is_some();
+        if self.stopping || !on_agent_thread || self.slots[i].spec.long_steps {
+            return;
+        }
+        let name = self.slots[i].spec.name.clone();
         tracing::warn!(agent = %self.agent, module = %name, "{reason}");
         self.stop_slot(i, None).await;
         self.slots[i].spec.long_steps = true;

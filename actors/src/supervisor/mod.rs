@@ -25,6 +25,7 @@ use crate::summary::ModuleReport;
 use crate::supervision::{
     Backoff, Intensity, RestartPolicy, Strategy, SupervisionConfig, SupervisorEvent,
 };
+use crate::thread_hold::ThreadHold;
 
 mod control;
 mod restart;
@@ -113,6 +114,8 @@ pub(crate) struct SupervisorArgs {
     pub shared: Option<tokio::runtime::Handle>,
     /// Modules on the agent's thread whose steps exceed it are moved to `shared`.
     pub step_budget: StepBudget,
+    /// Where modules on the agent's thread mark their polls, for the watcher of held threads.
+    pub hold: Option<Arc<ThreadHold>>,
 }
 
 pub(crate) struct SupervisorState {
@@ -133,6 +136,7 @@ pub(crate) struct SupervisorState {
     scheduler: Scheduler,
     shared: Option<tokio::runtime::Handle>,
     step_budget: StepBudget,
+    hold: Option<Arc<ThreadHold>>,
 }
 
 /// A runtime request about one module.
@@ -160,6 +164,9 @@ pub(crate) enum SupervisorMsg {
     /// A module instance on the agent's thread found its mean step above the agent's
     /// `step_budget` (the mean it measured): move it to the shared runtime.
     Move(ractor::ActorId, Duration),
+    /// One step of slot `.0`'s module held the agent's thread for over `.1` (seen by the
+    /// watcher in `thread_hold.rs`): move it to the shared runtime once the step returned.
+    Held(usize, Duration),
 }
 
 pub(crate) struct AgentSupervisor;
@@ -204,6 +211,7 @@ impl Actor for AgentSupervisor {
             scheduler: args.scheduler,
             shared: args.shared,
             step_budget: args.step_budget,
+            hold: args.hold,
         };
         for i in 0..state.slots.len() {
             state.spawn(i).await;
@@ -240,6 +248,7 @@ impl Actor for AgentSupervisor {
                 let _ = reply.send(state.control_request(request).await);
             }
             SupervisorMsg::Move(actor, mean) => state.move_to_shared(actor, mean).await,
+            SupervisorMsg::Held(slot, held) => state.move_held(slot, held).await,
         }
         Ok(())
     }
@@ -329,6 +338,13 @@ impl SupervisorState {
             // Only a module on the agent's own thread can hold up the others.
             step_budget: match (&self.shared, slot.spec.long_steps) {
                 (Some(_), false) => Some(self.step_budget),
+                _ => None,
+            },
+            hold: match (&self.hold, slot.spec.long_steps) {
+                (Some(hold), false) => {
+                    hold.register(i, &slot.spec.name);
+                    Some((hold.clone(), i))
+                }
                 _ => None,
             },
         };
