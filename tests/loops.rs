@@ -178,7 +178,13 @@ fn a_plan_that_fires_in_a_circle_is_named_once_and_its_firings_are_not_logged_on
     assert_eq!(out.status.code(), Some(0), "{log}");
     assert!(steps(&summary, "c") >= 1, "the others ran: {summary}");
     let reports = lines_with(&log, "fires in a circle");
-    assert_eq!(reports.len(), 1, "{reports:?}");
+    // Its steps are long, so the runtime may move the mission off the agent's thread (a
+    // restart, with a warning saying so), after which the new instance names the cycle again.
+    let moves = lines_with(&log, "moved off the agent's thread")
+        .iter()
+        .filter(|l| l.contains("module=mission"))
+        .count();
+    assert_eq!(reports.len(), 1 + moves, "{reports:?}");
     assert!(
         reports[0].contains("plan `spin`") && reports[0].contains(r#""ping.start", "ping.end""#),
         "the cycle is named: {}",
@@ -186,6 +192,11 @@ fn a_plan_that_fires_in_a_circle_is_named_once_and_its_firings_are_not_logged_on
     );
     // It used to log ~110,000 lines a second: a firing and an "unbound action" warning each.
     let firings = lines_with(&log, "plan step").len();
-    assert!(firings <= 1_100, "{firings} firings logged");
-    assert_eq!(lines_with(&log, "unbound action").len(), 1, "said once");
+    let instances = 1 + moves;
+    assert!(firings <= 1_100 * instances, "{firings} firings logged");
+    assert_eq!(
+        lines_with(&log, "unbound action").len(),
+        instances,
+        "said once (by each instance)"
+    );
 }

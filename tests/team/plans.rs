@@ -156,6 +156,34 @@ async fn a_robot_leaving_the_team_fails_its_action_and_the_plan_recovers() {
     }
 }
 
+/// A robot's mission restarted while it carries out a coordinator's action (a crash, or a move
+/// off its agent's thread) still answers that run when the action finishes: what it serves is
+/// kept in its `state/memory`.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_robot_mission_restarted_mid_action_still_answers_the_coordinator() {
+    let t = team_plan("plan-restart", "r1#search_west\n").await;
+    let running = t.boss.handle::<String>("mission/out/running").await;
+    wait_for(&running, "r1's search running", |r| r == "r1#search_west").await;
+    let served = t.r1.handle::<MissionMemory>("mission/state/memory").await;
+    wait_for(&served, "the run kept in r1's memory", |m| {
+        m.serve
+            .running()
+            .any(|(a, from)| a == "search_west" && from.starts_with("boss/"))
+    })
+    .await;
+    t.r1.agent.modules().restart("mission").await.unwrap();
+    t.r1.agent
+        .blackboard()
+        .set("probe/in/value", 1.0)
+        .await
+        .unwrap();
+    let result = t.boss.handle::<String>("mission/out/result").await;
+    wait_for(&result, "the plan's goal", |r| r == "goal").await;
+    for m in [t.r2, t.r1, t.boss] {
+        m.stop().await;
+    }
+}
+
 /// Bindings of a robot running its own plan: `goto_door` until the probe reads 1 or more,
 /// `enter` sets it to 42; `atDoor` (watched by the other robot) is probe >= 1.
 const OWN_PLAN_BINDINGS: &str = r#""params/actions": {

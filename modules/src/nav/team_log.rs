@@ -113,14 +113,14 @@ impl TeamLog {
         Some(line)
     }
 
-    /// `robot` stalled holding `target` (see [`super::StallWatch`]); the line that says so.
-    pub fn stalled(&mut self, robot: &str, target: Point2, stall_s: f64) -> String {
+    /// `robot` stalled at `at` holding `target` (see [`super::StallWatch`]); the line that says so.
+    pub fn stalled(&mut self, robot: &str, at: Point2, target: Point2, stall_s: f64) -> String {
         if let Some(r) = self.robot_mut(robot) {
             r.stalled += 1;
         }
         format!(
-            "{robot} stalled: it did not move for {stall_s:.0} s; its frontier ({:.2}, {:.2}) goes to another robot, and it gets none for {stall_s:.0} s",
-            target.0.x, target.0.y
+            "{robot} stalled at ({:.2}, {:.2}): it did not move for {stall_s:.0} s; its frontier ({:.2}, {:.2}) goes to another robot, and it gets none for {stall_s:.0} s",
+            at.0.x, at.0.y, target.0.x, target.0.y
         )
     }
 
@@ -211,8 +211,8 @@ mod tests {
         log.released("r1", Point2::new(1.0, 1.0), false);
         assert_eq!(log.assigned("r2", Point2::new(1.0, 1.0), 3.0), None);
         assert!(log.reassignments().is_empty());
-        let line = log.stalled("r1", Point2::new(2.0, 3.0), 20.0);
-        assert_eq!(line, "r1 stalled: it did not move for 20 s; its frontier (2.00, 3.00) goes to another robot, and it gets none for 20 s");
+        let line = log.stalled("r1", Point2::new(1.0, 1.5), Point2::new(2.0, 3.0), 20.0);
+        assert_eq!(line, "r1 stalled at (1.00, 1.50): it did not move for 20 s; its frontier (2.00, 3.00) goes to another robot, and it gets none for 20 s");
         assert!(
             log.summary()
                 .contains("  r1: 0 frontier(s), stalled 1 time(s)\n"),

@@ -175,7 +175,7 @@ impl Module for TeamSearch {
             let claim = state.allocator.claim_of(&m.name);
             if let Some(claim) = state.stalls.observe(&m.name, at, claim, t) {
                 state.allocator.release(&m.name);
-                let line = state.log.stalled(&m.name, claim, self.stall_s.value());
+                let line = state.log.stalled(&m.name, at, claim, self.stall_s.value());
                 petrel_actors::outln!("[{}] t = {t:6.1} s  {line}", ctx.module());
             }
             if state.stalls.benched(&m.name, t) {

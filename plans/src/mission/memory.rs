@@ -22,6 +22,8 @@ pub struct MissionMemory {
     pub actions: BTreeMap<String, ActionStats>,
     /// The action whose unhandled failure failed the plan, if one did.
     pub failed_action: Option<String>,
+    /// What other agents asked of this one (team runs to answer, conditions watched).
+    pub serve: crate::remote::Serve,
 }
 
 impl PropertyType for MissionMemory {

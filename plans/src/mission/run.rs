@@ -159,6 +159,7 @@ impl Run {
                 })
                 .collect();
         }
+        self.memory.serve.clone_from(&self.team.serve);
         out.set(self.memory.clone());
     }
 
@@ -193,6 +194,9 @@ impl Run {
             }
         }
         self.memory = memory.clone();
+        // The runs a coordinator started here are still answered, and watchers get every
+        // value again.
+        self.team.serve = memory.serve.clone();
         Ok(())
     }
 }
@@ -200,7 +204,8 @@ impl Run {
 impl Run {
     /// Serve mode, one round: calls from the inbox carried out on this agent's actions,
     /// coordinators that left have their actions stopped, then answers and watched conditions
-    /// go out. Returns whether any call was made.
+    /// go out. Returns whether any call was made or what is served changed (a watch, a
+    /// coordinator leaving or back): what `state/memory` keeps.
     pub fn serve_round(
         &mut self,
         now: Instant,
@@ -213,10 +218,11 @@ impl Run {
         let agent = self.team.agent.clone();
         let serve = &mut self.team.serve;
         let mut calls = Vec::new();
+        let mut served = present.is_some();
         for item in inbox.drain() {
             match serve.receive(&item.from, &item.body) {
                 Ok(Some(call)) => calls.push(call),
-                Ok(None) => {}
+                Ok(None) => served = true,
                 Err(e) => tracing::warn!(from = %item.from, "message ignored: {e}"),
             }
         }
@@ -238,7 +244,7 @@ impl Run {
         use crate::exec::Environment;
         use crate::label::CallKind;
         let pending = &mut self.team.pending;
-        let called = !calls.is_empty();
+        let called = !calls.is_empty() || served;
         for (local, kind) in calls {
             let name = full(&local);
             if !env.bound.actions.contains_key(&name) {

@@ -2,11 +2,13 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use serde::{Deserialize, Serialize};
+
 use super::protocol::{parse_call, Outgoing, TeamMsg};
 use crate::label::CallKind;
 
 /// An action started by a coordinator and not yet ended by it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct Run {
     /// Who started it (`agent/module`): the answer goes there.
     from: String,
@@ -16,9 +18,12 @@ struct Run {
 }
 
 /// Who watches which conditions, and what they were last sent.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 struct Watcher {
     conditions: Vec<String>,
+    /// Not kept across a restart: the new instance sends every value again.
+    #[serde(skip)]
     sent: BTreeMap<String, bool>,
     /// Its agent is not in the team now: nothing is sent until it is back.
     away: bool,
@@ -32,12 +37,18 @@ struct Watcher {
 /// and sent every value again when it is back: it missed the changes), and the runs it had
 /// started here, which stopped when it left, are answered as failed when it is back: its plan
 /// may still wait for them.
-#[derive(Debug, Clone, Default)]
+///
+/// It is kept in the mission's `state/memory` (without the messages not yet sent and what
+/// watchers were last sent), so that a restarted mission still answers the runs its
+/// predecessor accepted and sends its watchers their values again.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Serve {
     runs: BTreeMap<String, Run>,
     watchers: BTreeMap<String, Watcher>,
     /// Runs stopped because their coordinator left, by action: answered when it is back.
     orphans: Vec<(String, Run)>,
+    #[serde(skip)]
     outgoing: Vec<Outgoing>,
 }
 

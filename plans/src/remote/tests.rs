@@ -182,6 +182,45 @@ fn an_executor_answers_each_run_once_and_sends_watched_conditions_when_they_chan
     assert!(err.contains("unknown call `jump`"), "{err}");
 }
 
+/// What `state/memory` keeps of an executor: a restarted mission still answers the run its
+/// predecessor accepted, to the coordinator that started it, and sends its watcher every
+/// value again.
+#[test]
+fn an_executor_restored_from_its_memory_answers_the_runs_it_had_and_resends_watched_values() {
+    let mut s = Serve::new();
+    s.receive("boss/m", &call("go", "start", 7).encode())
+        .unwrap();
+    let watch = TeamMsg::Watch {
+        conditions: vec!["seen".into()],
+    };
+    s.receive("boss/m", &watch.encode()).unwrap();
+    s.poll(|_| (false, false), |_| Some(true));
+    assert_eq!(s.take_outgoing().len(), 1, "the watched value went out");
+    let text = ron::to_string(&s).unwrap();
+    let mut restored: Serve = ron::from_str(&text).unwrap();
+    assert_eq!(restored.running().collect::<Vec<_>>(), [("go", "boss/m")]);
+    restored.poll(|_| (true, false), |_| Some(true));
+    assert_eq!(
+        bodies(&restored.take_outgoing()),
+        [
+            (
+                "boss/m".to_string(),
+                TeamMsg::Done {
+                    action: "go".into(),
+                    run: 7,
+                    failed: false
+                }
+            ),
+            (
+                "boss/m".to_string(),
+                TeamMsg::Conditions {
+                    values: [("seen".to_string(), true)].into()
+                }
+            ),
+        ]
+    );
+}
+
 #[test]
 fn an_executor_drops_the_actions_of_a_coordinator_that_left() {
     let mut s = Serve::new();
