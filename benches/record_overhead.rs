@@ -41,6 +41,19 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
         if let Some(r) = recorder {
             let report = r.finish().await.unwrap();
             assert_eq!(report.dropped, 0);
+            // What a run records, once per format: before/after comparisons must record the same.
+            static REPORTED: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+            let line = format!(
+                "record_overhead: {:?} recorded {} messages on {} channels",
+                record.map(|(_, f)| f),
+                report.written,
+                report.channels
+            );
+            let mut reported = REPORTED.lock().unwrap();
+            if !reported.contains(&line) {
+                eprintln!("{line}");
+                reported.push(line);
+            }
         }
     });
     common::cpu_time() - start
