@@ -145,7 +145,11 @@ mod tests {
         assert_eq!((*value.downcast_ref::<i64>().unwrap(), version), (3, 3));
         drop(tap);
         ep.write(Arc::new(4_i64));
-        assert_eq!(taken(&ready), Vec::<usize>::new(), "unsubscribed when dropped");
+        assert_eq!(
+            taken(&ready),
+            Vec::<usize>::new(),
+            "unsubscribed when dropped"
+        );
     }
 
     #[tokio::test(start_paused = true)]
