@@ -1,7 +1,8 @@
 //! `record_overhead`: the CPU time of `configs/navigate.ron` (one virtual second on tokio's
 //! paused clock: 10 s of simulated time, as fast as the CPU allows) recording every property
 //! and queue to MCAP, against the same run without recording. CPU time of the whole process
-//! (the recorder's writer thread included), from `getrusage`.
+//! (the recorder's writer thread included), from `getrusage`. With `RECORD_OVERHEAD_THREADS`
+//! set, each run also prints its agent thread's CPU time and the process's.
 
 mod common;
 
@@ -20,6 +21,7 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
         .build()
         .unwrap();
     let start = common::cpu_time();
+    let thread_start = common::thread_cpu_time();
     rt.block_on(async {
         let prepared = Agent::prepare(file, &common::registry(), &[])
             .await
@@ -41,9 +43,34 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
         if let Some(r) = recorder {
             let report = r.finish().await.unwrap();
             assert_eq!(report.dropped, 0);
+            // What a run records, once per format: before/after comparisons must record the same.
+            static REPORTED: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+            let line = format!(
+                "record_overhead: {:?} recorded {} messages on {} channels",
+                record.map(|(_, f)| f),
+                report.written,
+                report.channels
+            );
+            let mut reported = REPORTED.lock().unwrap();
+            if !reported.contains(&line) {
+                eprintln!("{line}");
+                reported.push(line);
+            }
         }
     });
-    common::cpu_time() - start
+    let total = common::cpu_time() - start;
+    // Where the CPU goes, per run: the agent's thread (this one, on the current-thread
+    // runtime) and the rest of the process (the recorder's writer thread).
+    if std::env::var_os("RECORD_OVERHEAD_THREADS").is_some() {
+        let agent = common::thread_cpu_time() - thread_start;
+        eprintln!(
+            "THREADS {:?} agent_us {} total_us {}",
+            record.map(|(_, f)| f),
+            agent.as_micros(),
+            total.as_micros()
+        );
+    }
+    total
 }
 
 fn record_overhead(c: &mut Criterion) {

@@ -13,6 +13,7 @@ use tokio::sync::Notify;
 use tokio::time::Instant;
 
 use crate::loop_watch::Hop;
+use crate::team::TapReady;
 use crate::value::{AnyValue, TypeInfo};
 
 /// Why a module woke up; a set of these is reported to the module's step.
@@ -44,6 +45,9 @@ pub(crate) struct Signal {
     hops: AtomicU64,
     /// Names this signal in a [`Hop`].
     id: u32,
+    /// Set for a tap drained with many others: a raise queues this id on the shared list
+    /// instead of waking a waiter of its own.
+    ready: Option<(TapReady, usize)>,
 }
 
 impl Default for Signal {
@@ -55,12 +59,28 @@ impl Default for Signal {
             quiet: AtomicBool::new(false),
             hops: AtomicU64::new(0),
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            ready: None,
         }
     }
 }
 
 impl Signal {
+    /// A tap's signal that queues `id` on `ready` (see [`TapReady`]).
+    pub fn marking(ready: TapReady, id: usize) -> Self {
+        Signal {
+            ready: Some((ready, id)),
+            ..Signal::default()
+        }
+    }
+
     pub fn raise(&self, cause: u8) {
+        if let Some((ready, id)) = &self.ready {
+            // Only the first raise since the consumer took the causes (read the tap) queues it.
+            if self.causes.fetch_or(cause, Ordering::AcqRel) == 0 {
+                ready.mark(*id);
+            }
+            return;
+        }
         if cause & (cause::CHANGE | cause::ITEMS) != 0 {
             if let Some(step) = crate::loop_watch::current() {
                 let hop = Hop {

@@ -23,6 +23,18 @@ pub fn cpu_time() -> Duration {
     t(usage.ru_utime) + t(usage.ru_stime)
 }
 
+/// CPU time the calling thread has used (user + system).
+pub fn thread_cpu_time() -> Duration {
+    let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+    // SAFETY: getrusage fills the struct it is given.
+    let usage = unsafe {
+        libc::getrusage(libc::RUSAGE_THREAD, usage.as_mut_ptr());
+        usage.assume_init()
+    };
+    let t = |tv: libc::timeval| Duration::new(tv.tv_sec as u64, tv.tv_usec as u32 * 1000);
+    t(usage.ru_utime) + t(usage.ru_stime)
+}
+
 /// `configs/navigate.ron` with its recorder drawing no picture.
 pub fn navigate() -> ConfigFile {
     let mut file = ConfigFile::load(

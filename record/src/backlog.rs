@@ -84,6 +84,27 @@ impl Backlog {
         true
     }
 
+    /// Queues `entries` under one lock while fewer than `limit` wait; each one that does not
+    /// fit is dropped and its tag handed to `dropped`.
+    pub(crate) fn try_send_all<T>(
+        &self,
+        entries: impl Iterator<Item = (T, Entry)>,
+        mut dropped: impl FnMut(T),
+    ) {
+        let mut msgs = self.0.msgs.lock();
+        let before = msgs.len();
+        for (tag, entry) in entries {
+            if msgs.len() >= self.0.limit {
+                dropped(tag);
+            } else {
+                msgs.push(Msg::Entry(entry));
+            }
+        }
+        if before < WAKE_AT && msgs.len() >= WAKE_AT {
+            self.0.ready.notify_one();
+        }
+    }
+
     /// Queues a control message (a channel, the stop), whatever the backlog, and wakes the writer.
     pub(crate) fn send(&self, msg: Msg) {
         self.0.msgs.lock().push(msg);

@@ -1,5 +1,5 @@
-//! The recorder shell: taps on an agent's blackboard feed a bounded channel that a writer
-//! thread drains into a [`Sink`]. Modules never wait for it: a tap that finds the channel full
+//! The recorder shell: taps on an agent's blackboard, read by one drain task per agent when
+//! they are marked ready, feed a bounded channel that a writer thread drains into a [`Sink`]. Modules never wait for it: a tap that finds the channel full
 //! drops the value and counts it (per channel, written in the file's summary), and a queue tap
 //! that lags behind its queue's capacity loses the oldest items, counted the same way.
 
@@ -144,27 +144,11 @@ impl Recorder {
     ) -> Result<usize, BlackboardError> {
         let selection = self.options.selection.clone();
         let name = agent.to_string();
-        let mut taps = blackboard
+        let taps = blackboard
             .watch_taps(move |key| selection.wants(&name, key))
             .await?;
-        let mut tapped = 0;
-        {
-            let mut channels = self.channels.lock();
-            // What the agent holds now is tapped by the time `watch_taps` answers.
-            while let Ok(tap) = taps.try_recv() {
-                channels.record(agent, tap);
-                tapped += 1;
-            }
-        }
-        let channels = self.channels.clone();
-        let agent = agent.to_string();
-        let watch = tokio::spawn(async move {
-            while let Some(tap) = taps.recv().await {
-                tracing::info!(agent = %agent, property = %tap.key, "recording a property declared while running");
-                channels.lock().record(&agent, tap);
-            }
-        });
-        self.channels.lock().keep(watch);
+        // What the agent holds now is tapped by the time `watch_taps` answers.
+        let tapped = Channels::drain(&self.channels, agent, taps);
         Ok(tapped)
     }
 
@@ -178,13 +162,13 @@ impl Recorder {
             .sum()
     }
 
-    /// Stops the taps (each sends what was written up to now first), writes what is queued,
+    /// Stops the taps (each drain sends what was written up to now first), writes what is queued,
     /// finishes the file (summary, indexes, drop counts) and says what was recorded.
     pub async fn finish(mut self) -> io::Result<SinkReport> {
-        let taps = self.channels.lock().close();
-        for tap in taps {
-            // Each sends what is left and ends; a tap that panicked has nothing more to send.
-            let _ = tap.await;
+        let drains = self.channels.lock().close();
+        for drain in drains {
+            // Each sends what is left and ends; a drain that panicked has nothing more to send.
+            let _ = drain.await;
         }
         self.tx.send(Msg::Stop);
         let thread = self.thread.take().expect("finished once");
@@ -197,8 +181,8 @@ impl Recorder {
 
 impl Drop for Recorder {
     fn drop(&mut self) {
-        for tap in self.channels.lock().close() {
-            tap.abort();
+        for drain in self.channels.lock().close() {
+            drain.abort();
         }
         self.tx.send(Msg::Stop);
     }

@@ -1,48 +1,34 @@
-//! The recorder's taps: one task per recorded property, sending each change (or queue item)
-//! to the writer thread without ever waiting, and the table of channels they feed, shared
-//! with the watches that tap properties declared while the agent runs.
+//! The recorder's taps: one drain task per recorded agent reads the properties whose taps
+//! were marked ready ([`TapReady`]) and sends their changes (or queue items) to the writer
+//! thread without ever waiting; and the table of channels they feed, shared by the drains and
+//! the log.
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
-use petrel_actors::team::{QueueTap, Tap, ValueTap};
-use petrel_actors::{AnyValue, WatchedTap};
-use tokio::sync::watch;
+use parking_lot::Mutex;
+use petrel_actors::team::{QueueTap, Tap, TapReady, ValueTap};
+use petrel_actors::WatchedTap;
+use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
 use crate::backlog::{Backlog, Msg, StampClock};
 use crate::sink::{ChannelSpec, Entry};
 
-/// Items a queue tap takes per wake-up.
+/// Items a queue tap takes at a time.
 const BATCH: usize = 256;
 
-/// Sends values of one channel to the writer thread without ever waiting.
+/// Where one channel's values go: the writer's backlog, and the channel's drop counter.
 #[derive(Clone)]
 pub(crate) struct Out {
     pub tx: Backlog,
-    pub clock: StampClock,
     pub channel: usize,
     pub dropped: Arc<AtomicU64>,
 }
 
-impl Out {
-    fn send(&self, value: AnyValue, sequence: u64, written: Instant) {
-        let entry = Entry {
-            channel: self.channel,
-            value,
-            sequence,
-            publish_ns: self.clock.unix_ns(written),
-            log_ns: self.clock.unix_ns(Instant::now()),
-        };
-        if !self.tx.try_send(Msg::Entry(entry)) {
-            self.dropped.fetch_add(1, Ordering::Relaxed);
-        }
-    }
-}
-
-/// The channels of a recording and the tasks feeding them.
+/// The channels of a recording and the drain tasks feeding them.
 pub(crate) struct Channels {
     tx: Backlog,
     clock: StampClock,
@@ -50,12 +36,10 @@ pub(crate) struct Channels {
     by_topic: HashMap<String, Out>,
     /// Drop counters, by channel index.
     pub dropped: Vec<Arc<AtomicU64>>,
-    tasks: Vec<JoinHandle<()>>,
-    /// The watches tapping properties declared later.
-    watches: Vec<JoinHandle<()>>,
-    /// Raised when the recording finishes: each tap sends what is left, then ends.
+    drains: Vec<JoinHandle<()>>,
+    /// Raised when the recording finishes: each drain sends what is left, then ends.
     stop: watch::Sender<bool>,
-    /// Set when the recording finishes: a watch that was mid-way taps nothing more.
+    /// Set when the recording finishes: a drain started later taps nothing.
     closed: bool,
 }
 
@@ -66,8 +50,7 @@ impl Channels {
             clock,
             by_topic: HashMap::new(),
             dropped: Vec::new(),
-            tasks: Vec::new(),
-            watches: Vec::new(),
+            drains: Vec::new(),
             stop: watch::channel(false).0,
             closed: false,
         }
@@ -81,7 +64,6 @@ impl Channels {
         let dropped = Arc::new(AtomicU64::new(0));
         let out = Out {
             tx: self.tx.clone(),
-            clock: self.clock,
             channel: self.dropped.len(),
             dropped: dropped.clone(),
         };
@@ -91,99 +73,170 @@ impl Channels {
         out
     }
 
-    /// Records what `tapped` (a property of `agent`) writes from now on.
-    pub fn record(&mut self, agent: &str, tapped: WatchedTap) {
-        if self.closed {
-            return;
+    /// Starts recording `agent` in one task: the taps `taps` holds now are added before this
+    /// returns (their channels announced in order), those it receives later as they come.
+    /// Returns how many were added now.
+    pub fn drain(
+        shared: &Arc<Mutex<Channels>>,
+        agent: &str,
+        mut taps: mpsc::UnboundedReceiver<WatchedTap>,
+    ) -> usize {
+        let mut channels = shared.lock();
+        if channels.closed {
+            return 0;
         }
-        let spec = ChannelSpec {
-            topic: crate::select::topic(agent, &tapped.key),
-            url: format!("petrel://{agent}/{}", tapped.key),
-            type_info: tapped.tap.type_info(),
-            queue: matches!(tapped.tap, Tap::Queue(_)),
-        };
-        let out = self.channel(spec);
-        let stop = self.stop.subscribe();
-        let task = match tapped.tap {
-            Tap::Value(tap) => tokio::spawn(record_value(tap, out, stop)),
-            Tap::Queue(tap) => tokio::spawn(record_queue(tap, out, stop)),
-        };
-        self.tasks.push(task);
+        let mut drain = Drain::new(agent, channels.tx.clone(), channels.clock);
+        while let Ok(tapped) = taps.try_recv() {
+            drain.add(&mut channels, tapped);
+        }
+        let added = drain.taps.len();
+        let stop = channels.stop.subscribe();
+        let task = tokio::spawn(drain.run(taps, shared.clone(), stop));
+        channels.drains.push(task);
+        added
     }
 
-    /// Keeps `task` (a watch) to stop it with the taps.
-    pub fn keep(&mut self, task: JoinHandle<()>) {
-        match self.closed {
-            true => task.abort(),
-            false => self.watches.push(task),
-        }
-    }
-
-    /// Stops the watches and asks every tap to send what is left and end; returns the taps
-    /// to wait for.
+    /// Asks every drain to send what is left and end; returns the drains to wait for.
     pub fn close(&mut self) -> Vec<JoinHandle<()>> {
         self.closed = true;
-        for watch in self.watches.drain(..) {
-            watch.abort();
-        }
         self.stop.send_replace(true);
-        std::mem::take(&mut self.tasks)
+        std::mem::take(&mut self.drains)
     }
 }
 
-/// Records a value's changes until `stop`, then its last change if not yet sent.
-async fn record_value(tap: ValueTap, out: Out, mut stop: watch::Receiver<bool>) {
-    let mut last = None;
-    // Made once, not per wake-up: a fresh `wait_for` registers with the stop channel and
-    // unregisters again on every change, a cost the agent's thread paid per recorded value.
-    let stopped = stop.wait_for(|&stop| stop);
-    tokio::pin!(stopped);
-    loop {
-        let (value, version, written) = tap.read();
-        if last != Some(version) {
-            last = Some(version);
-            out.send(value, version, written);
-        }
-        tokio::select! {
-            biased;
-            _ = &mut stopped => break,
-            _ = tap.changed() => {}
-        }
-    }
-    let (value, version, written) = tap.read();
-    if last != Some(version) {
-        out.send(value, version, written);
-    }
+/// What a drain reads of one tapped property.
+enum Source {
+    /// A value: its changes (the last version sent, to skip a wake-up with no new write).
+    Value { tap: ValueTap, last: Option<u64> },
+    /// A queue: its items (and how many it lost by lagging, already counted).
+    Queue { tap: QueueTap, lost: u64 },
 }
 
-/// Records a queue's items until `stop`, then those still unread.
-async fn record_queue(mut tap: QueueTap, out: Out, mut stop: watch::Receiver<bool>) {
-    let mut lost = 0;
-    let mut stopping = false;
-    // Made once, as in `record_value`.
-    let stopped = stop.wait_for(|&stop| stop);
-    tokio::pin!(stopped);
-    loop {
-        let items = tap.take(BATCH);
-        let full = items.len() == BATCH;
-        for (seq, stamp, value) in items {
-            out.send(value, seq, stamp);
+struct Tapped {
+    out: Out,
+    source: Source,
+}
+
+/// One agent's taps, read by one task when they are marked ready.
+struct Drain {
+    agent: String,
+    ready: TapReady,
+    /// By id (the index the tap marks).
+    taps: Vec<Tapped>,
+    tx: Backlog,
+    clock: StampClock,
+    /// Values read in one pass, with the id of their tap, sent under one lock.
+    batch: Vec<(usize, Entry)>,
+}
+
+impl Drain {
+    fn new(agent: &str, tx: Backlog, clock: StampClock) -> Self {
+        Drain {
+            agent: agent.to_string(),
+            ready: TapReady::new(),
+            taps: Vec::new(),
+            tx,
+            clock,
+            batch: Vec::new(),
         }
-        let now_lost = tap.lost().max(0) as u64;
-        if now_lost > lost {
-            out.dropped.fetch_add(now_lost - lost, Ordering::Relaxed);
-            lost = now_lost;
+    }
+
+    /// Records what `tapped` writes from now on (its current value or unread items first).
+    fn add(&mut self, channels: &mut Channels, tapped: WatchedTap) {
+        let WatchedTap { key, mut tap } = tapped;
+        let out = channels.channel(ChannelSpec {
+            topic: crate::select::topic(&self.agent, &key),
+            url: format!("petrel://{}/{key}", self.agent),
+            type_info: tap.type_info(),
+            queue: matches!(tap, Tap::Queue(_)),
+        });
+        tap.wake_through(&self.ready, self.taps.len());
+        let source = match tap {
+            Tap::Value(tap) => Source::Value { tap, last: None },
+            Tap::Queue(tap) => Source::Queue { tap, lost: 0 },
+        };
+        self.taps.push(Tapped { out, source });
+    }
+
+    /// Reads what the ready taps hold until `stop`, adding the taps declared meanwhile; then
+    /// reads every tap one last time.
+    async fn run(
+        mut self,
+        mut declared: mpsc::UnboundedReceiver<WatchedTap>,
+        channels: Arc<Mutex<Channels>>,
+        mut stop: watch::Receiver<bool>,
+    ) {
+        let mut ids = Vec::new();
+        let mut watching = true;
+        let stopped = stop.wait_for(|&stop| stop);
+        tokio::pin!(stopped);
+        loop {
+            tokio::select! {
+                biased;
+                _ = &mut stopped => break,
+                tapped = declared.recv(), if watching => match tapped {
+                    Some(tapped) => {
+                        tracing::info!(agent = %self.agent, property = %tapped.key, "recording a property declared while running");
+                        self.add(&mut channels.lock(), tapped);
+                    }
+                    None => watching = false,
+                },
+                _ = self.ready.wait(&mut ids) => self.pass(&ids),
+            }
         }
-        if full {
-            continue;
+        let all: Vec<usize> = (0..self.taps.len()).collect();
+        self.pass(&all);
+    }
+
+    /// Reads the taps `ids` and sends what they hold.
+    fn pass(&mut self, ids: &[usize]) {
+        let log_ns = self.clock.unix_ns(Instant::now());
+        for &id in ids {
+            self.read(id, log_ns);
         }
-        if stopping {
-            return;
-        }
-        tokio::select! {
-            biased;
-            _ = &mut stopped, if !stopping => stopping = true,
-            _ = tap.changed() => {}
+        let taps = &self.taps;
+        self.tx.try_send_all(self.batch.drain(..), |id| {
+            taps[id].out.dropped.fetch_add(1, Ordering::Relaxed);
+        });
+    }
+
+    /// Reads tap `id` into the batch: a value if it changed since the last read, a queue's
+    /// unread items.
+    fn read(&mut self, id: usize, log_ns: u64) {
+        let Tapped { out, source } = &mut self.taps[id];
+        let clock = self.clock;
+        let entry = |value, sequence, written| Entry {
+            channel: out.channel,
+            value,
+            sequence,
+            publish_ns: clock.unix_ns(written),
+            log_ns,
+        };
+        match source {
+            Source::Value { tap, last } => {
+                let (value, version, written) = tap.read();
+                if *last != Some(version) {
+                    *last = Some(version);
+                    self.batch.push((id, entry(value, version, written)));
+                }
+            }
+            Source::Queue { tap, lost } => {
+                loop {
+                    let items = tap.take(BATCH);
+                    let full = items.len() == BATCH;
+                    for (seq, stamp, value) in items {
+                        self.batch.push((id, entry(value, seq, stamp)));
+                    }
+                    if !full {
+                        break;
+                    }
+                }
+                let now_lost = tap.lost().max(0) as u64;
+                if now_lost > *lost {
+                    out.dropped.fetch_add(now_lost - *lost, Ordering::Relaxed);
+                    *lost = now_lost;
+                }
+            }
         }
     }
 }

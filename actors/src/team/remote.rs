@@ -346,8 +346,8 @@ impl Tap {
 
 /// Watches a value property; unsubscribes when dropped.
 pub struct ValueTap {
-    ep: Arc<Endpoint>,
-    signal: Arc<Signal>,
+    pub(super) ep: Arc<Endpoint>,
+    pub(super) signal: Arc<Signal>,
 }
 
 impl ValueTap {
@@ -359,6 +359,8 @@ impl ValueTap {
 
     /// The current value, its version and write time.
     pub fn read(&self) -> (AnyValue, u64, Instant) {
+        // Re-arms a tap woken through a `TapReady` before the read, so a later write queues it again.
+        self.signal.take();
         let slot = self.ep.read();
         (slot.value, slot.version, slot.written)
     }
@@ -382,8 +384,8 @@ impl Drop for ValueTap {
 
 /// Reads every item of an output queue as one more reader; detaches when dropped.
 pub struct QueueTap {
-    reader: Arc<ReaderEndpoint>,
-    signal: Arc<Signal>,
+    pub(super) reader: Arc<ReaderEndpoint>,
+    pub(super) signal: Arc<Signal>,
     buffer: Vec<QueueItem>,
 }
 
@@ -401,6 +403,8 @@ impl QueueTap {
     /// Takes up to `max` new items (sequence number, push time, value), oldest first; they
     /// count as consumed at once. `lost` says how many this tap missed by lagging so far.
     pub fn take(&mut self, max: usize) -> Vec<(u64, Instant, AnyValue)> {
+        // Re-arms a tap woken through a `TapReady`, as in `ValueTap::read`.
+        self.signal.take();
         self.buffer.clear();
         self.reader.take(max, &mut self.buffer);
         self.reader.ack();
