@@ -25,9 +25,6 @@ pub(crate) mod cause {
     pub const ENABLED: u8 = 16;
     /// The module is asked to stop.
     pub const STOP: u8 = 32;
-    /// Not a cause: the module waits for its signal (set only by modules switched on or off
-    /// before, see `Signal::mark_idle`); taking the causes clears it.
-    pub const IDLE: u8 = 64;
     /// Causes that make a module step.
     pub const STEPS: u8 = PERIOD | CHANGE | ITEMS | TIMEOUT;
 }
@@ -57,8 +54,8 @@ pub(crate) struct Signal {
 /// A plan action switches its modules on and off at every reaction; waking a module only for
 /// it to note that it is off (and publish its status) was a third of a reaction's wake-ups.
 pub(crate) trait QuietSwitch: Send + Sync {
-    /// Called by the writer of `enabled` while the module waits: if it is now off, notes it
-    /// (status, quiet signal) and returns true, so the module is not woken. The `ENABLED` cause stays
+    /// Called by the writer of `enabled`: if the module waits and is now off, notes it (status,
+    /// quiet signal) and returns true, so the module is not woken. The `ENABLED` cause stays
     /// recorded, so the module reads `enabled` again at its next wake-up.
     fn settle_off(&self, signal: &Signal) -> bool;
 }
@@ -88,13 +85,11 @@ impl Signal {
                 self.hops.fetch_max(hop.pack(), Ordering::Relaxed);
             }
         }
-        let before = self.causes.fetch_or(cause, Ordering::AcqRel);
+        self.causes.fetch_or(cause, Ordering::Release);
         if cause & !cause::STEPS == 0 && self.quiet.load(Ordering::Acquire) {
             return;
         }
-        // Idle until the module takes its causes, which takes this one with them: one atomic
-        // operation decides whether the module will see the cause or must be spared a wake-up.
-        if cause == cause::ENABLED && before & cause::IDLE != 0 && self.settled_off() {
+        if cause == cause::ENABLED && self.settled_off() {
             return;
         }
         self.notify.notify_one();
@@ -136,13 +131,7 @@ impl Signal {
     }
 
     pub fn take(&self) -> u8 {
-        self.causes.swap(0, Ordering::AcqRel) & !cause::IDLE
-    }
-
-    /// Notes that the module waits for its signal, until it takes its causes: a write that
-    /// switches it off meanwhile may be settled by its [`QuietSwitch`] without waking it.
-    pub fn mark_idle(&self) {
-        self.causes.fetch_or(cause::IDLE, Ordering::AcqRel);
+        self.causes.swap(0, Ordering::Acquire)
     }
 
     /// Whether step causes wait to be taken: the module will step again at once.

@@ -249,10 +249,6 @@ impl<M: Module> Running<M> {
         self.stop.attach(&self.signal);
         let (mut ticker, mut timeout) = self.arm();
         let mut enabled = self.switch.enabled();
-        // Switched on or off since it started: from then on it tells its signal when it waits,
-        // so that being switched off while waiting need not wake it (a module nobody switches
-        // pays nothing for this).
-        let mut switched = !enabled;
         self.signal.set_quiet(!enabled);
         self.publish(if enabled {
             status::RUNNING
@@ -303,9 +299,7 @@ impl<M: Module> Running<M> {
             }
             // One signal carries every event (data, `enabled`, stop), so a purely event-driven
             // module waits on a single `Notify`: the hot path of `property_wake`.
-            if switched {
-                self.signal.mark_idle();
-            }
+            self.switch.set_idle(true);
             let woken_by = if ticker.is_none() && timeout.is_none() {
                 self.signal.woken().await;
                 0
@@ -317,11 +311,11 @@ impl<M: Module> Running<M> {
                     _ = tokio::time::sleep_until(last_step + timeout.unwrap_or_default()), if timeout.is_some() => cause::TIMEOUT,
                 }
             };
-            // Taking the causes clears the idle mark: a writer that switches the module off
-            // from now on wakes it, and one that found it idle recorded `ENABLED` in these.
+            // Awake before taking the causes: a writer that switches the module off from now on
+            // wakes it, and one that found it idle recorded `ENABLED` before these are taken.
+            self.switch.set_idle(false);
             let causes = woken_by | self.signal.take();
             if causes & cause::ENABLED != 0 {
-                switched = true;
                 // A writer may have switched the module off and on again while it waited
                 // (noting the status for it), so `enabled` is read again whatever it was.
                 enabled = self.switch.enabled();

@@ -7,37 +7,40 @@
 //! lines. Switching on still wakes the module: it has to step anyway. The status is written by
 //! both the module and those writers, so its writes go one at a time, through [`Switch`].
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use parking_lot::Mutex;
 
 use super::status;
 use crate::cell::{Endpoint, QuietSwitch, Signal};
-use crate::value::AnyValue;
 
 /// The status of one module instance, and its `enabled` as writers of it see it.
 pub(crate) struct Switch {
+    /// The step loop waits for its signal: not stepping, not in init or cleanup.
+    idle: AtomicBool,
     enabled: Arc<Endpoint>,
     status: Arc<Endpoint>,
     /// Serialises status writes, so a writer switching the module off never overwrites a
     /// status the module wrote meanwhile (stopped, failed).
     writing: Mutex<()>,
     span: tracing::Span,
-    /// The two statuses written at every switch, made once: a write shares them.
-    running: AnyValue,
-    disabled: AnyValue,
 }
 
 impl Switch {
     pub fn new(enabled: Arc<Endpoint>, status: Arc<Endpoint>, span: tracing::Span) -> Arc<Self> {
         Arc::new(Switch {
+            idle: AtomicBool::new(false),
             enabled,
             status,
             writing: Mutex::new(()),
             span,
-            running: Arc::new(status::RUNNING.to_string()),
-            disabled: Arc::new(status::DISABLED.to_string()),
         })
+    }
+
+    /// Marks the step loop as waiting for its signal (true) or awake (false).
+    pub fn set_idle(&self, idle: bool) {
+        self.idle.store(idle, Ordering::SeqCst);
     }
 
     /// The module's `enabled`, as written last.
@@ -82,12 +85,7 @@ impl Switch {
         if unchanged {
             return;
         }
-        let value = match new {
-            status::RUNNING => self.running.clone(),
-            status::DISABLED => self.disabled.clone(),
-            other => Arc::new(other.to_string()),
-        };
-        self.status.write(value);
+        self.status.write(Arc::new(new.to_string()));
         // The module actor's target, as before this code moved here: log filters name it.
         self.span.in_scope(|| match new {
             status::STOPPED | status::DISABLED => {
@@ -100,7 +98,10 @@ impl Switch {
 
 impl QuietSwitch for Switch {
     fn settle_off(&self, signal: &Signal) -> bool {
-        if self.enabled() {
+        // The `ENABLED` cause was recorded before this: either the module reads it after
+        // marking itself awake, or this sees it idle (a store then a load on each side).
+        std::sync::atomic::fence(Ordering::SeqCst);
+        if !self.idle.load(Ordering::SeqCst) || self.enabled() {
             return false;
         }
         signal.set_quiet(true);
