@@ -44,20 +44,6 @@ pub(crate) struct Signal {
     hops: AtomicU64,
     /// Names this signal in a [`Hop`].
     id: u32,
-    /// Settles a write of `enabled` that switches the module off while it waits, without
-    /// waking it (see [`QuietSwitch`]); set while the module's step loop runs.
-    switch: Mutex<Option<Arc<dyn QuietSwitch>>>,
-}
-
-/// What the writer of a module's `enabled` does in place of waking the module.
-///
-/// A plan action switches its modules on and off at every reaction; waking a module only for
-/// it to note that it is off (and publish its status) was a third of a reaction's wake-ups.
-pub(crate) trait QuietSwitch: Send + Sync {
-    /// Called by the writer of `enabled`: if the module waits and is now off, notes it (status,
-    /// quiet signal) and returns true, so the module is not woken. The `ENABLED` cause stays
-    /// recorded, so the module reads `enabled` again at its next wake-up.
-    fn settle_off(&self, signal: &Signal) -> bool;
 }
 
 impl Default for Signal {
@@ -69,7 +55,6 @@ impl Default for Signal {
             quiet: AtomicBool::new(false),
             hops: AtomicU64::new(0),
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
-            switch: Mutex::new(None),
         }
     }
 }
@@ -89,29 +74,7 @@ impl Signal {
         if cause & !cause::STEPS == 0 && self.quiet.load(Ordering::Acquire) {
             return;
         }
-        if cause == cause::ENABLED && self.settled_off() {
-            return;
-        }
         self.notify.notify_one();
-    }
-
-    fn settled_off(&self) -> bool {
-        let switch = self.switch.lock().clone();
-        switch.is_some_and(|s| s.settle_off(self))
-    }
-
-    /// Removes `switch` if it is the one set (a newer instance may have set its own).
-    pub fn clear_switch(&self, switch: &Arc<dyn QuietSwitch>) {
-        let mut slot = self.switch.lock();
-        if slot.as_ref().is_some_and(|s| Arc::ptr_eq(s, switch)) {
-            *slot = None;
-        }
-    }
-
-    /// Lets `switch` settle writes of `enabled` that switch the module off (None: every such
-    /// write wakes the module again).
-    pub fn set_switch(&self, switch: Option<Arc<dyn QuietSwitch>>) {
-        *self.switch.lock() = switch;
     }
 
     /// Whether step causes should wait, recorded, instead of waking the module.
@@ -123,11 +86,6 @@ impl Signal {
     pub async fn wait(&self) -> u8 {
         self.notify.notified().await;
         self.take()
-    }
-
-    /// Waits for the next raise, leaving its causes to [`take`](Self::take).
-    pub async fn woken(&self) {
-        self.notify.notified().await;
     }
 
     pub fn take(&self) -> u8 {

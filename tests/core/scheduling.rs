@@ -55,54 +55,6 @@ async fn changes_while_disabled_make_one_step_when_enabled() {
 }
 
 #[tokio::test(start_paused = true)]
-async fn switching_a_waiting_module_off_shows_it_disabled_without_waking_it() {
-    let agent = start(r#"Agent(name: "r1", modules: [(name: "e", type: "test.echo")])"#).await;
-    let bb = agent.blackboard().clone();
-    advance(1).await;
-    let enabled = bb.handle::<bool>("e/enabled").await.unwrap();
-    let shown = bb.handle::<String>("e/stats/status").await.unwrap();
-    assert_eq!(*shown.get(), status::RUNNING);
-    // No await between the write and the read: the module cannot have run in between, so
-    // the writer itself noted the change.
-    enabled.set(false);
-    assert_eq!(
-        *shown.get(),
-        status::DISABLED,
-        "shown by the writer, at once"
-    );
-    bb.set("e/in/value", 1.0).await.unwrap();
-    advance(1).await;
-    assert_eq!(
-        *bb.get::<i64>("e/state/steps").await.unwrap(),
-        0,
-        "no step while off"
-    );
-    // Off and on again while it waits: the module wakes for the switch on, and steps.
-    enabled.set(true);
-    enabled.set(false);
-    enabled.set(true);
-    advance(1).await;
-    assert_eq!(*shown.get(), status::RUNNING);
-    assert_eq!(*bb.get::<f64>("e/out/value").await.unwrap(), 1.0);
-    bb.set("e/in/value", 2.0).await.unwrap();
-    advance(1).await;
-    assert_eq!(
-        *bb.get::<f64>("e/out/value").await.unwrap(),
-        2.0,
-        "data wakes it again"
-    );
-    assert_eq!(*bb.get::<i64>("e/state/steps").await.unwrap(), 2);
-    agent.stop(DEFAULT_STOP_TIMEOUT).await;
-    assert_eq!(*shown.get(), status::STOPPED);
-    enabled.set(false);
-    assert_eq!(
-        *shown.get(),
-        status::STOPPED,
-        "a stopped module's status stays"
-    );
-}
-
-#[tokio::test(start_paused = true)]
 async fn a_disabled_module_does_not_step_until_enabled_again() {
     let agent = start(
         r#"Agent(name: "r1", modules: [

@@ -29,14 +29,12 @@ mod loops;
 mod publish;
 mod stats;
 mod stop;
-mod switch;
 
 pub use builtins::status;
 pub(crate) use builtins::{declare_builtins, Builtins};
 use loops::{report_loop, Loop};
 use stats::StepStats;
 pub(crate) use stop::StopRequest;
-use switch::Switch;
 
 /// The longest a module steps back to back, while it has work waiting, before it lets the
 /// other tasks of its worker run.
@@ -75,8 +73,6 @@ pub(crate) struct Running<M> {
     ctx: Context,
     builtins: Builtins,
     signal: Arc<Signal>,
-    /// The status, written by the module and by writers switching it off (see `switch.rs`).
-    switch: Arc<Switch>,
     stop: Arc<StopRequest>,
     step_mark: Arc<StepMark>,
     span: tracing::Span,
@@ -134,11 +130,6 @@ impl<M: Module> Actor for ModuleActor<M> {
             return Err(ports.errors.join("; ").into());
         }
         builtins.status.set(status::INITIALIZING.into());
-        let switch = Switch::new(
-            builtins.enabled.ep.clone(),
-            builtins.status.ep.clone(),
-            span.clone(),
-        );
         let mut ctx = Context::new(
             &args.agent,
             &args.name,
@@ -174,7 +165,6 @@ impl<M: Module> Actor for ModuleActor<M> {
             ctx,
             builtins,
             signal: binding.signal,
-            switch,
             stop: args.stop,
             step_mark: args.step_mark,
             span,
@@ -202,9 +192,7 @@ impl<M: Module> Actor for ModuleActor<M> {
         state: &mut Running<M>,
     ) -> Result<(), ActorProcessingErr> {
         let span = state.span.clone();
-        let outcome = failure(catching(state.run().instrument(span.clone())).await);
-        state.release_switch();
-        match outcome {
+        match failure(catching(state.run().instrument(span.clone())).await) {
             None => {
                 // Stopped with the whole agent: clean up in reverse start order, when told.
                 state.stop.cleanup_turn().await;
@@ -224,21 +212,6 @@ impl<M: Module> Actor for ModuleActor<M> {
     }
 }
 
-impl<M> Running<M> {
-    /// Writers of `enabled` wake the module again: it is leaving its step loop (or ending).
-    fn release_switch(&self) {
-        let ours: Arc<dyn crate::cell::QuietSwitch> = self.switch.clone();
-        self.signal.clear_switch(&ours);
-    }
-}
-
-impl<M> Drop for Running<M> {
-    fn drop(&mut self) {
-        // A kill drops the step loop where it waits.
-        self.release_switch();
-    }
-}
-
 impl<M: Module> Running<M> {
     /// Waits for events and steps until asked to stop; an error is the module's failure.
     async fn run(&mut self) -> anyhow::Result<()> {
@@ -248,14 +221,13 @@ impl<M: Module> Running<M> {
             .subscribe_with(&self.signal, cause::ENABLED);
         self.stop.attach(&self.signal);
         let (mut ticker, mut timeout) = self.arm();
-        let mut enabled = self.switch.enabled();
+        let mut enabled = self.builtins.enabled.value();
         self.signal.set_quiet(!enabled);
         self.publish(if enabled {
             status::RUNNING
         } else {
             status::DISABLED
         });
-        self.signal.set_switch(Some(self.switch.clone()));
         // Every module steps once after init; later steps need an event.
         let mut pending: Option<u8> = Some(0);
         let mut last_step = Instant::now();
@@ -299,30 +271,31 @@ impl<M: Module> Running<M> {
             }
             // One signal carries every event (data, `enabled`, stop), so a purely event-driven
             // module waits on a single `Notify`: the hot path of `property_wake`.
-            self.switch.set_idle(true);
-            let woken_by = if ticker.is_none() && timeout.is_none() {
-                self.signal.woken().await;
-                0
+            let causes = if ticker.is_none() && timeout.is_none() {
+                self.signal.wait().await
             } else {
                 tokio::select! {
                     biased;
-                    _ = self.signal.woken() => 0,
-                    _ = tick(&mut ticker) => cause::PERIOD,
+                    c = self.signal.wait() => c,
+                    _ = tick(&mut ticker) => cause::PERIOD | self.signal.take(),
                     _ = tokio::time::sleep_until(last_step + timeout.unwrap_or_default()), if timeout.is_some() => cause::TIMEOUT,
                 }
             };
-            // Awake before taking the causes: a writer that switches the module off from now on
-            // wakes it, and one that found it idle recorded `ENABLED` before these are taken.
-            self.switch.set_idle(false);
-            let causes = woken_by | self.signal.take();
             if causes & cause::ENABLED != 0 {
-                // A writer may have switched the module off and on again while it waited
-                // (noting the status for it), so `enabled` is read again whatever it was.
-                enabled = self.switch.enabled();
-                // Data events while disabled are recorded in the signal and picked up by the
-                // next wait; they need not wake this module until it is enabled.
-                self.signal.set_quiet(!enabled);
-                self.switch.show_enabled(enabled);
+                let now_enabled = self.builtins.enabled.value();
+                if now_enabled != enabled {
+                    enabled = now_enabled;
+                    // Data events while disabled are recorded in the signal and picked up by
+                    // the next wait; they need not wake this module until it is enabled.
+                    self.signal.set_quiet(!enabled);
+                    self.span
+                        .in_scope(|| tracing::info!(enabled, "enabled changed"));
+                    self.publish(if enabled {
+                        status::RUNNING
+                    } else {
+                        status::DISABLED
+                    });
+                }
             }
             if causes & cause::STEPS != 0 {
                 pending = Some(pending.unwrap_or(0) | (causes & cause::STEPS));

@@ -25,7 +25,16 @@ impl<M: Module> Running<M> {
     /// at every plan reaction changes its status twice a reaction: writing four stats (and
     /// reading the clock for each) cost more than the reaction's own hand-overs.
     pub(super) fn publish(&mut self, status: &str) {
-        self.switch.show(status);
+        if *self.builtins.status.get() != status {
+            self.builtins.status.set(status.to_string());
+            // The module actor's target, as before this code moved here: log filters name it.
+            self.span.in_scope(|| match status {
+                status::STOPPED | status::DISABLED => {
+                    tracing::info!(target: "petrel_actors::module_actor", status, "status")
+                }
+                _ => tracing::debug!(target: "petrel_actors::module_actor", status, "status"),
+            });
+        }
         if matches!(status, status::STOPPED | status::FAILED) {
             self.publish_stats();
         }
