@@ -40,6 +40,7 @@ impl AgentThread {
         std::thread::Builder::new()
             .name(format!("petrel-agent-{name}"))
             .spawn(move || {
+                crate::fine_timer::mark_agent_thread();
                 // A current-thread runtime runs its tasks only inside `block_on`.
                 runtime.block_on(async {
                     let _ = ended.await;

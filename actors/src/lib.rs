@@ -15,6 +15,7 @@ mod cell;
 pub mod config;
 pub mod expr;
 pub mod files;
+mod fine_timer;
 mod handle;
 mod loop_watch;
 mod module;

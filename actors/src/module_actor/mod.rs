@@ -311,7 +311,7 @@ impl<M: Module> Running<M> {
 
     /// Applies the module's schedule: subscribes its watches (again: subscribing is idempotent),
     /// sets its watchdog, and returns its ticker and timeout.
-    fn arm(&mut self) -> (Option<tokio::time::Interval>, Option<Duration>) {
+    fn arm(&mut self) -> (Option<Ticker>, Option<Duration>) {
         let Schedule {
             period,
             timeout,
@@ -325,10 +325,13 @@ impl<M: Module> Running<M> {
                 WatchTarget::Queue(reader) => reader.subscribe(&self.signal),
             }
         }
-        let ticker = period.map(|p| {
-            let mut t = tokio::time::interval_at(Instant::now() + p, p);
-            t.set_missed_tick_behavior(MissedTickBehavior::Skip);
-            t
+        let ticker = period.map(|p| match crate::fine_timer::fine_clock_here() {
+            true => Ticker::Fine(crate::fine_timer::FineTicker::new(p)),
+            false => {
+                let mut t = tokio::time::interval_at(Instant::now() + p, p);
+                t.set_missed_tick_behavior(MissedTickBehavior::Skip);
+                Ticker::Tokio(t)
+            }
         });
         (ticker, timeout)
     }
@@ -445,9 +448,18 @@ impl<M: Module> Running<M> {
     }
 }
 
-async fn tick(ticker: &mut Option<tokio::time::Interval>) {
+/// A periodic module's clock: the fine timer where the runtime's clock cannot be paused (a
+/// tick within microseconds of its time, not tokio's 1 ms slots), else tokio's, which a paused
+/// test clock drives.
+enum Ticker {
+    Fine(crate::fine_timer::FineTicker),
+    Tokio(tokio::time::Interval),
+}
+
+async fn tick(ticker: &mut Option<Ticker>) {
     match ticker {
-        Some(t) => {
+        Some(Ticker::Fine(t)) => t.tick().await,
+        Some(Ticker::Tokio(t)) => {
             t.tick().await;
         }
         None => std::future::pending().await,

@@ -1,0 +1,276 @@
+//! A timer finer than tokio's, for periodic modules: one thread per process sleeps to the
+//! earliest deadline and wakes the task waiting for it.
+//!
+//! Why: tokio's timer wheel has 1 ms slots and its driver sleeps in `epoll_wait`, whose timeout
+//! is in whole milliseconds, so a 1 kHz module's period strayed by up to a millisecond (p99
+//! 1 ms even alone). Here a condition variable's timed wait (a futex with a nanosecond
+//! timeout, the thread's timer slack lowered to 1 µs) ends within microseconds of the
+//! deadline; the task is then woken like by any other thread. No thread spins: between
+//! deadlines the timer thread sleeps.
+//!
+//! Only for runtimes whose clock cannot be paused (see [`fine_clock_here`]): a paused test
+//! clock must keep driving periodic modules through tokio's timer.
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
+use std::task::{Context, Poll, Waker};
+use std::time::{Duration, Instant};
+
+use parking_lot::{Condvar, Mutex};
+
+thread_local! {
+    /// Set on an agent's own thread, whose runtime petrel built and never pauses.
+    static ON_AGENT_THREAD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Marks the current thread as an agent's own (see [`fine_clock_here`]).
+pub(crate) fn mark_agent_thread() {
+    ON_AGENT_THREAD.with(|c| c.set(true));
+}
+
+/// Whether periodic modules on the current runtime may use the fine timer: tokio pauses a
+/// clock only on a current-thread runtime, and petrel's agent threads never pause theirs. A
+/// current-thread runtime elsewhere (a paused-clock test) keeps tokio's timer.
+pub(crate) fn fine_clock_here() -> bool {
+    if ON_AGENT_THREAD.with(|c| c.get()) {
+        return true;
+    }
+    tokio::runtime::Handle::try_current()
+        .is_ok_and(|h| h.runtime_flavor() != tokio::runtime::RuntimeFlavor::CurrentThread)
+}
+
+/// The deadlines waited for, earliest first, and who waits for each.
+#[derive(Default)]
+struct Deadlines {
+    heap: BinaryHeap<Reverse<(Instant, u64)>>,
+    /// By sleep id: its deadline and its task's waker. A heap entry whose id is gone here (the
+    /// sleep ended or moved its deadline) is skipped when it comes up.
+    waiting: HashMap<u64, (Instant, Waker)>,
+}
+
+struct Timer {
+    deadlines: Mutex<Deadlines>,
+    earlier: Condvar,
+}
+
+fn timer() -> &'static Timer {
+    static TIMER: OnceLock<&'static Timer> = OnceLock::new();
+    TIMER.get_or_init(|| {
+        let timer: &'static Timer = Box::leak(Box::new(Timer {
+            deadlines: Mutex::new(Deadlines::default()),
+            earlier: Condvar::new(),
+        }));
+        std::thread::Builder::new()
+            .name("petrel-fine-timer".into())
+            .spawn(move || timer.run())
+            .expect("the fine timer thread could not be started");
+        timer
+    })
+}
+
+impl Timer {
+    fn run(&self) {
+        // The kernel may end a timed sleep up to the thread's timer slack late (50 µs by
+        // default): ask for 1 µs. Refused, the timer is only coarser.
+        // SAFETY: prctl with PR_SET_TIMERSLACK takes a plain integer.
+        unsafe {
+            libc::prctl(libc::PR_SET_TIMERSLACK, 1000_u64, 0, 0, 0);
+        }
+        let mut due: Vec<Waker> = Vec::new();
+        let mut d = self.deadlines.lock();
+        loop {
+            let now = Instant::now();
+            while let Some(&Reverse((at, id))) = d.heap.peek() {
+                if at > now {
+                    break;
+                }
+                d.heap.pop();
+                if d.waiting.get(&id).is_some_and(|(wanted, _)| *wanted == at) {
+                    if let Some((_, waker)) = d.waiting.remove(&id) {
+                        due.push(waker);
+                    }
+                }
+            }
+            let next = d.heap.peek().map(|Reverse((at, _))| *at);
+            if !due.is_empty() {
+                // Wake outside the lock: a woken task may register its next deadline at once.
+                drop(d);
+                due.drain(..).for_each(Waker::wake);
+                d = self.deadlines.lock();
+                continue;
+            }
+            match next {
+                Some(at) => {
+                    self.earlier.wait_until(&mut d, at);
+                }
+                None => self.earlier.wait(&mut d),
+            }
+        }
+    }
+}
+
+/// Sleeps until `deadline` (a wall-clock instant) on the fine timer.
+pub(crate) struct FineSleep {
+    deadline: Instant,
+    id: u64,
+    registered: bool,
+}
+
+impl FineSleep {
+    pub fn until(deadline: Instant) -> Self {
+        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+        FineSleep {
+            deadline,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+            registered: false,
+        }
+    }
+}
+
+impl Future for FineSleep {
+    type Output = ();
+
+    fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
+        if Instant::now() >= self.deadline {
+            return Poll::Ready(());
+        }
+        let timer = timer();
+        let mut d = timer.deadlines.lock();
+        let first = d
+            .heap
+            .peek()
+            .is_none_or(|Reverse((at, _))| self.deadline < *at);
+        match d.waiting.get_mut(&self.id) {
+            Some((_, waker)) => waker.clone_from(cx.waker()),
+            None => {
+                d.waiting
+                    .insert(self.id, (self.deadline, cx.waker().clone()));
+                d.heap.push(Reverse((self.deadline, self.id)));
+            }
+        }
+        drop(d);
+        self.registered = true;
+        if first {
+            timer.earlier.notify_one();
+        }
+        Poll::Pending
+    }
+}
+
+impl Drop for FineSleep {
+    fn drop(&mut self) {
+        if self.registered {
+            // Its heap entry is skipped when it comes up.
+            timer().deadlines.lock().waiting.remove(&self.id);
+        }
+    }
+}
+
+/// A period on the fine timer, like tokio's `interval` with `MissedTickBehavior::Skip`: the
+/// first tick one period from now, ticks missed while the module was busy are skipped, and the
+/// ticks stay on the grid of the start time.
+pub(crate) struct FineTicker {
+    next: Instant,
+    period: Duration,
+}
+
+impl FineTicker {
+    pub fn new(period: Duration) -> Self {
+        FineTicker {
+            next: Instant::now() + period,
+            period,
+        }
+    }
+
+    /// Waits for the next tick.
+    pub async fn tick(&mut self) {
+        FineSleep::until(self.next).await;
+        self.next = next_tick(self.next, self.period, Instant::now());
+    }
+}
+
+/// The first tick on the grid `last + k·period` (k ≥ 1) after `now`.
+fn next_tick(last: Instant, period: Duration, now: Instant) -> Instant {
+    let next = last + period;
+    if next > now || period.is_zero() {
+        return next;
+    }
+    let behind = now.duration_since(last).as_nanos();
+    let periods = behind / period.as_nanos() + 1;
+    last + period * u32::try_from(periods).unwrap_or(u32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn missed_ticks_are_skipped_and_the_grid_kept() {
+        let t0 = Instant::now();
+        let ms = Duration::from_millis(1);
+        assert_eq!(next_tick(t0, ms, t0), t0 + ms);
+        assert_eq!(next_tick(t0, ms, t0 + ms / 2), t0 + ms);
+        assert_eq!(next_tick(t0, ms, t0 + ms), t0 + 2 * ms);
+        assert_eq!(next_tick(t0, ms, t0 + ms * 5 + ms / 3), t0 + 6 * ms);
+    }
+
+    #[test]
+    fn only_runtimes_that_cannot_be_paused_use_the_fine_timer() {
+        let current = tokio::runtime::Builder::new_current_thread()
+            .build()
+            .unwrap();
+        assert!(
+            !current.block_on(async { fine_clock_here() }),
+            "a test clock may be paused"
+        );
+        let multi = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .build()
+            .unwrap();
+        assert!(multi.block_on(async { fine_clock_here() }));
+        let agent = std::thread::spawn(move || {
+            mark_agent_thread();
+            current.block_on(async { fine_clock_here() })
+        });
+        assert!(agent.join().unwrap(), "an agent's own thread");
+    }
+
+    #[test]
+    fn a_sleep_ends_at_its_deadline_not_before() {
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .build()
+            .unwrap();
+        for micros in [0, 300, 1500] {
+            let deadline = Instant::now() + Duration::from_micros(micros);
+            rt.block_on(FineSleep::until(deadline));
+            assert!(Instant::now() >= deadline);
+        }
+    }
+
+    #[test]
+    fn a_dropped_sleep_leaves_the_others_on_time() {
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_time()
+            .build()
+            .unwrap();
+        rt.block_on(async {
+            let soon = Instant::now() + Duration::from_millis(1);
+            let late = Instant::now() + Duration::from_secs(3600);
+            // The late sleep registers, then is dropped when the earlier one ends the select.
+            tokio::select! {
+                _ = FineSleep::until(late) => panic!("an hour passed"),
+                _ = FineSleep::until(soon) => {}
+            }
+            assert!(timer()
+                .deadlines
+                .lock()
+                .waiting
+                .values()
+                .all(|(at, _)| *at != late));
+        });
+    }
+}
