@@ -65,11 +65,10 @@ impl ThreadHold {
     }
 }
 
-/// The pure rule: the same poll seen in `samples` samples in a row is held; each held poll is
-/// reported once.
-#[derive(Debug)]
+/// The pure rule: the same poll seen in `SAMPLES_PER_HOLD + 1` samples in a row (so
+/// `held_ms` apart) is held; each held poll is reported once.
+#[derive(Debug, Default)]
 struct HoldWatch {
-    samples: u32,
     last: u64,
     seen: u32,
     reported: u64,
@@ -79,15 +78,6 @@ struct HoldWatch {
 const SAMPLES_PER_HOLD: u32 = 4;
 
 impl HoldWatch {
-    fn new() -> HoldWatch {
-        HoldWatch {
-            samples: SAMPLES_PER_HOLD + 1,
-            last: 0,
-            seen: 0,
-            reported: 0,
-        }
-    }
-
     /// Notes a sample; returns the holding slot the first time its poll counts as held.
     fn observe(&mut self, word: u64) -> Option<usize> {
         if word == 0 || word != self.last {
@@ -96,7 +86,7 @@ impl HoldWatch {
             return None;
         }
         self.seen += 1;
-        if self.seen < self.samples || self.reported == word {
+        if self.seen <= SAMPLES_PER_HOLD || self.reported == word {
             return None;
         }
         self.reported = word;
@@ -128,7 +118,7 @@ pub(crate) fn watch(watcher: HoldWatcher, supervisor: ActorRef<SupervisorMsg>) {
     tokio::spawn(async move {
         let mut ticks = tokio::time::interval(held / SAMPLES_PER_HOLD);
         ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-        let mut rule = HoldWatch::new();
+        let mut rule = HoldWatch::default();
         loop {
             ticks.tick().await;
             if !matches!(
@@ -168,7 +158,7 @@ mod tests {
 
     #[test]
     fn the_same_poll_in_enough_samples_in_a_row_is_held_once() {
-        let mut rule = HoldWatch::new();
+        let mut rule = HoldWatch::default();
         let w = word(7, 2);
         let seen: Vec<_> = (0..12).map(|_| rule.observe(w)).collect();
         let first = seen.iter().position(Option::is_some).unwrap();
@@ -179,7 +169,7 @@ mod tests {
 
     #[test]
     fn short_polls_idle_samples_and_new_polls_are_never_held() {
-        let mut rule = HoldWatch::new();
+        let mut rule = HoldWatch::default();
         for sequence in 0..100 {
             // A new poll of the same slot at every sample, with idle samples between.
             assert_eq!(rule.observe(word(sequence, 0)), None);
