@@ -24,6 +24,8 @@ pub struct MissionMemory {
     pub failed_action: Option<String>,
     /// What other agents asked of this one (team runs to answer, conditions watched).
     pub serve: crate::remote::Serve,
+    /// The runs this mission started on other agents' actions, and where they stand.
+    pub dispatch: crate::remote::DispatchMemory,
 }
 
 impl PropertyType for MissionMemory {
