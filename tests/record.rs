@@ -356,10 +356,21 @@ fn the_chunk_compression_is_chosen_on_the_command_line_or_in_the_section_and_che
         );
     }
     let out = petrel(dir.path(), &["check", "bad.ron"]);
-    assert!(text(&out.stderr).contains("bad.ron:2:"), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr).contains("bad.ron:2:"),
+        "{}",
+        text(&out.stderr)
+    );
     let out = petrel(
         dir.path(),
-        &["run", "demo.ron", "--record", "x.mcap", "--record-compression", "gzip"],
+        &[
+            "run",
+            "demo.ron",
+            "--record",
+            "x.mcap",
+            "--record-compression",
+            "gzip",
+        ],
     );
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("gzip"), "{}", text(&out.stderr));

@@ -11,8 +11,8 @@ use std::sync::Arc;
 
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions, Writer};
-use serde::{Deserialize, Serialize};
 use petrel_actors::{AnyValue, TypeInfo};
+use serde::{Deserialize, Serialize};
 
 use crate::encode::{Codec, Format, Stamp};
 use crate::select::{split_path, SplitPolicy};

@@ -6,13 +6,14 @@
 
 use std::sync::Arc;
 
-use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
 use petrel_actors::{Image, LaserScan, OccupancyGrid, Pose2};
 use serde::{Deserialize, Serialize};
 
-mod floats;
 mod schema;
+mod text;
+use text::BASE64;
+
 pub use schema::{
     grid_schema, laser_scan_schema, log_schema, pose_in_frame_schema, raw_image_schema,
 };
@@ -94,7 +95,7 @@ struct FoxLaserScan {
 }
 
 /// What [`laser_scan`] writes through serde: [`FoxLaserScan`]'s fields up to `end_angle`,
-/// borrowed; the ranges and what follows them are written by [`floats`].
+/// borrowed; the ranges and what follows them are written by [`text`].
 #[derive(Serialize)]
 struct LaserScanHead<'a> {
     timestamp: Time,
@@ -209,9 +210,9 @@ pub fn laser_scan(out: &mut Vec<u8>, scan: &LaserScan, stamp: Stamp, frame: &str
     debug_assert_eq!(out.last(), Some(&b'}'));
     out.pop();
     out.extend_from_slice(b",\"ranges\":");
-    floats::write_f64_array(out, &scan.ranges);
+    text::write_f64_array(out, &scan.ranges);
     out.extend_from_slice(b",\"intensities\":[],\"range_max\":");
-    floats::write_f64(out, scan.range_max);
+    text::write_f64(out, scan.range_max);
     out.push(b'}');
 }
 
