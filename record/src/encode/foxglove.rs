@@ -10,9 +10,9 @@ use base64::Engine;
 use petrel_actors::{Image, LaserScan, OccupancyGrid, Pose2};
 use serde::{Deserialize, Serialize};
 
+mod binary;
 mod schema;
-mod text;
-use text::BASE64;
+use binary::BASE64;
 
 pub use schema::{
     grid_schema, laser_scan_schema, log_schema, pose_in_frame_schema, raw_image_schema,
@@ -92,17 +92,6 @@ struct FoxLaserScan {
     /// petrel's maximum range (Foxglove has none).
     #[serde(default)]
     range_max: f64,
-}
-
-/// What [`laser_scan`] writes through serde: [`FoxLaserScan`]'s fields up to `end_angle`,
-/// borrowed; the ranges and what follows them are written by [`text`].
-#[derive(Serialize)]
-struct LaserScanHead<'a> {
-    timestamp: Time,
-    frame_id: &'a str,
-    pose: Pose,
-    start_angle: f64,
-    end_angle: f64,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -192,28 +181,22 @@ fn read<'a, T: Deserialize<'a>>(data: &'a [u8], what: &str) -> Result<T, String>
     serde_json::from_slice(data).map_err(|e| format!("expected a {what} JSON message: {e}"))
 }
 
-/// Encodes a scan as `foxglove.LaserScan`: the JSON serde writes for [`FoxLaserScan`], its
-/// ranges written straight from the scan (no copy; floats without serde's per-element path,
-/// the most costly part of a Foxglove recording's encoding).
+/// Encodes a scan as `foxglove.LaserScan`.
 pub fn laser_scan(out: &mut Vec<u8>, scan: &LaserScan, stamp: Stamp, frame: &str) {
     let n = scan.ranges.len();
     write(
         out,
-        &LaserScanHead {
+        &FoxLaserScan {
             timestamp: stamp.into(),
-            frame_id: frame,
+            frame_id: frame.into(),
             pose: Pose::of(&Pose2::default()),
             start_angle: scan.angle_min,
             end_angle: scan.angle_min + scan.angle_increment * n.saturating_sub(1) as f64,
+            ranges: scan.ranges.to_vec(),
+            intensities: Vec::new(),
+            range_max: scan.range_max,
         },
     );
-    debug_assert_eq!(out.last(), Some(&b'}'));
-    out.pop();
-    out.extend_from_slice(b",\"ranges\":");
-    text::write_f64_array(out, &scan.ranges);
-    out.extend_from_slice(b",\"intensities\":[],\"range_max\":");
-    text::write_f64(out, scan.range_max);
-    out.push(b'}');
 }
 
 /// Decodes a `foxglove.LaserScan`.
