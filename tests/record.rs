@@ -299,10 +299,11 @@ fn chunks(path: &Path) -> (Vec<String>, usize) {
         .iter()
         .map(|c| c.compression.clone())
         .collect();
-    let messages = mcap::MessageStream::new(&bytes)
-        .unwrap()
-        .map(|m| m.expect("a readable message"))
-        .count();
+    let mut messages = 0;
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        message.expect("a readable message");
+        messages += 1;
+    }
     (compressions, messages)
 }
 
