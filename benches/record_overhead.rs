@@ -2,7 +2,8 @@
 //! paused clock: 10 s of simulated time, as fast as the CPU allows) recording every property
 //! and queue to MCAP, against the same run without recording. CPU time of the whole process
 //! (the recorder's writer thread included), from `getrusage`. With `RECORD_OVERHEAD_THREADS`
-//! set, each run also prints its agent thread's CPU time and the process's.
+//! set, each run also prints its agent thread's CPU time, the process's and the file's size;
+//! `RECORD_COMPRESSION=lz4` records with LZ4 chunks instead of the default (zstd), to compare.
 
 mod common;
 
@@ -11,7 +12,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use petrel::actors::{Agent, ConfigFile, DEFAULT_STOP_TIMEOUT};
-use petrel::record::{Format, RecordOptions, Recorder};
+use petrel::record::{ChunkCompression, Format, RecordOptions, Recorder};
 
 /// One run; returns the CPU time it took.
 fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
@@ -31,6 +32,9 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
             Some((path, format)) => {
                 let mut options = RecordOptions::everything(path, format);
                 options.backlog = 1 << 22;
+                if let Ok(c) = std::env::var("RECORD_COMPRESSION") {
+                    options.compression = c.parse::<ChunkCompression>().unwrap();
+                }
                 let mut r = Recorder::start(options).unwrap();
                 r.attach("robot1", prepared.blackboard()).await.unwrap();
                 Some(r)
@@ -63,11 +67,13 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>) -> Duration {
     // runtime) and the rest of the process (the recorder's writer thread).
     if std::env::var_os("RECORD_OVERHEAD_THREADS").is_some() {
         let agent = common::thread_cpu_time() - thread_start;
+        let bytes = record.map(|(p, _)| std::fs::metadata(p).map_or(0, |m| m.len()));
         eprintln!(
-            "THREADS {:?} agent_us {} total_us {}",
+            "THREADS {:?} agent_us {} total_us {} file_bytes {}",
             record.map(|(_, f)| f),
             agent.as_micros(),
-            total.as_micros()
+            total.as_micros(),
+            bytes.unwrap_or(0)
         );
     }
     total

@@ -288,3 +288,92 @@ fn bad_recordings_and_mismatched_configs_are_errors_naming_what_is_wrong() {
         "{stderr}"
     );
 }
+
+/// The compression of every chunk of a recording, read by the `mcap` crate's own reader, and
+/// how many messages that reader decompresses from them.
+fn chunks(path: &Path) -> (Vec<String>, usize) {
+    let bytes = std::fs::read(path).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
+    let compressions = summary
+        .chunk_indexes
+        .iter()
+        .map(|c| c.compression.clone())
+        .collect();
+    let mut messages = 0;
+    for message in mcap::MessageStream::new(&bytes).unwrap() {
+        message.expect("a readable message");
+        messages += 1;
+    }
+    (compressions, messages)
+}
+
+#[test]
+fn the_chunk_compression_is_chosen_on_the_command_line_or_in_the_section_and_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("demo.ron"), DEMO).unwrap();
+    let record = |file: &str, extra: &[&str]| {
+        let mut args = vec!["run", "demo.ron", "--for", "300ms", "--no-remote"];
+        args.extend(["--record", file]);
+        args.extend(extra);
+        let out = petrel(dir.path(), &args);
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        chunks(&dir.path().join(file))
+    };
+    let (compressions, messages) = record("default.mcap", &[]);
+    assert!(messages > 0 && !compressions.is_empty());
+    assert!(compressions.iter().all(|c| c == "zstd"), "{compressions:?}");
+    let (compressions, messages) = record("lz4.mcap", &["--record-compression", "lz4"]);
+    assert!(messages > 0 && !compressions.is_empty());
+    assert!(compressions.iter().all(|c| c == "lz4"), "{compressions:?}");
+
+    let in_section = DEMO.replace(
+        r#"Agent(name: "d","#,
+        r#"Agent(name: "d", record: (file: "section.mcap", compression: "lz4"),"#,
+    );
+    std::fs::write(dir.path().join("section.ron"), in_section).unwrap();
+    let out = petrel(
+        dir.path(),
+        &["run", "section.ron", "--for", "300ms", "--no-remote"],
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let (compressions, _) = chunks(&dir.path().join("section.mcap"));
+    assert!(compressions.iter().all(|c| c == "lz4"), "{compressions:?}");
+
+    let bad = DEMO.replace(
+        r#"Agent(name: "d","#,
+        "Agent(name: \"d\",\n  record: (compression: \"gzip\"),",
+    );
+    std::fs::write(dir.path().join("bad.ron"), bad).unwrap();
+    for args in [
+        &["check", "bad.ron"][..],
+        &["run", "bad.ron", "--for", "100ms", "--no-remote"],
+    ] {
+        let out = petrel(dir.path(), args);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("compression: expected `zstd` or `lz4`, got `gzip`"),
+            "{args:?}: {stderr}"
+        );
+    }
+    let out = petrel(dir.path(), &["check", "bad.ron"]);
+    assert!(
+        text(&out.stderr).contains("bad.ron:2:"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = petrel(
+        dir.path(),
+        &[
+            "run",
+            "demo.ron",
+            "--record",
+            "x.mcap",
+            "--record-compression",
+            "gzip",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("gzip"), "{}", text(&out.stderr));
+    assert!(!dir.path().join("x.mcap").exists());
+}

@@ -19,7 +19,7 @@ pub struct TypeInfo {
     to_ron: fn(&AnyValue) -> Result<String, String>,
     short: fn(&AnyValue) -> String,
     to_dynamic: fn(&AnyValue) -> Result<ron::Value, String>,
-    to_json: fn(&AnyValue) -> Result<Vec<u8>, String>,
+    write_json: fn(&AnyValue, &mut Vec<u8>) -> Result<(), String>,
     from_json: fn(&[u8]) -> Result<AnyValue, String>,
 }
 
@@ -52,9 +52,9 @@ impl TypeInfo {
                 let text = ron::to_string(t).map_err(|e| e.to_string())?;
                 ron::from_str::<ron::Value>(&text).map_err(|e| e.to_string())
             },
-            to_json: |v| {
+            write_json: |v, out| {
                 let t = v.downcast_ref::<T>().ok_or("value has another type")?;
-                serde_json::to_vec(t).map_err(|e| e.to_string())
+                serde_json::to_writer(out, t).map_err(|e| e.to_string())
             },
             from_json: |bytes| {
                 serde_json::from_slice::<T>(bytes)
@@ -97,7 +97,15 @@ impl TypeInfo {
 
     /// A value of this type as JSON (the team wire format: any zenoh client can read it).
     pub fn to_json(&self, value: &AnyValue) -> Result<Vec<u8>, String> {
-        (self.to_json)(value)
+        let mut out = Vec::new();
+        (self.write_json)(value, &mut out)?;
+        Ok(out)
+    }
+
+    /// Appends a value of this type as JSON to `out` (a recorder reuses one buffer for all);
+    /// on an error, `out` may hold part of it.
+    pub fn write_json(&self, value: &AnyValue, out: &mut Vec<u8>) -> Result<(), String> {
+        (self.write_json)(value, out)
     }
 
     /// Reads a value of this type from JSON, or says why it is not one.

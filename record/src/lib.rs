@@ -15,7 +15,7 @@ mod taps;
 
 pub use encode::{Codec, Format, Kind, LogLevel, LogRecord, SchemaDef, Stamp};
 pub use select::{RecordOptions, Selection, SplitPolicy};
-pub use sink::{ChannelSpec, Entry, Sink, SinkReport};
+pub use sink::{ChannelSpec, ChunkCompression, Entry, Sink, SinkReport};
 pub mod read;
 pub mod recorder;
 

@@ -56,7 +56,12 @@ pub struct Recorder {
 impl Recorder {
     /// Creates the first file and starts the writer thread.
     pub fn start(options: RecordOptions) -> io::Result<Recorder> {
-        let mut sink = Sink::create(&options.path, options.format, options.split)?;
+        let mut sink = Sink::create_compressed(
+            &options.path,
+            options.format,
+            options.compression,
+            options.split,
+        )?;
         let path = options.path.clone();
         let tx = Backlog::new(options.backlog);
         let rx = tx.clone();

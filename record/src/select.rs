@@ -7,6 +7,7 @@ use glob::{MatchOptions, Pattern};
 use petrel_actors::config::RecordSection;
 
 use crate::encode::Format;
+use crate::sink::ChunkCompression;
 
 /// Smallest split size accepted, bytes: below it a file holds little more than its schemas.
 pub const MIN_SPLIT_BYTES: u64 = 64 * 1024;
@@ -20,6 +21,8 @@ pub struct RecordOptions {
     pub path: PathBuf,
     /// Message family of the standard types.
     pub format: Format,
+    /// How chunks are compressed.
+    pub compression: ChunkCompression,
     /// Which properties.
     pub selection: Selection,
     /// Whether the tracing log is recorded.
@@ -39,6 +42,7 @@ impl RecordOptions {
         RecordOptions {
             path: path.into(),
             format,
+            compression: ChunkCompression::default(),
             selection: Selection::everything(),
             log: true,
             split: SplitPolicy::default(),
@@ -46,12 +50,13 @@ impl RecordOptions {
         }
     }
 
-    /// Checks a `record:` section; `path` and `format` given on the command line win over the
-    /// section's. The error says which field is wrong and what was expected.
+    /// Checks a `record:` section; `path`, `format` and `compression` given on the command
+    /// line win over the section's. The error says which field is wrong and what was expected.
     pub fn from_section(
         section: &RecordSection,
         path: Option<&Path>,
         format: Option<Format>,
+        compression: Option<ChunkCompression>,
     ) -> Result<Self, String> {
         let path = match (path, &section.file) {
             (Some(p), _) => p.to_path_buf(),
@@ -68,11 +73,17 @@ impl RecordOptions {
             (None, Some(f)) => f.parse().map_err(|e| format!("record: format: {e}"))?,
             (None, None) => Format::default(),
         };
+        let compression = match (compression, &section.compression) {
+            (Some(c), _) => c,
+            (None, Some(c)) => c.parse().map_err(|e| format!("record: compression: {e}"))?,
+            (None, None) => ChunkCompression::default(),
+        };
         let selection = Selection::new(&section.include, &section.exclude)?;
         let split = SplitPolicy::new(section.max_bytes, section.max_duration_s)?;
         Ok(RecordOptions {
             path,
             format,
+            compression,
             selection,
             log: section.log,
             split,
@@ -306,16 +317,39 @@ mod tests {
     #[test]
     fn sections_are_checked() {
         let section = RecordSection::default();
-        let err = RecordOptions::from_section(&section, None, None).unwrap_err();
+        let err = RecordOptions::from_section(&section, None, None, None).unwrap_err();
         assert!(err.contains("file"), "{err}");
         let bad = RecordSection {
             file: Some("x.mcap".into()),
             format: Some("rosbag".into()),
             ..RecordSection::default()
         };
-        let err = RecordOptions::from_section(&bad, None, None).unwrap_err();
+        let err = RecordOptions::from_section(&bad, None, None, None).unwrap_err();
         assert!(err.contains("format") && err.contains("rosbag"), "{err}");
-        let ok = RecordOptions::from_section(&bad, None, Some(Format::Ros2)).unwrap();
+        let ok = RecordOptions::from_section(&bad, None, Some(Format::Ros2), None).unwrap();
         assert_eq!(ok.format, Format::Ros2);
+        assert_eq!(ok.compression, ChunkCompression::Zstd, "the default");
+        let bad = RecordSection {
+            file: Some("x.mcap".into()),
+            compression: Some("gzip".into()),
+            ..RecordSection::default()
+        };
+        let err = RecordOptions::from_section(&bad, None, None, None).unwrap_err();
+        assert!(
+            err.contains("compression") && err.contains("gzip") && err.contains("lz4"),
+            "{err}"
+        );
+        let lz4 = RecordSection {
+            compression: Some("lz4".into()),
+            ..bad.clone()
+        };
+        let ok = RecordOptions::from_section(&lz4, None, None, None).unwrap();
+        assert_eq!(ok.compression, ChunkCompression::Lz4);
+        let ok = RecordOptions::from_section(&bad, None, None, Some(ChunkCompression::Lz4));
+        assert_eq!(
+            ok.unwrap().compression,
+            ChunkCompression::Lz4,
+            "the command line wins over the section"
+        );
     }
 }

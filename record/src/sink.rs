@@ -1,5 +1,5 @@
-//! The writer core: recorded values → MCAP files through the `mcap` crate. Chunked, zstd
-//! compressed, indexed; files split by the [`SplitPolicy`]; drops counted per channel and
+//! The writer core: recorded values → MCAP files through the `mcap` crate. Chunked, zstd or
+//! LZ4 compressed ([`ChunkCompression`]), indexed; files split by the [`SplitPolicy`]; drops counted per channel and
 //! written in the summary. Synchronous: the recorder runs it on its own thread.
 
 use std::collections::{BTreeMap, HashMap};
@@ -12,6 +12,7 @@ use std::sync::Arc;
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Compression, WriteOptions, Writer};
 use petrel_actors::{AnyValue, TypeInfo};
+use serde::{Deserialize, Serialize};
 
 use crate::encode::{Codec, Format, Stamp};
 use crate::select::{split_path, SplitPolicy};
@@ -22,6 +23,41 @@ pub const CHUNK_BYTES: u64 = 512 * 1024;
 /// zstd level of the chunks: the fastest standard level, and cheaper in CPU than the `mcap`
 /// crate's LZ4 frames, whose XXH32 content checksum its options cannot turn off (BENCHMARKS.md).
 pub const ZSTD_LEVEL: u32 = 1;
+
+/// How chunks are compressed. Every MCAP reader (Foxglove, the `mcap` CLI, rosbag2) reads both.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ChunkCompression {
+    /// zstd level 1: less CPU on the robot and smaller files than LZ4 on petrel's recordings
+    /// (BENCHMARKS.md, 2026-11-24).
+    #[default]
+    Zstd,
+    /// LZ4 frames: faster for readers to decompress, more CPU to write (the `mcap` crate's
+    /// frames carry a content checksum) and larger files.
+    Lz4,
+}
+
+impl ChunkCompression {
+    /// The `mcap` crate's compression and level for it.
+    fn mcap(self) -> (Compression, u32) {
+        match self {
+            ChunkCompression::Zstd => (Compression::Zstd, ZSTD_LEVEL),
+            // Level 0: LZ4's default fast mode (levels ≥ 3 are the slow LZ4 HC).
+            ChunkCompression::Lz4 => (Compression::Lz4, 0),
+        }
+    }
+}
+
+impl std::str::FromStr for ChunkCompression {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "zstd" => Ok(ChunkCompression::Zstd),
+            "lz4" => Ok(ChunkCompression::Lz4),
+            other => Err(format!("expected `zstd` or `lz4`, got `{other}`")),
+        }
+    }
+}
 
 /// Name of the metadata record holding the drop counts (per topic) of a file.
 pub const DROPPED_METADATA: &str = "petrel.dropped";
@@ -120,6 +156,7 @@ impl Seek for Counted {
 pub struct Sink {
     base: PathBuf,
     format: Format,
+    compression: ChunkCompression,
     split: SplitPolicy,
     writer: Option<Writer<Counted>>,
     /// Bytes written to the current file.
@@ -132,15 +169,26 @@ pub struct Sink {
 }
 
 impl Sink {
-    /// Creates the first file (and its directory).
+    /// Creates the first file (and its directory), zstd-compressed.
     pub fn create(
         path: impl Into<PathBuf>,
         format: Format,
         split: SplitPolicy,
     ) -> io::Result<Self> {
+        Self::create_compressed(path, format, ChunkCompression::default(), split)
+    }
+
+    /// Creates the first file (and its directory), its chunks compressed with `compression`.
+    pub fn create_compressed(
+        path: impl Into<PathBuf>,
+        format: Format,
+        compression: ChunkCompression,
+        split: SplitPolicy,
+    ) -> io::Result<Self> {
         let mut sink = Sink {
             base: path.into(),
             format,
+            compression,
             split,
             writer: None,
             file_len: Arc::default(),
@@ -168,9 +216,10 @@ impl Sink {
             Format::Ros2 => "ros2",
             Format::Foxglove => "",
         };
+        let (compression, level) = self.compression.mcap();
         let mut writer = WriteOptions::new()
-            .compression(Some(Compression::Zstd))
-            .compression_level(ZSTD_LEVEL)
+            .compression(Some(compression))
+            .compression_level(level)
             // On the writer thread itself: zstd's worker threads would add CPU, not save it.
             .compression_threads(0)
             .chunk_size(Some(CHUNK_BYTES))

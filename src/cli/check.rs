@@ -145,7 +145,8 @@ pub(crate) fn check_all(
     if let Some(section) = &file.config.record {
         // The file may come from `--record`: only the rest of the section is checked here.
         let path = std::path::Path::new("petrel-check.mcap");
-        if let Err(e) = petrel_record::RecordOptions::from_section(section, Some(path), None) {
+        if let Err(e) = petrel_record::RecordOptions::from_section(section, Some(path), None, None)
+        {
             let field = e.split(':').nth(1).map(str::trim).unwrap_or("record");
             let needle = match file.config.record.as_ref().map(|_| field) {
                 Some(f) if !f.is_empty() && !f.contains(' ') => format!("{f}:"),

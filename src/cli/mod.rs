@@ -263,6 +263,10 @@ pub(crate) struct RunArgs {
     /// How the standard types are written: Foxglove schemas (JSON) or ROS 2 messages (CDR).
     #[arg(long, value_enum)]
     record_format: Option<record::RecordFormat>,
+    /// How the recording's chunks are compressed: zstd (default: less CPU and smaller files on
+    /// petrel's recordings) or lz4 (faster to read back).
+    #[arg(long, value_enum)]
+    record_compression: Option<record::RecordCompression>,
     /// Serve the web console here (`127.0.0.1:8080`; port 0: any free port, printed): modules,
     /// live properties and parameter editing, links, plan, contexts, events, log, map.
     #[arg(long, value_name = "ADDR")]

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use clap::ValueEnum;
 use petrel_actors::{ConfigFile, ModuleConfig};
 use petrel_record::info::Info;
-use petrel_record::{Format, RecordOptions, Recorder, Recording};
+use petrel_record::{ChunkCompression, Format, RecordOptions, Recorder, Recording};
 
 use super::EXIT_BAD_INPUT;
 
@@ -25,6 +25,24 @@ impl From<RecordFormat> for Format {
         match f {
             RecordFormat::Foxglove => Format::Foxglove,
             RecordFormat::Ros2 => Format::Ros2,
+        }
+    }
+}
+
+/// `--record-compression`.
+#[derive(Clone, Copy, ValueEnum)]
+pub(crate) enum RecordCompression {
+    /// zstd level 1 (default): the least CPU on the robot and the smallest files.
+    Zstd,
+    /// LZ4: faster for readers to decompress, more CPU to write, larger files.
+    Lz4,
+}
+
+impl From<RecordCompression> for ChunkCompression {
+    fn from(c: RecordCompression) -> Self {
+        match c {
+            RecordCompression::Zstd => ChunkCompression::Zstd,
+            RecordCompression::Lz4 => ChunkCompression::Lz4,
         }
     }
 }
@@ -88,6 +106,7 @@ pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) {
 pub(crate) fn options(
     file: Option<&PathBuf>,
     format: Option<RecordFormat>,
+    compression: Option<RecordCompression>,
     configs: &[ConfigFile],
 ) -> Result<Option<RecordOptions>, ExitCode> {
     let section = configs.iter().find_map(|c| c.config.record.clone());
@@ -95,7 +114,8 @@ pub(crate) fn options(
         return Ok(None);
     }
     let section = section.unwrap_or_default();
-    RecordOptions::from_section(&section, file.map(PathBuf::as_path), format.map(Into::into))
+    let (path, format) = (file.map(PathBuf::as_path), format.map(Into::into));
+    RecordOptions::from_section(&section, path, format, compression.map(Into::into))
         .map(Some)
         .map_err(|e| {
             eprintln!("error: {e}");

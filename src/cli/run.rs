@@ -98,7 +98,12 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let hangups = Hangups::listen();
     let workers = tokio::runtime::Handle::current().metrics().num_workers();
     tracing::info!(workers, "modules run on {workers} worker thread(s)");
-    let recording = match super::record::options(args.record.as_ref(), args.record_format, &files) {
+    let recording = match super::record::options(
+        args.record.as_ref(),
+        args.record_format,
+        args.record_compression,
+        &files,
+    ) {
         Ok(options) => options,
         Err(code) => return code,
     };

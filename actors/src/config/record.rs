@@ -13,6 +13,9 @@ pub struct RecordSection {
     /// `foxglove` (default) or `ros2`; `--record-format` overrides it.
     #[serde(default)]
     pub format: Option<String>,
+    /// Chunk compression, `zstd` (default) or `lz4`; `--record-compression` overrides it.
+    #[serde(default)]
+    pub compression: Option<String>,
     /// Properties and queues to record, as URL globs (`robot/out/*`, `**/laserScan`,
     /// `petrel://robot1/**`) where `*` matches within one segment and `**` across segments.
     #[serde(default = "everything")]
@@ -36,6 +39,7 @@ impl Default for RecordSection {
         RecordSection {
             file: None,
             format: None,
+            compression: None,
             include: everything(),
             exclude: Vec::new(),
             log: true,

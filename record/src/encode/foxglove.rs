@@ -6,12 +6,14 @@
 
 use std::sync::Arc;
 
-use base64::engine::general_purpose::STANDARD as BASE64;
 use base64::Engine;
 use petrel_actors::{Image, LaserScan, OccupancyGrid, Pose2};
 use serde::{Deserialize, Serialize};
 
+mod binary;
 mod schema;
+use binary::BASE64;
+
 pub use schema::{
     grid_schema, laser_scan_schema, log_schema, pose_in_frame_schema, raw_image_schema,
 };

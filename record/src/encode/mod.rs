@@ -233,7 +233,8 @@ impl Codec {
         Some(Codec { format, kind })
     }
 
-    /// Encodes `value` (of type `ti`) stamped `stamp` at the end of `out`.
+    /// Encodes `value` (of type `ti`) stamped `stamp` at the end of `out` (on an error, `out`
+    /// may hold part of it: callers clear it before the next message).
     pub fn encode(
         &self,
         ti: &TypeInfo,
@@ -279,16 +280,13 @@ impl Codec {
                     false => ros2::log(out, l),
                 }
             }
-            Kind::Json { wrapped } => {
-                let json = ti.to_json(value)?;
-                if wrapped {
-                    out.extend_from_slice(b"{\"value\":");
-                    out.extend_from_slice(&json);
-                    out.push(b'}');
-                } else {
-                    out.extend_from_slice(&json);
-                }
+            // Straight into the message buffer: no JSON of its own per value.
+            Kind::Json { wrapped: true } => {
+                out.extend_from_slice(b"{\"value\":");
+                ti.write_json(value, out)?;
+                out.push(b'}');
             }
+            Kind::Json { wrapped: false } => ti.write_json(value, out)?,
         }
         Ok(())
     }
