@@ -48,7 +48,7 @@ pub struct SearchParams {
     /// mapper wants before it believes a victim), 1..=255.
     pub min_views: u8,
     /// A cell beside unknown space counts only from this near, metres (default 3.0: half a metre
-    /// inside the laser's 3.5 m); `min_range < edge_range <= max_range`, `max_range` = no
+    /// inside the laser's 3.5 m); more than `min_range`; `max_range` or more makes no
     /// difference.
     pub edge_range: f64,
 }
@@ -85,12 +85,13 @@ impl SearchParams {
                 ),
             });
         }
-        if !(self.edge_range > self.min_range && self.edge_range <= self.max_range) {
+        // Not capped by max_range: at or beyond it, it makes no difference.
+        if !(self.edge_range > self.min_range) {
             return Err(ParamError {
                 param: "edge_range".into(),
                 message: format!(
-                    "expected min_range ({}) < edge_range <= max_range ({}), got {}",
-                    self.min_range, self.max_range, self.edge_range
+                    "expected more than min_range ({}), got {}",
+                    self.min_range, self.edge_range
                 ),
             });
         }

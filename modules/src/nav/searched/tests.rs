@@ -184,7 +184,7 @@ fn bad_parameters_are_refused_by_name() {
         ..SearchParams::default()
     };
     assert_eq!(bad(views), "min_views");
-    for edge_range in [1.0, 5.0] {
+    for edge_range in [0.5, 1.0, f64::NAN] {
         assert_eq!(
             bad(SearchParams {
                 edge_range,
