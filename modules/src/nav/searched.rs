@@ -86,7 +86,7 @@ impl SearchParams {
             });
         }
         // Not capped by max_range: at or beyond it, it makes no difference.
-        if !(self.edge_range > self.min_range) {
+        if self.edge_range.is_nan() || self.edge_range <= self.min_range {
             return Err(ParamError {
                 param: "edge_range".into(),
                 message: format!(
