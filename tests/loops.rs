@@ -72,7 +72,22 @@ fn a_module_that_wakes_itself_starves_neither_the_others_nor_the_stop_and_is_nam
         "the periodic module ran: {summary}"
     );
     let reports = lines_with(&log, "re-triggers itself");
-    assert_eq!(reports.len(), 1, "one report, for `s` only: {log}");
+    // Its steps may average over the step budget on a loaded machine, so the runtime may move
+    // it off the agent's thread (a restart, with a warning saying so), after which the new
+    // instance names the loop again.
+    let moves = lines_with(&log, "moved off the agent's thread")
+        .iter()
+        .filter(|l| l.ends_with("module=s"))
+        .count();
+    assert_eq!(
+        reports.len(),
+        1 + moves,
+        "one report per instance, for `s` only: {log}"
+    );
+    assert!(
+        reports.iter().all(|r| r.contains("module `s` ")),
+        "for `s` only: {log}"
+    );
     assert!(
         reports[0].contains(
             "module `s` re-triggers itself without progress through s/out/value → s/in/value"

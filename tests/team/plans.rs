@@ -184,6 +184,39 @@ async fn a_robot_mission_restarted_mid_action_still_answers_the_coordinator() {
     }
 }
 
+/// A coordinator's mission restarted while a robot carries out its action (a crash, or a move
+/// off its agent's thread) still hears that run's answer: the runs it started are kept in its
+/// `state/memory`, and the running ones are asked again.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_coordinator_mission_restarted_mid_action_still_hears_the_robot_finish() {
+    let t = team_plan("plan-boss-restart", "r1#search_west\n").await;
+    let running = t.boss.handle::<String>("mission/out/running").await;
+    wait_for(&running, "r1's search running", |r| r == "r1#search_west").await;
+    let memory = t.boss.handle::<MissionMemory>("mission/state/memory").await;
+    wait_for(&memory, "the run kept in the boss's memory", |m| {
+        m.running.contains_key("r1#search_west")
+    })
+    .await;
+    t.boss.agent.modules().restart("mission").await.unwrap();
+    t.r1.agent
+        .blackboard()
+        .set("probe/in/value", 1.0)
+        .await
+        .unwrap();
+    let result = t.boss.handle::<String>("mission/out/result").await;
+    wait_for(&result, "the plan's goal", |r| r == "goal").await;
+    let memory = t
+        .boss
+        .handle::<MissionMemory>("mission/state/memory")
+        .await
+        .get();
+    let search = &memory.actions["r1#search_west"];
+    assert_eq!((search.starts, search.ends), (1, 1), "{memory:?}");
+    for m in [t.r2, t.r1, t.boss] {
+        m.stop().await;
+    }
+}
+
 /// Bindings of a robot running its own plan: `goto_door` until the probe reads 1 or more,
 /// `enter` sets it to 42; `atDoor` (watched by the other robot) is probe >= 1.
 const OWN_PLAN_BINDINGS: &str = r#""params/actions": {

@@ -11,6 +11,12 @@
 //! what lies behind them; an occupied cell in view is itself searched, its face was seen).
 //! One glimpse is not a search: a detector confirms a victim over several frames, so a cell
 //! counts as searched once it was in view in `min_views` frames.
+//! A cell at the edge of unknown space (beside a cell the navigation map does not know yet)
+//! counts only from nearer than `edge_range`: the laser reaches about as far as the camera, so
+//! the floor at the far edge of what a scan mapped is in view as soon as it is mapped, and
+//! counting it there would leave the unknown space beyond it no frontier to explore. Seen from
+//! nearer, where the laser would have mapped what lies beyond if it could, it counts: space no
+//! scan can map (behind glass, outside the walls) does not keep a search going forever.
 //! Frames too dark or too blurred to detect anything are not counted by the module that
 //! feeds this map ([`crate::robot`]'s `nav.searched`), which knows the image quality.
 //!
@@ -41,6 +47,10 @@ pub struct SearchParams {
     /// Frames a cell must be in view in to be searched (default 3, the sightings a victim
     /// mapper wants before it believes a victim), 1..=255.
     pub min_views: u8,
+    /// A cell beside unknown space counts only from this near, metres (default 3.0: half a metre
+    /// inside the laser's 3.5 m); `min_range < edge_range <= max_range`, `max_range` = no
+    /// difference.
+    pub edge_range: f64,
 }
 
 impl Default for SearchParams {
@@ -51,6 +61,7 @@ impl Default for SearchParams {
             max_range: 3.5,
             occupied_threshold: 50,
             min_views: 3,
+            edge_range: 3.0,
         }
     }
 }
@@ -71,6 +82,15 @@ impl SearchParams {
                 message: format!(
                     "expected 0 <= min_range < max_range ({}), got {}",
                     self.max_range, self.min_range
+                ),
+            });
+        }
+        if !(self.edge_range > self.min_range && self.edge_range <= self.max_range) {
+            return Err(ParamError {
+                param: "edge_range".into(),
+                message: format!(
+                    "expected min_range ({}) < edge_range <= max_range ({}), got {}",
+                    self.min_range, self.max_range, self.edge_range
                 ),
             });
         }
@@ -144,6 +164,12 @@ impl SearchedMap {
             let v = map.data[(r * w + c) as usize];
             v < 0 || v >= p.occupied_threshold
         };
+        let borders_unknown = |c: i64, r: i64| {
+            [(1, 0), (-1, 0), (0, 1), (0, -1)].iter().any(|(dc, dr)| {
+                let (nc, nr) = (c + dc, r + dr);
+                nc >= 0 && nr >= 0 && nc < w && nr < h && map.data[(nr * w + nc) as usize] < 0
+            })
+        };
         let camera_cell = ((cx / res).floor() as i64, (cy / res).floor() as i64);
         let reach = (p.max_range / res).ceil() as i64 + 1;
         let mut added = 0;
@@ -156,6 +182,9 @@ impl SearchedMap {
                 let (dx, dy) = ((c as f64 + 0.5) * res - cx, (r as f64 + 0.5) * res - cy);
                 let d = dx.hypot(dy);
                 if d < p.min_range || d > p.max_range || d == 0.0 {
+                    continue;
+                }
+                if d > p.edge_range && borders_unknown(c, r) {
                     continue;
                 }
                 let off = (dy.atan2(dx) - heading + std::f64::consts::PI)

@@ -16,6 +16,7 @@ pub struct SearchedModule {
     fov_deg: Input<f64>,
     min_range: Input<f64>,
     max_range: Input<f64>,
+    edge_range: Input<f64>,
     min_views: Input<i64>,
     min_brightness: Input<f64>,
     max_brightness: Input<f64>,
@@ -42,6 +43,7 @@ impl Module for SearchedModule {
             fov_deg: ports.param_in("params/fov_deg", 50.0, Range::new(1.0, 179.0), "field of view that counts, degrees: the camera's less the margin a victim at the image edge needs"),
             min_range: ports.param_in("params/min_range", 1.0, Range::new(0.0, 20.0), "closer floor is not searched (a victim overflows the image), m"),
             max_range: ports.param_in("params/max_range", 3.5, Range::new(0.1, 50.0), "farther floor is not searched (a victim is too small to resolve), m"),
+            edge_range: ports.param_in("params/edge_range", 3.0, Range::new(0.0, 50.0), "floor beside unknown space is searched only from this near, m (the laser reaches about as far as the camera: the far edge of a scan is not searched yet); more than min_range, at most max_range"),
             min_views: ports.param_in("params/min_views", 3, Range::new(1.0, 255.0), "frames a cell must be in view in to be searched"),
             min_brightness: ports.param_in("params/min_brightness", 0.1, Range::new(0.0, 1.0), "darker frames search nothing (too little contrast left to detect), 0..1"),
             max_brightness: ports.param_in("params/max_brightness", 0.95, Range::new(0.0, 1.0), "brighter frames search nothing (saturated), 0..1"),
@@ -102,6 +104,7 @@ impl SearchedModule {
             fov: self.fov_deg.value().to_radians(),
             min_range: self.min_range.value(),
             max_range: self.max_range.value(),
+            edge_range: self.edge_range.value(),
             min_views: u8::try_from(min_views).map_err(|_| {
                 anyhow::anyhow!("invalid parameter `params/min_views`: expected 1..=255 frames, got {min_views}")
             })?,

@@ -106,6 +106,17 @@ impl Module for VictimMapper {
             self.frame_version = Some(frame.version);
             core.next_frame();
             for d in &frame.value.0 {
+                // Why a victim was, or was not, confirmed: each sighting and the pose it is
+                // placed from.
+                tracing::debug!(
+                    x = pose.x(),
+                    y = pose.y(),
+                    theta = pose.theta(),
+                    bearing = d.bearing,
+                    range = d.range,
+                    confidence = d.confidence,
+                    "sighting"
+                );
                 if let Some(p) = core.add(pose, d) {
                     petrel_actors::outln!(
                         "[{}] victim seen at ({:.2}, {:.2})",

@@ -27,6 +27,8 @@ pub struct MissionMemory {
     pub failed_action: Option<String>,
     /// What other agents asked of this one (team runs to answer, conditions watched).
     pub serve: crate::remote::Serve,
+    /// The runs this mission started on other agents' actions, and where they stand.
+    pub dispatch: crate::remote::DispatchMemory,
 }
 
 impl PropertyType for MissionMemory {
@@ -42,16 +44,28 @@ impl Clone for MissionMemory {
             actions: self.actions.clone(),
             failed_action: self.failed_action.clone(),
             serve: self.serve.clone(),
+            dispatch: self.dispatch.clone(),
         }
     }
 
     fn clone_from(&mut self, source: &Self) {
-        self.plan.clone_from(&source.plan);
-        self.marking.clone_from(&source.marking);
-        clone_map_from(&mut self.running, &source.running);
-        clone_map_from(&mut self.actions, &source.actions);
-        self.failed_action.clone_from(&source.failed_action);
-        self.serve.clone_from(&source.serve);
+        // Destructured so that a field added later cannot be forgotten here.
+        let MissionMemory {
+            plan,
+            marking,
+            running,
+            actions,
+            failed_action,
+            serve,
+            dispatch,
+        } = source;
+        self.plan.clone_from(plan);
+        self.marking.clone_from(marking);
+        clone_map_from(&mut self.running, running);
+        clone_map_from(&mut self.actions, actions);
+        self.failed_action.clone_from(failed_action);
+        self.serve.clone_from(serve);
+        self.dispatch.clone_from(dispatch);
     }
 }
 

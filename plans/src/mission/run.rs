@@ -177,6 +177,7 @@ impl Run {
             }
         }
         self.memory.serve.clone_from(&self.team.serve);
+        self.memory.dispatch = self.team.dispatch.memory();
         if *out.get() == self.memory {
             return;
         }
@@ -193,7 +194,8 @@ impl Run {
     }
 
     /// Goes on from `memory` (a restart, or a snapshot being resumed): the marking, the
-    /// running actions' start times, what they replaced and their `held` windows.
+    /// running actions' start times, what they replaced and their `held` windows, and the
+    /// team runs this mission serves or started.
     pub fn resume(&mut self, memory: &MissionMemory) -> Result<(), String> {
         self.state.restore(&self.plan, &memory.marking)?;
         for (name, ra) in &memory.running {
@@ -226,6 +228,8 @@ impl Run {
         // The runs a coordinator started here are still answered, and watchers get every
         // value again.
         self.team.serve = memory.serve.clone();
+        // The runs started on other robots keep their numbers, and are asked again.
+        self.team.dispatch.restore(&memory.dispatch);
         Ok(())
     }
 }

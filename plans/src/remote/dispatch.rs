@@ -2,12 +2,14 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use serde::{Deserialize, Serialize};
+
 use super::protocol::{call_name, Outgoing, TeamMsg};
 use super::robot_of;
 use crate::label::CallKind;
 
 /// Where one remote action stands, as the coordinator knows it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 enum State {
     /// Not started, or ended / interrupted / failed by the plan.
     Idle,
@@ -24,6 +26,15 @@ struct RemoteAction {
     /// Starts so far: the run answers must name.
     run: u64,
     state: State,
+}
+
+/// What a restarted coordinator needs to go on (kept in the mission's `state/memory`): per
+/// remote action, its last run and where it stands. Without it, a restarted mission would
+/// number its runs from 0 again and drop the answer to the run its predecessor started.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DispatchMemory {
+    runs: BTreeMap<String, (u64, State)>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -157,6 +168,45 @@ impl Dispatch {
             (false, true) => {
                 if a.state == State::Running {
                     a.state = State::Failed;
+                }
+            }
+        }
+    }
+
+    /// What [`Dispatch::restore`] needs after a restart.
+    pub fn memory(&self) -> DispatchMemory {
+        let runs = self
+            .actions
+            .iter()
+            .filter(|(_, a)| a.run > 0)
+            .map(|(full, a)| (full.clone(), (a.run, a.state)))
+            .collect();
+        DispatchMemory { runs }
+    }
+
+    /// Goes on from a predecessor's [`Dispatch::memory`]: its runs keep their numbers, so
+    /// their answers are heard. Each action still running is asked again (its start repeated
+    /// with the same run, sent when its robot is seen): an answer that came while no mission
+    /// read the inbox is sent again, and a robot ignores a start it already carries out.
+    pub fn restore(&mut self, memory: &DispatchMemory) {
+        for (full, &(run, state)) in &memory.runs {
+            let Some(a) = self.actions.get_mut(full) else {
+                continue;
+            };
+            (a.run, a.state) = (run, state);
+            if state == State::Running {
+                let msg = TeamMsg::Call {
+                    action: a.local.clone(),
+                    call: call_name(CallKind::Start).to_string(),
+                    run,
+                };
+                let robot = self.robots.entry(a.robot.clone()).or_default();
+                match robot.present {
+                    true => self.outgoing.push(Outgoing {
+                        to: format!("{}/{}", a.robot, self.executor),
+                        body: msg.encode(),
+                    }),
+                    false => robot.held.push(msg),
                 }
             }
         }

@@ -15,7 +15,7 @@ mod dispatch;
 pub mod protocol;
 mod serve;
 
-pub use dispatch::{Departure, Dispatch};
+pub use dispatch::{Departure, Dispatch, DispatchMemory};
 pub use protocol::{Outgoing, TeamMsg};
 pub use serve::Serve;
 

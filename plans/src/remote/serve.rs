@@ -70,6 +70,14 @@ impl Serve {
                 let kind = parse_call(&call)?;
                 match kind {
                     CallKind::Start | CallKind::Resume => {
+                        let same = |r: &&mut Run| r.run == run && r.from == from;
+                        if let Some(r) = self.runs.get_mut(&action).filter(same) {
+                            // Messages arrive at least once: a start repeated (a restarted
+                            // coordinator asking again) is not carried out twice, but its
+                            // answer, if one was sent, goes again.
+                            r.answered = false;
+                            return Ok(None);
+                        }
                         let r = Run {
                             from: from.to_string(),
                             run,

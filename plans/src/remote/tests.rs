@@ -221,6 +221,79 @@ fn an_executor_restored_from_its_memory_answers_the_runs_it_had_and_resends_watc
     );
 }
 
+/// What `state/memory` keeps of a coordinator: a restarted mission hears the answer to the run
+/// its predecessor started, and asks the robot again once it sees it (an answer sent while no
+/// mission read the inbox is not lost); finished and idle actions are not asked.
+#[test]
+fn a_dispatch_restored_from_its_memory_hears_its_runs_and_asks_the_running_ones_again() {
+    let actions = ["r1#go", "r1#look", "r2#wait"];
+    let mut d = Dispatch::new("boss", "ex", actions, []);
+    d.members(["r1", "r2"]);
+    d.call("r1#go", CallKind::Start);
+    d.call("r1#go", CallKind::Interrupt);
+    d.call("r1#go", CallKind::Start);
+    d.call("r1#look", CallKind::Start);
+    let done = |action: &str, run| TeamMsg::Done {
+        action: action.into(),
+        run,
+        failed: false,
+    };
+    d.receive("r1/ex", &done("look", 1).encode()).unwrap();
+    let text = ron::to_string(&d.memory()).unwrap();
+    let memory: DispatchMemory = ron::from_str(&text).unwrap();
+    let mut restored = Dispatch::new("boss", "ex", actions, []);
+    restored.restore(&memory);
+    assert!(restored.finished("r1#look") && !restored.finished("r1#go"));
+    assert!(restored.take_outgoing().is_empty(), "r1 is not seen yet");
+    restored.members(["r1", "r2"]);
+    assert_eq!(
+        bodies(&restored.take_outgoing()),
+        [("r1/ex".to_string(), call("go", "start", 2))],
+        "only the running run is asked again, with its number"
+    );
+    restored.receive("r1/ex", &done("go", 2).encode()).unwrap();
+    assert!(restored.finished("r1#go"));
+    // A fresh dispatch (no memory) drops that answer: the run is not one it started.
+    let mut fresh = Dispatch::new("boss", "ex", actions, []);
+    fresh.members(["r1", "r2"]);
+    fresh.receive("r1/ex", &done("go", 2).encode()).unwrap();
+    assert!(!fresh.finished("r1#go"));
+}
+
+/// Messages arrive at least once: a start repeated for the run being carried out is not
+/// carried out again, and the answer already sent for it goes again.
+#[test]
+fn an_executor_repeats_its_answer_to_a_repeated_start_and_starts_nothing() {
+    let mut s = Serve::new();
+    let start = call("go", "start", 3).encode();
+    assert_eq!(
+        s.receive("boss/m", &start).unwrap(),
+        Some(("go".to_string(), CallKind::Start))
+    );
+    s.poll(|_| (true, false), |_| None);
+    assert_eq!(s.take_outgoing().len(), 1, "the answer went out");
+    s.poll(|_| (true, false), |_| None);
+    assert!(s.take_outgoing().is_empty(), "once per run");
+    assert_eq!(
+        s.receive("boss/m", &start).unwrap(),
+        None,
+        "not started again"
+    );
+    s.poll(|_| (true, false), |_| None);
+    let again = TeamMsg::Done {
+        action: "go".into(),
+        run: 3,
+        failed: false,
+    };
+    assert_eq!(bodies(&s.take_outgoing()), [("boss/m".to_string(), again)]);
+    // A new run of it is a start.
+    assert_eq!(
+        s.receive("boss/m", &call("go", "start", 4).encode())
+            .unwrap(),
+        Some(("go".to_string(), CallKind::Start))
+    );
+}
+
 #[test]
 fn an_executor_drops_the_actions_of_a_coordinator_that_left() {
     let mut s = Serve::new();

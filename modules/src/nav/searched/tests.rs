@@ -20,6 +20,7 @@ fn params(min_range: f64, max_range: f64) -> SearchParams {
         min_range,
         max_range,
         min_views: 1,
+        edge_range: max_range,
         ..SearchParams::default()
     }
 }
@@ -143,6 +144,31 @@ fn a_cell_is_searched_only_after_enough_views() {
 }
 
 #[test]
+fn floor_beside_unknown_space_counts_only_from_near() {
+    // Unknown space from column 4 on; the camera looks along row 2.
+    let edge = map(&["....????"; 5], (0.0, 0.0));
+    let p = SearchParams {
+        edge_range: 2.5,
+        ..params(1.0, 4.5)
+    };
+    let mut s = SearchedMap::new(p.clone()).unwrap();
+    s.look(Pose2::new(0.5, 2.5, 0.0), &edge);
+    let got = cells(&s);
+    assert!(got.contains(&(2, 2)), "2 m away, not beside it: {got:?}");
+    assert!(
+        !got.contains(&(3, 2)),
+        "3 m away beside the unknown: {got:?}"
+    );
+    // From a metre nearer it counts...
+    let mut near = SearchedMap::new(p).unwrap();
+    near.look(Pose2::new(1.5, 2.5, 0.0), &edge);
+    assert!(cells(&near).contains(&(3, 2)));
+    // ...and from afar once the laser mapped past it.
+    s.look(Pose2::new(0.5, 2.5, 0.0), &open(8, 5));
+    assert!(cells(&s).contains(&(3, 2)));
+}
+
+#[test]
 fn bad_parameters_are_refused_by_name() {
     let bad = |p: SearchParams| SearchedMap::new(p).unwrap_err().param;
     assert_eq!(bad(params(3.0, 2.0)), "min_range");
@@ -158,4 +184,13 @@ fn bad_parameters_are_refused_by_name() {
         ..SearchParams::default()
     };
     assert_eq!(bad(views), "min_views");
+    for edge_range in [1.0, 5.0] {
+        assert_eq!(
+            bad(SearchParams {
+                edge_range,
+                ..params(1.0, 4.5)
+            }),
+            "edge_range"
+        );
+    }
 }
