@@ -181,6 +181,13 @@ impl Cell {
     }
 
     pub fn write(&self, value: AnyValue, written: Instant) {
+        // The previous value (maybe a large image) is freed outside the lock.
+        drop(self.replace(value, written));
+    }
+
+    /// Like [`write`](Self::write), returning the value it replaced (for a writer that reuses
+    /// it once no reader holds it).
+    pub fn replace(&self, value: AnyValue, written: Instant) -> AnyValue {
         let old = {
             let mut slot = self.slot.write();
             slot.version += 1;
@@ -188,11 +195,10 @@ impl Cell {
             slot.written = written;
             std::mem::replace(&mut slot.value, value)
         };
-        // The previous value (maybe a large image) is freed outside the lock.
-        drop(old);
         for (watcher, cause) in self.watchers.load().iter() {
             watcher.raise(*cause);
         }
+        old
     }
 
     fn add_watcher(&self, signal: &Arc<Signal>, cause: u8) {
@@ -267,6 +273,12 @@ impl Endpoint {
     #[inline]
     pub fn write_at(&self, value: AnyValue, written: Instant) {
         self.resolved.load().write(value, written)
+    }
+
+    /// Writes a value stamped `written` and returns the value it replaced.
+    #[inline]
+    pub fn replace_at(&self, value: AnyValue, written: Instant) -> AnyValue {
+        self.resolved.load().replace(value, written)
     }
 
     /// The version of the value seen through this endpoint, without locking it.

@@ -139,6 +139,18 @@ impl<T: PropertyType> Output<T> {
         }
         self.ep.write_at(Arc::new(value), self.clock.now())
     }
+
+    /// Publishes an already shared value like [`set`](Self::set) and returns the value it
+    /// replaced. A writer that publishes a large value often can keep the returned one and,
+    /// once no reader holds it ([`Arc::get_mut`]), fill it in place for its next write
+    /// instead of allocating a new value (copy-on-write with two buffers).
+    pub fn swap(&self, value: Arc<T>) -> Arc<T> {
+        if tracing::enabled!(tracing::Level::TRACE) {
+            let shown = self.ep.type_info().short(&(value.clone() as AnyValue));
+            tracing::trace!(property = %self.ep.key, value = %shown, "write");
+        }
+        downcast(self.ep.replace_at(value, self.clock.now()))
+    }
 }
 
 read_methods!(Output);
@@ -220,6 +232,13 @@ impl AnyHandle {
 
     /// Writes a value, which must have the property's type.
     pub fn set(&self, value: AnyValue) -> Result<(), crate::BlackboardError> {
+        self.set_at(value, Instant::now())
+    }
+
+    /// Like [`set`](Self::set), with the value stamped `written` rather than with a clock read:
+    /// for a module that writes through untyped handles during a step, so that those writes
+    /// carry the step's time ([`Context::now`](crate::Context::now)) like its typed outputs'.
+    pub fn set_at(&self, value: AnyValue, written: Instant) -> Result<(), crate::BlackboardError> {
         if !self.ep.type_info().is_type_of(value.as_ref()) {
             return Err(crate::BlackboardError::BadValue {
                 key: self.ep.key.to_string(),
@@ -227,7 +246,7 @@ impl AnyHandle {
                 reason: "got a value of another type".into(),
             });
         }
-        self.ep.write(value);
+        self.ep.write_at(value, written);
         Ok(())
     }
 

@@ -98,10 +98,18 @@ pub fn scheduler() -> String {
     std::env::var("PETREL_BENCH_SCHEDULER").unwrap_or_default()
 }
 
-/// Agent config `text` (which starts `Agent(`) with the scheduler [`scheduler`] names, if any.
+/// Agent config `text` (which starts `Agent(`) with the scheduler [`scheduler`] names, if any,
+/// and the step budget `PETREL_BENCH_STEP_BUDGET` gives, if set (e.g. `(mean_us: 1000, steps:
+/// 20, held_ms: 0)` to measure the agent without its held-thread watcher).
 pub fn scheduled(text: &str) -> String {
+    let text = match std::env::var("PETREL_BENCH_STEP_BUDGET") {
+        Ok(budget) if !budget.is_empty() => {
+            text.replacen("Agent(", &format!("Agent(step_budget: {budget}, "), 1)
+        }
+        _ => text.to_string(),
+    };
     match scheduler().as_str() {
-        "" => text.to_string(),
+        "" => text,
         name => text.replacen("Agent(", &format!("Agent(scheduler: {name}, "), 1),
     }
 }

@@ -247,6 +247,12 @@ impl PlanState {
         key
     }
 
+    /// Like [`save`](PlanState::save), appending to `out` (a caller that saves often reuses
+    /// one buffer).
+    pub fn save_into(&self, out: &mut Vec<u32>) {
+        self.encode(out);
+    }
+
     /// Sets the marking saved by [`save`](PlanState::save) from a state of the same plan.
     /// A list that does not fit the plan (another plan, an edited snapshot) is refused and
     /// the state left unchanged.

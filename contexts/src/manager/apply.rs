@@ -68,7 +68,8 @@ impl ContextManager {
                     let (old, new) = (info.short(&old), info.short(&new));
                     tracing::debug!(%context, %target, %old, %new, "context updates");
                 }
-                handle.set(new)?;
+                // Stamped with the step's time, like the manager's own outputs: no clock read.
+                handle.set_at(new, ctx.now())?;
             }
             Action::Restore(target) => {
                 if let Some(original) = self.original_values.remove(target) {
@@ -76,7 +77,7 @@ impl ContextManager {
                     if !ctx.in_a_loop() {
                         tracing::info!(%target, value = %handle.type_info().short(&original), "context restores");
                     }
-                    handle.set(original)?;
+                    handle.set_at(original, ctx.now())?;
                 }
             }
             Action::Release(target) => {

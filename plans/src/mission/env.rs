@@ -18,6 +18,10 @@ pub(crate) struct MissionEnv<'a> {
     /// The mission clock now, as an instant and in seconds.
     pub now: Instant,
     pub secs: f64,
+    /// The mission step's time ([`Context::now`](petrel_actors::Context::now)): the stamp of
+    /// every value the step writes through its bindings, like its own outputs' (a step's
+    /// writes carry the step's time, and the clock is read once per step).
+    pub stamp: Instant,
     pub memory: &'a mut MissionMemory,
     /// Other robots' actions and conditions (`robot#...`): carried out over the team.
     pub dispatch: &'a mut Dispatch,
@@ -25,16 +29,16 @@ pub(crate) struct MissionEnv<'a> {
 
 impl BoundAction {
     /// `start` / `resume`: remember what `set` replaces (once), write it, enable the modules,
-    /// ask for the action's links (into `relinks`).
-    pub fn activate(&mut self, relinks: &mut Vec<Relink>) {
+    /// ask for the action's links (into `relinks`). Writes are stamped `stamp`.
+    pub fn activate(&mut self, relinks: &mut Vec<Relink>, stamp: Instant) {
         if self.saved.is_none() {
             self.saved = Some(self.set.iter().map(|(h, _)| h.value()).collect());
         }
         for (h, v) in &self.set {
-            write(h, v.clone());
+            write(h, v.clone(), stamp);
         }
         for e in &self.enable {
-            write(e, std::sync::Arc::new(true));
+            write(e, std::sync::Arc::new(true), stamp);
         }
         relinks.extend(self.links.iter().map(|(input, source, _)| Relink {
             input: input.clone(),
@@ -43,10 +47,10 @@ impl BoundAction {
     }
 
     /// `end` / `interrupt` / `fail`: disable the modules, put back what `set` replaced and
-    /// (into `relinks`) the links `link` changed.
-    pub fn deactivate(&mut self, relinks: &mut Vec<Relink>) {
+    /// (into `relinks`) the links `link` changed. Writes are stamped `stamp`.
+    pub fn deactivate(&mut self, relinks: &mut Vec<Relink>, stamp: Instant) {
         for e in &self.enable {
-            write(e, std::sync::Arc::new(false));
+            write(e, std::sync::Arc::new(false), stamp);
         }
         if self.restore && self.saved.is_some() {
             relinks.extend(self.links.iter().map(|(input, _, original)| Relink {
@@ -57,7 +61,7 @@ impl BoundAction {
         if let Some(saved) = self.saved.take() {
             if self.restore {
                 for ((h, _), old) in self.set.iter().zip(saved) {
-                    write(h, old);
+                    write(h, old, stamp);
                 }
             }
         }
@@ -69,9 +73,9 @@ impl BoundAction {
     }
 }
 
-fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue) {
+fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue, stamp: Instant) {
     // Types were checked at init (`from_ron` into the property's own type, `enabled` is bool).
-    if let Err(e) = h.set(v) {
+    if let Err(e) = h.set_at(v, stamp) {
         tracing::error!(property = h.key(), error = %e, "binding write refused");
     }
 }
@@ -145,7 +149,7 @@ impl Environment for MissionEnv<'_> {
 
     fn call(&mut self, name: &str, kind: CallKind) {
         self.remember(name, kind);
-        let now = self.now;
+        let (now, stamp) = (self.now, self.stamp);
         if self.dispatch.has_action(name) {
             tracing::info!(action = name, call = %kind, "sent to its robot");
             self.dispatch.call(name, kind);
@@ -177,10 +181,10 @@ impl Environment for MissionEnv<'_> {
                 if let Some(text) = &a.log {
                     tracing::info!(action = name, "{text}");
                 }
-                a.activate(&mut self.bound.relinks);
+                a.activate(&mut self.bound.relinks, stamp);
             }
             CallKind::End | CallKind::Interrupt | CallKind::Fail => {
-                a.deactivate(&mut self.bound.relinks)
+                a.deactivate(&mut self.bound.relinks, stamp)
             }
         }
     }

@@ -9,7 +9,10 @@ use petrel_actors::PropertyType;
 use serde::{Deserialize, Serialize};
 
 /// `state/memory` of a `mission.pnp` module.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+///
+/// `clone_from` reuses the target's allocations (strings, vectors, map entries with the same
+/// keys): the mission fills the value it published two saves ago in place (see `Run::save`).
+#[derive(Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MissionMemory {
     /// The plan this memory is about (its name), empty before the first step.
@@ -32,6 +35,53 @@ impl PropertyType for MissionMemory {
     const TYPE_NAME: &'static str = "pnp.memory";
 }
 
+impl Clone for MissionMemory {
+    fn clone(&self) -> Self {
+        MissionMemory {
+            plan: self.plan.clone(),
+            marking: self.marking.clone(),
+            running: self.running.clone(),
+            actions: self.actions.clone(),
+            failed_action: self.failed_action.clone(),
+            serve: self.serve.clone(),
+            dispatch: self.dispatch.clone(),
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        // Destructured so that a field added later cannot be forgotten here.
+        let MissionMemory {
+            plan,
+            marking,
+            running,
+            actions,
+            failed_action,
+            serve,
+            dispatch,
+        } = source;
+        self.plan.clone_from(plan);
+        self.marking.clone_from(marking);
+        clone_map_from(&mut self.running, running);
+        clone_map_from(&mut self.actions, actions);
+        self.failed_action.clone_from(failed_action);
+        self.serve.clone_from(serve);
+        self.dispatch.clone_from(dispatch);
+    }
+}
+
+/// `dst = src.clone()`, keeping the entries (and their allocations) of keys both have.
+fn clone_map_from<V: Clone>(dst: &mut BTreeMap<String, V>, src: &BTreeMap<String, V>) {
+    dst.retain(|k, _| src.contains_key(k));
+    for (k, v) in src {
+        match dst.get_mut(k) {
+            Some(d) => d.clone_from(v),
+            None => {
+                dst.insert(k.clone(), v.clone());
+            }
+        }
+    }
+}
+
 /// One mission step's firings, as pushed to `out/firings`: what fired, in firing order, and the
 /// marking it left (for consoles and recordings, which need not infer firings from markings).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -49,7 +99,7 @@ impl PropertyType for PlanFiring {
 }
 
 /// An action in progress.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RunningAction {
     /// When it started, in mission clock seconds.
@@ -59,6 +109,23 @@ pub struct RunningAction {
     /// Per condition expression (finished, failed), when each `held` has seen its condition
     /// true since, in clock seconds.
     pub held: Vec<Vec<Option<f64>>>,
+}
+
+impl Clone for RunningAction {
+    fn clone(&self) -> Self {
+        RunningAction {
+            started_s: self.started_s,
+            saved: self.saved.clone(),
+            held: self.held.clone(),
+        }
+    }
+
+    /// Reuses `self`'s vectors (see [`MissionMemory`]).
+    fn clone_from(&mut self, source: &Self) {
+        self.started_s = source.started_s;
+        self.saved.clone_from(&source.saved);
+        self.held.clone_from(&source.held);
+    }
 }
 
 /// What one action did during the run.
@@ -106,5 +173,50 @@ fn s(n: u32) -> &'static str {
         ""
     } else {
         "s"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn memory(running: &[&str], starts: u32) -> MissionMemory {
+        let mut m = MissionMemory {
+            plan: "p".into(),
+            marking: vec![1, 2, starts],
+            ..Default::default()
+        };
+        for name in running {
+            let held = vec![vec![Some(1.5), None]];
+            let ra = RunningAction {
+                started_s: f64::from(starts),
+                saved: None,
+                held,
+            };
+            m.running.insert(name.to_string(), ra);
+            let stats = ActionStats {
+                starts,
+                ..Default::default()
+            };
+            m.actions.insert(name.to_string(), stats);
+        }
+        m
+    }
+
+    #[test]
+    fn clone_from_gives_an_equal_memory_whatever_was_there() {
+        let sources = [
+            memory(&["a"], 1),
+            memory(&[], 2),
+            memory(&["a", "b"], 3),
+            memory(&["b"], 4),
+        ];
+        for from in &sources {
+            for into in &sources {
+                let mut target = into.clone();
+                target.clone_from(from);
+                assert_eq!(&target, from);
+            }
+        }
     }
 }

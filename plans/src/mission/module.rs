@@ -16,7 +16,7 @@ use super::bind::{plan_names, Relink};
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
 use super::memory::{MissionMemory, PlanFiring};
 use super::prepare::{prepare, Problems, Setup};
-use super::run::{Run, MAX_ROUNDS};
+use super::run::{Run, StepTime, MAX_ROUNDS};
 use super::shown::{marking, Shown};
 use super::team::{is_serve, TeamIo, RUN};
 use crate::exec::{PlanState, PlanStatus};
@@ -127,9 +127,11 @@ impl Module for Mission {
             return Ok(());
         }
         let mut fired = 0;
-        let (now, secs) = (run.clock.now(ctx.now()), run.clock.secs(ctx.now()));
+        let stamp = ctx.now();
+        let (now, secs) = (run.clock.now(stamp), run.clock.secs(stamp));
+        let t = StepTime { now, secs, stamp };
         if run.team.serve_mode {
-            if run.serve_round(now, secs, &self.flags.get(), &self.inbox) {
+            if run.serve_round(t, &self.flags.get(), &self.inbox) {
                 run.save(&self.memory);
             }
             run.team.send(&self.outbox);
@@ -147,7 +149,7 @@ impl Module for Mission {
         }
         if !may_step {
             // Waiting for robots' conditions: the watches must still go out (and be answered).
-            run.answer_watches(now, secs, &self.flags.get());
+            run.answer_watches(t, &self.flags.get());
             run.team.send(&self.outbox);
             return Ok(());
         }
@@ -157,7 +159,7 @@ impl Module for Mission {
         let mut fired_labels = Vec::new();
         for round in 1.. {
             // Read at every round: an action's `set` may write the mission's own flags.
-            let (report, labels) = run.round(now, secs, &self.flags.get());
+            let (report, labels) = run.round(t, &self.flags.get());
             relink(ctx, &mut run.bound.relinks).await;
             fired += report.fired.len();
             fired_labels.extend(labels);
@@ -169,7 +171,7 @@ impl Module for Mission {
                 break;
             }
         }
-        run.answer_watches(now, secs, &self.flags.get());
+        run.answer_watches(t, &self.flags.get());
         run.team.send(&self.outbox);
         if run.clock.is_wall() {
             set_deadline(&run.timer, run.bound.exprs.next_deadline());
@@ -198,7 +200,7 @@ impl Module for Mission {
         if status != PlanStatus::Running {
             run.done = true;
             for a in run.bound.actions.values_mut().filter(|a| a.active()) {
-                a.deactivate(&mut run.bound.relinks);
+                a.deactivate(&mut run.bound.relinks, stamp);
             }
             relink(ctx, &mut run.bound.relinks).await;
             let mut reason = format!("mission `{}` ended: {}", run.plan.name(), status.as_str());
@@ -307,6 +309,7 @@ impl Mission {
             memory: MissionMemory::default(),
             loops: Default::default(),
             shown,
+            spare: None,
         };
         let memory = self.memory.get();
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {

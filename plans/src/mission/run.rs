@@ -16,6 +16,17 @@ use super::team::TeamIo;
 use crate::exec::{step, PlanState};
 use crate::model::Plan;
 
+/// A mission step's times, read once when the step begins.
+#[derive(Clone, Copy)]
+pub(super) struct StepTime {
+    /// The mission clock (`in/clock` or wall time) as an instant.
+    pub now: Instant,
+    /// The mission clock in seconds.
+    pub secs: f64,
+    /// The step's own time ([`petrel_actors::Context::now`]): what its writes are stamped with.
+    pub stamp: Instant,
+}
+
 /// What init builds.
 pub(super) struct Run {
     pub plan: Arc<Plan>,
@@ -35,27 +46,26 @@ pub(super) struct Run {
     pub loops: super::loops::LoopFinder,
     /// Transition labels and marking texts, kept (see `shown.rs`).
     pub shown: Shown,
+    /// The `state/memory` value published before the last one, given back by the cell: filled
+    /// in place at the next save when no reader holds it any more (see [`Run::save`]).
+    pub spare: Option<Arc<MissionMemory>>,
 }
 
 /// Plan steps run back to back in one module step at most (see [`Mission::step`]).
 pub(super) const MAX_ROUNDS: usize = 64;
 
 impl Run {
-    /// One plan step at clock time `secs`: bring expressions up to date with changed
-    /// properties, then step. Returns the step's report and the labels of what it fired (none
-    /// while the plan fires in a circle: the loop report names it).
-    pub fn round(
-        &mut self,
-        now: Instant,
-        secs: f64,
-        flags: &Flags,
-    ) -> (crate::exec::StepReport, Vec<String>) {
-        self.refresh(now);
+    /// One plan step at time `t`: bring expressions up to date with changed properties, then
+    /// step. Returns the step's report and the labels of what it fired (none while the plan
+    /// fires in a circle: the loop report names it).
+    pub fn round(&mut self, t: StepTime, flags: &Flags) -> (crate::exec::StepReport, Vec<String>) {
+        self.refresh(t.now);
         let mut env = MissionEnv {
             bound: &mut self.bound,
             flags,
-            now,
-            secs,
+            now: t.now,
+            secs: t.secs,
+            stamp: t.stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
         };
@@ -136,10 +146,18 @@ impl Run {
     }
 
     /// Writes the memory (marking, running actions with what they replaced and their `held`
-    /// windows) to `state/memory`.
+    /// windows) to `state/memory`, if it changed.
+    ///
+    /// Copy-on-write with two buffers: the published value is immutable (readers may hold
+    /// it), so each save publishes another one; the one it replaces comes back from the cell
+    /// and, once no reader holds it, is filled in place at the save after (reusing its
+    /// strings, vectors and map entries) instead of a fresh clone of the whole memory.
     pub fn save(&mut self, out: &State<MissionMemory>) {
-        self.memory.plan = self.plan.name().to_string();
-        self.memory.marking = self.state.save();
+        if self.memory.plan != self.plan.name() {
+            self.memory.plan = self.plan.name().to_string();
+        }
+        self.memory.marking.clear();
+        self.state.save_into(&mut self.memory.marking);
         for (name, ra) in self.memory.running.iter_mut() {
             let Some(a) = self.bound.actions.get(name) else {
                 continue;
@@ -151,17 +169,28 @@ impl Run {
                     .map(|((h, _), v)| h.type_info().to_dynamic(v).unwrap_or(ron::Value::Unit))
                     .collect()
             });
-            ra.held = a
-                .exprs()
-                .map(|id| {
-                    let held = self.bound.exprs.held_states(id);
-                    held.into_iter().map(|t| t.map(Clock::secs_of)).collect()
-                })
-                .collect();
+            ra.held.resize_with(a.exprs().count(), Vec::new);
+            for (held, id) in ra.held.iter_mut().zip(a.exprs()) {
+                held.clear();
+                let states = self.bound.exprs.held_states(id);
+                held.extend(states.into_iter().map(|t| t.map(Clock::secs_of)));
+            }
         }
         self.memory.serve.clone_from(&self.team.serve);
         self.memory.dispatch = self.team.dispatch.memory();
-        out.set(self.memory.clone());
+        if *out.get() == self.memory {
+            return;
+        }
+        let mut next = match self.spare.take() {
+            Some(spare) => spare,
+            None => Arc::new(MissionMemory::default()),
+        };
+        match Arc::get_mut(&mut next) {
+            Some(next) => next.clone_from(&self.memory),
+            // A reader (a tool, a recorder's tap) still holds it: a fresh copy.
+            None => next = Arc::new(self.memory.clone()),
+        }
+        self.spare = Some(out.swap(next));
     }
 
     /// Goes on from `memory` (a restart, or a snapshot being resumed): the marking, the
@@ -212,11 +241,11 @@ impl Run {
     /// coordinator leaving or back): what `state/memory` keeps.
     pub fn serve_round(
         &mut self,
-        now: Instant,
-        secs: f64,
+        t: StepTime,
         flags: &Flags,
         inbox: &petrel_actors::QueueReader<petrel_actors::team::Message>,
     ) -> bool {
+        let StepTime { now, secs, stamp } = t;
         self.refresh(now);
         let present = self.team.members_changed();
         let agent = self.team.agent.clone();
@@ -242,6 +271,7 @@ impl Run {
             flags,
             now,
             secs,
+            stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
         };
@@ -303,17 +333,18 @@ impl Run {
 
     /// Run mode: sends other agents the conditions of this one they watch, when they changed
     /// (calls, which only serve mode carries out, are answered as failed).
-    pub fn answer_watches(&mut self, now: Instant, secs: f64, flags: &Flags) {
+    pub fn answer_watches(&mut self, t: StepTime, flags: &Flags) {
         if !self.team.serve.has_watchers() {
             return;
         }
-        self.refresh(now);
+        self.refresh(t.now);
         let agent = self.team.agent.clone();
         let mut env = MissionEnv {
             bound: &mut self.bound,
             flags,
-            now,
-            secs,
+            now: t.now,
+            secs: t.secs,
+            stamp: t.stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
         };
