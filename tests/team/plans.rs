@@ -172,13 +172,7 @@ async fn a_robot_mission_restarted_mid_action_still_answers_the_coordinator() {
     })
     .await;
     t.r1.agent.modules().restart("mission").await.unwrap();
-    t.r1.agent
-        .blackboard()
-        .set("probe/in/value", 1.0)
-        .await
-        .unwrap();
-    let result = t.boss.handle::<String>("mission/out/result").await;
-    wait_for(&result, "the plan's goal", |r| r == "goal").await;
+    finish_r1s_search(&t).await;
     for m in [t.r2, t.r1, t.boss] {
         m.stop().await;
     }
@@ -198,13 +192,7 @@ async fn a_coordinator_mission_restarted_mid_action_still_hears_the_robot_finish
     })
     .await;
     t.boss.agent.modules().restart("mission").await.unwrap();
-    t.r1.agent
-        .blackboard()
-        .set("probe/in/value", 1.0)
-        .await
-        .unwrap();
-    let result = t.boss.handle::<String>("mission/out/result").await;
-    wait_for(&result, "the plan's goal", |r| r == "goal").await;
+    finish_r1s_search(&t).await;
     let memory = t
         .boss
         .handle::<MissionMemory>("mission/state/memory")
@@ -215,6 +203,17 @@ async fn a_coordinator_mission_restarted_mid_action_still_hears_the_robot_finish
     for m in [t.r2, t.r1, t.boss] {
         m.stop().await;
     }
+}
+
+/// Makes r1's `search_west` finish (its probe reads 1) and waits for the boss's plan goal.
+async fn finish_r1s_search(t: &TeamPlan) {
+    t.r1.agent
+        .blackboard()
+        .set("probe/in/value", 1.0)
+        .await
+        .unwrap();
+    let result = t.boss.handle::<String>("mission/out/result").await;
+    wait_for(&result, "the plan's goal", |r| r == "goal").await;
 }
 
 /// Bindings of a robot running its own plan: `goto_door` until the probe reads 1 or more,
