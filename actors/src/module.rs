@@ -90,7 +90,8 @@ pub trait Module: Send + Sized + 'static {
     /// Does one unit of work. An error (or a panic) is a module failure.
     fn step(&mut self, ctx: &mut Context) -> impl Future<Output = anyhow::Result<()>> + Send;
 
-    /// Releases resources when the agent stops the module.
+    /// Releases resources when the module instance stops: the agent stops, the module is
+    /// stopped on request, or it is restarted or moved ([`Context::restarting`] tells which).
     fn cleanup(&mut self, _ctx: &mut Context) -> impl Future<Output = anyhow::Result<()>> + Send {
         async { Ok(()) }
     }
@@ -258,6 +259,7 @@ pub struct Context {
     /// The step time, shared with the module's output handles.
     pub(crate) clock: Arc<StepClock>,
     pub(crate) reschedule: bool,
+    pub(crate) restarting: bool,
 }
 
 impl Context {
@@ -280,6 +282,7 @@ impl Context {
             steps: 0,
             clock,
             reschedule: false,
+            restarting: false,
         }
     }
 
@@ -315,6 +318,14 @@ impl Context {
     /// This module instance's name.
     pub fn module(&self) -> &str {
         &self.module
+    }
+
+    /// In [`Module::cleanup`]: whether this instance stops only to be started again at once
+    /// (a supervisor's restart, a restart on request, or a move off the agent's thread), so a
+    /// module that prints a summary at the end of a run prints it only when the run ends.
+    /// False when the agent stops or the module is stopped on request, and outside `cleanup`.
+    pub fn restarting(&self) -> bool {
+        self.restarting
     }
 
     /// Whether this step is part of a loop: the last of thousands of steps in a row, each woken

@@ -17,6 +17,9 @@ pub struct ModuleReport {
     pub failures: u64,
     /// Restarts by the supervisor.
     pub restarts: u64,
+    /// Moves off the agent's thread to the shared runtime (steps over the agent's
+    /// `step_budget`); each starts a new instance, like a restart.
+    pub moves: u64,
     /// The last failure's message.
     pub last_error: Option<String>,
 }
@@ -41,6 +44,11 @@ impl RunSummary {
         self.modules.iter().map(|m| m.restarts).sum()
     }
 
+    /// Total moves across modules.
+    pub fn moves(&self) -> u64 {
+        self.modules.iter().map(|m| m.moves).sum()
+    }
+
     /// Total failures across modules.
     pub fn failures(&self) -> u64 {
         self.modules.iter().map(|m| m.failures).sum()
@@ -63,7 +71,7 @@ impl fmt::Display for RunSummary {
             .max()
             .unwrap_or(4)
             .max(4);
-        writeln!(
+        write!(
             f,
             "agent {}: {} modules, {} failures, {} restarts",
             self.agent,
@@ -71,16 +79,20 @@ impl fmt::Display for RunSummary {
             self.failures(),
             self.restarts()
         )?;
+        match self.moves() {
+            0 => writeln!(f)?,
+            moves => writeln!(f, ", {moves} moves")?,
+        }
         writeln!(
             f,
-            "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}  {:>8}",
-            "module", "type", "status", "steps", "failures", "restarts"
+            "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}  {:>8}  {:>5}",
+            "module", "type", "status", "steps", "failures", "restarts", "moves"
         )?;
         for m in &self.modules {
             writeln!(
                 f,
-                "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}  {:>8}",
-                m.name, m.module_type, m.status, m.steps, m.failures, m.restarts
+                "  {:<w$}  {:<tw$}  {:<12}  {:>9}  {:>8}  {:>8}  {:>5}",
+                m.name, m.module_type, m.status, m.steps, m.failures, m.restarts, m.moves
             )?;
             if let Some(e) = &m.last_error {
                 writeln!(f, "  {:<w$}  last error: {e}", "")?;

@@ -118,6 +118,7 @@ async fn a_module_over_the_step_budget_moves_and_its_blocking_steps_hold_up_no_o
     let summary = agent.stop(Duration::from_secs(5)).await;
     let slow = summary.module("slow").unwrap();
     assert_eq!(slow.failures, 0, "{slow:?}");
+    assert_eq!((slow.moves, slow.restarts), (1, 0), "{slow:?}");
 }
 
 #[test]

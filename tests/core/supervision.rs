@@ -375,6 +375,40 @@ async fn modules_can_be_stopped_started_and_restarted_while_running() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn a_cleanup_tells_a_restart_from_a_stop_and_steps_count_every_instance() {
+    let agent =
+        start(r#"Agent(name: "r1", modules: [(name: "c", type: "test.cleanup_log")])"#).await;
+    let modules = agent.modules();
+    let cleanups = agent
+        .blackboard()
+        .handle::<String>("c/out/cleanups")
+        .await
+        .unwrap();
+    advance(35).await;
+    modules.restart("c").await.unwrap();
+    assert_eq!(*cleanups.get(), "restart");
+    advance(35).await;
+    modules.stop("c").await.unwrap();
+    assert_eq!(
+        *cleanups.get(),
+        "restart,stop",
+        "stopped on request: not a restart"
+    );
+    modules.start("c").await.unwrap();
+    advance(35).await;
+    let steps = int(&agent, "c/state/steps").await;
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(*cleanups.get(), "restart,stop,stop");
+    let c = summary.module("c").unwrap();
+    assert_eq!(c.restarts, 1, "{c:?}");
+    assert!(steps >= 9, "three instances stepped: {steps}");
+    assert_eq!(
+        c.steps, steps as u64,
+        "the summary counts every instance's steps"
+    );
+}
+
+#[tokio::test(start_paused = true)]
 async fn chaos_soak_twenty_modules_lose_nothing_and_leave_nothing_behind() {
     let tasks_before = tokio::runtime::Handle::current()
         .metrics()

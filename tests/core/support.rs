@@ -14,6 +14,7 @@ pub fn registry() -> ModuleRegistry {
         .register::<Faulty>()
         .register::<EventLog>()
         .register::<StopOrder>()
+        .register::<CleanupLog>()
         .register::<FlakyConsumer>()
         .register::<ImageSource>()
         .register::<ImageSink>();
@@ -184,6 +185,44 @@ impl Module for EventLog {
         }
         self.kinds.set(kinds);
         self.restart_ms.set(times);
+        Ok(())
+    }
+}
+
+/// `test.cleanup_log`: counts its steps in `state/steps` (across instances), and its cleanup
+/// appends `restart` or `stop` to `out/cleanups`, as [`Context::restarting`] tells it.
+pub struct CleanupLog {
+    steps: State<i64>,
+    cleanups: Output<String>,
+}
+
+impl Module for CleanupLog {
+    const TYPE: &'static str = "test.cleanup_log";
+    const DESCRIPTION: &'static str = "Notes whether each cleanup was for a restart.";
+    fn declare(ports: &mut Ports) -> Self {
+        CleanupLog {
+            steps: ports.state("state/steps", 0, "steps of every instance"),
+            cleanups: ports.output(
+                "out/cleanups",
+                String::new(),
+                "restart or stop, per cleanup",
+            ),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::every(Duration::from_millis(10))
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.steps.set(*self.steps.get() + 1);
+        Ok(())
+    }
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let mut log = (*self.cleanups.get()).clone();
+        if !log.is_empty() {
+            log.push(',');
+        }
+        log.push_str(if ctx.restarting() { "restart" } else { "stop" });
+        self.cleanups.set(log);
         Ok(())
     }
 }

@@ -80,6 +80,8 @@ pub(crate) struct Running<M> {
     step_mark: Arc<StepMark>,
     span: tracing::Span,
     stats: StepStats,
+    /// Steps the module's earlier instances ran (`stats/steps` counts since the agent started).
+    steps_before: u64,
     loops: LoopWatch,
     /// Steps against the agent's `step_budget`, on the agent's own thread only.
     long_steps: Option<LongStepWatch>,
@@ -161,6 +163,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             f if f.value.is_empty() => f.version,
             _ => 0,
         };
+        let steps_before = u64::try_from(*builtins.steps.get()).unwrap_or(0);
         Ok(Running {
             module,
             readers,
@@ -174,6 +177,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             step_mark: args.step_mark,
             span,
             stats: StepStats::default(),
+            steps_before,
             loops: LoopWatch::default(),
             long_steps,
             hold: args.hold,
@@ -202,6 +206,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             None => {
                 // Stopped with the whole agent: clean up in reverse start order, when told.
                 state.stop.cleanup_turn().await;
+                state.ctx.restarting = state.stop.is_restart();
                 let cleanup = catching(state.module.cleanup(&mut state.ctx).instrument(span)).await;
                 state.publish(status::STOPPED);
                 me.stop(None);

@@ -43,7 +43,9 @@ impl<M: Module> Running<M> {
     pub(super) fn publish_stats(&mut self) {
         let s = &mut self.stats;
         s.published = Some(Instant::now());
-        self.builtins.steps.set(self.ctx.steps as i64);
+        self.builtins
+            .steps
+            .set((self.steps_before + self.ctx.steps) as i64);
         self.builtins.last_step_us.set(s.last.as_secs_f64() * 1e6);
         self.builtins.mean_step_us.set(s.mean_step_us());
         self.builtins.mean_interval_ms.set(s.mean_interval_ms());

@@ -20,6 +20,9 @@ pub(crate) struct StopRequest {
     signal: parking_lot::Mutex<Option<Arc<Signal>>>,
     cleanup_allowed: AtomicBool,
     cleanup_turn: Notify,
+    /// The instance stops only to be started again at once (a restart or a move), which its
+    /// cleanup can tell ([`crate::Context::restarting`]).
+    restart: AtomicBool,
 }
 
 impl StopRequest {
@@ -30,6 +33,17 @@ impl StopRequest {
         if let Some(signal) = signal.as_ref() {
             signal.raise(cause::STOP);
         }
+    }
+
+    /// Marks this stop as one after which the module is started again at once; call before
+    /// [`Self::halt`].
+    pub fn for_restart(&self) {
+        self.restart.store(true, Ordering::SeqCst);
+    }
+
+    /// Whether the module is started again right after this stop.
+    pub(super) fn is_restart(&self) -> bool {
+        self.restart.load(Ordering::SeqCst)
     }
 
     /// Lets a halted module run its cleanup.

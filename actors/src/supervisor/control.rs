@@ -27,6 +27,7 @@ impl SupervisorState {
             }
             ControlRequest::Restart(name) => {
                 let i = self.find(&name)?;
+                self.slots[i].stop.for_restart();
                 self.stop_slot(i, None).await;
                 self.slots[i].restarts += 1;
                 let restarts = self.slots[i].restarts;
@@ -93,8 +94,10 @@ impl SupervisorState {
         }
         let name = self.slots[i].spec.name.clone();
         tracing::warn!(agent = %self.agent, module = %name, "{reason}");
+        self.slots[i].stop.for_restart();
         self.stop_slot(i, None).await;
         self.slots[i].spec.long_steps = true;
+        self.slots[i].moves += 1;
         self.event(&name, "moved", &reason, self.slots[i].restarts);
         self.spawn(i).await;
     }

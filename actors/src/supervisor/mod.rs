@@ -75,6 +75,8 @@ struct Slot {
     backoff: Backoff,
     failures: u64,
     restarts: u64,
+    /// Moves off the agent's thread (each starts a new instance, like a restart).
+    moves: u64,
     last_error: Option<String>,
     /// Did not stop within its timeout when last stopped.
     killed: bool,
@@ -92,6 +94,7 @@ impl Slot {
             backoff: Backoff::new(backoff),
             failures: 0,
             restarts: 0,
+            moves: 0,
             last_error: None,
             killed: false,
         }
@@ -405,6 +408,7 @@ impl SupervisorState {
                 steps: steps as u64,
                 failures: slot.failures,
                 restarts: slot.restarts,
+                moves: slot.moves,
                 last_error: slot.last_error.clone(),
             });
         }

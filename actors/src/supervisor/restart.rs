@@ -127,6 +127,9 @@ impl SupervisorState {
 
     /// Stops `stop` (reverse order), then restarts `restart` after the failed module's backoff.
     async fn execute(&mut self, failed: usize, stop: Vec<usize>, restart: Vec<usize>) {
+        for &j in &restart {
+            self.slots[j].stop.for_restart();
+        }
         self.stop_slots(&stop, None).await;
         let unit = self.unit();
         let delay = self.slots[failed].backoff.next_delay(Instant::now(), unit);

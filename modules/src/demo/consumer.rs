@@ -74,7 +74,7 @@ impl Module for Consumer {
     }
 
     async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        self.report(ctx, self.report_every.value() > 0);
+        self.report(ctx, self.report_every.value() > 0 && !ctx.restarting());
         Ok(())
     }
 }

@@ -227,9 +227,13 @@ impl Module for Recorder {
         Ok(())
     }
 
-    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(p) = self.last {
             self.record(p);
+        }
+        // The summary is the run's, printed when it ends, not at a restart or a move.
+        if ctx.restarting() {
+            return Ok(());
         }
         let wall = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
         let sim = self.sim_time.value();

@@ -255,7 +255,11 @@ impl Module for TeamSearch {
         Ok(())
     }
 
-    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        // The summary is the run's: not at a restart or a move, which the search survives.
+        if ctx.restarting() {
+            return Ok(());
+        }
         if let Some(state) = &self.state {
             petrel_actors::outln!("\n{}", state.log.summary());
         }

@@ -105,7 +105,10 @@ impl Module for TeamVictimsModule {
         Ok(())
     }
 
-    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        if ctx.restarting() {
+            return Ok(());
+        }
         if let Some(core) = &self.core {
             petrel_actors::outln!("\n{}", core.summary());
         }

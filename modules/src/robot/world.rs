@@ -310,8 +310,12 @@ impl Module for SimWorld {
         Ok(())
     }
 
-    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        self.picture()
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        // The picture is of the whole run: drawn when it ends, not at a restart or a move.
+        match ctx.restarting() {
+            true => Ok(()),
+            false => self.picture(),
+        }
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {

@@ -227,10 +227,11 @@ impl Module for Mission {
         Ok(())
     }
 
-    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(run) = self.run.as_mut() {
             set_deadline(&run.timer, None);
-            if self.is_mission.value() && !run.memory.actions.is_empty() {
+            // At a restart or a move the plan goes on from `state/memory`: no summary yet.
+            if self.is_mission.value() && !run.memory.actions.is_empty() && !ctx.restarting() {
                 // The run summary of a plan-driven mission: the plan's result and what each
                 // action did (printed as the run stops, like the recorder's summary).
                 petrel_actors::outln!(
