@@ -11,8 +11,8 @@ pub mod lint;
 mod manager;
 pub mod rules;
 
-pub use engine::{Action, Engine, Schema};
-pub use manager::{check_rules, ContextChange, ContextManager};
+pub use engine::{Action, Engine, EngineMemory, SavedEffect, Schema};
+pub use manager::{check_rules, ContextChange, ContextManager, ContextMemory};
 pub use rules::{ContextRule, LoadedRules, RuleError, RulesFile};
 
 /// Registers the `context.manager` module type.

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use petrel_actors::expr::Value;
 use petrel_actors::{AnyValue, Pose2, PropertyType, TypeInfo};
-use petrel_contexts::{Action, Engine, LoadedRules, Schema};
+use petrel_contexts::{Action, Engine, EngineMemory, LoadedRules, Schema};
 use tokio::time::Instant;
 
 struct Props(HashMap<String, (TypeInfo, AnyValue)>);
@@ -372,5 +372,40 @@ fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active() {
     assert_eq!(
         actions,
         [set("oa/params/maxSpeed", Value::Num(0.1), "slow")]
+    );
+}
+
+#[test]
+fn a_restarted_engine_goes_on_from_its_memory() {
+    let mut old = engine(DEBLUR);
+    let t0 = Instant::now();
+    assert_eq!(
+        at(&mut old, t0, 0, "speed/out/v", 0.7),
+        [
+            Action::Activated("fast".into()),
+            set("cam/params/deblur", Value::Bool(true), "fast")
+        ]
+    );
+    let mut memory = EngineMemory::default();
+    old.save_into(&mut memory);
+    // Kept in `state/memory`, so it must survive a snapshot's text form.
+    let text = ron::to_string(&memory).unwrap();
+    let memory: EngineMemory = ron::from_str(&text).unwrap();
+
+    // Between the thresholds: a fresh engine would not switch `fast` on, a resumed one keeps
+    // it on without a second activation, and undoes its effect when it ends.
+    let mut fresh = engine(DEBLUR);
+    assert_eq!(at(&mut fresh, t0, 10, "speed/out/v", 0.5), []);
+    assert_eq!(fresh.active().count(), 0);
+    let mut new = engine(DEBLUR);
+    new.resume(&memory);
+    assert_eq!(at(&mut new, t0, 10, "speed/out/v", 0.5), []);
+    assert_eq!(new.active().collect::<Vec<_>>(), ["fast"]);
+    assert_eq!(
+        at(&mut new, t0, 20, "speed/out/v", 0.3),
+        [
+            Action::Deactivated("fast".into()),
+            Action::Restore("cam/params/deblur".into())
+        ]
     );
 }

@@ -85,6 +85,56 @@ async fn a_context_relinks_sets_and_stops_then_restores_everything() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn a_context_manager_restarted_mid_context_goes_on_and_restores_what_was_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(&rules, LOST).unwrap();
+    let agent = start(&agent_with_rules(&rules)).await;
+    let bb = agent.blackboard().clone();
+    bb.set("quality/in/value", 0.1).await.unwrap();
+    advance(30).await;
+    let active = bb.handle::<String>("contexts/out/active").await.unwrap();
+    assert_eq!(*active.get(), "lost");
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        0.0
+    );
+
+    // The manager crashes while `lost` is active (its next step, woken by the quality), and
+    // the supervisor restarts it.
+    bb.set("contexts/control/fault", "panic".to_string())
+        .await
+        .unwrap();
+    bb.set("quality/in/value", 0.4).await.unwrap();
+    advance(1000).await;
+    assert_eq!(*bb.get::<i64>("contexts/stats/restarts").await.unwrap(), 1);
+    assert_eq!(
+        *active.get(),
+        "lost",
+        "between thresholds a restarted manager keeps the context it had on"
+    );
+    bb.set("quality/in/value", 0.8).await.unwrap();
+    advance(30).await;
+    assert_eq!(*active.get(), "");
+    assert_eq!(
+        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        1.0,
+        "the value from before the context, not the context's own"
+    );
+    assert_eq!(
+        bb.link_of("mapper/in/value").await.unwrap().as_deref(),
+        Some("localizer/out/value"),
+        "link restored"
+    );
+    assert_eq!(
+        *bb.get::<String>("recorder/stats/status").await.unwrap(),
+        status::RUNNING,
+        "restarted"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
 async fn reloading_applies_the_difference_and_a_broken_file_changes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let rules = dir.path().join("rules.ron");

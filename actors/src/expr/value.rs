@@ -5,8 +5,9 @@ use std::sync::Arc;
 
 use crate::value::{AnyValue, TypeInfo};
 
-/// The value of an expression or sub-expression.
-#[derive(Debug, Clone, PartialEq)]
+/// The value of an expression or sub-expression (serializable, so what a context set can be
+/// kept in a module's `state/` memory).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Value {
     /// A boolean.
     Bool(bool),

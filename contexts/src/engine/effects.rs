@@ -8,6 +8,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use super::memory::SavedEffect;
 use super::Action;
 
 /// An effect: the context responsible, the value, and whether it outlives its context.
@@ -52,21 +53,30 @@ impl<V: Clone + PartialEq> Effects<V> {
         (table, numbers)
     }
 
-    /// Takes over what `old` has applied (a reload); targets the new rules no longer mention
-    /// are kept at the end so the next resolution restores them.
-    pub fn adopt(&mut self, old: Effects<V>) {
-        for (name, applied) in old.targets.into_iter().zip(old.applied) {
-            let Some(applied) = applied else { continue };
-            let t = match self.targets.iter().position(|t| *t == name) {
+    /// Writes what is applied, in target order, into `out`.
+    pub fn save_into(&self, out: &mut Vec<SavedEffect<V>>) {
+        out.clear();
+        for (name, applied) in self.targets.iter().zip(&self.applied) {
+            if let Some(applied) = applied {
+                out.push(SavedEffect::of(name, applied));
+            }
+        }
+    }
+
+    /// Takes over what was applied (a reload or a restart); targets these rules do not
+    /// mention are kept at the end so the next resolution restores them.
+    pub fn resume(&mut self, saved: &[SavedEffect<V>]) {
+        for effect in saved {
+            let t = match self.targets.iter().position(|t| *t == effect.target) {
                 Some(t) => t,
                 None => {
-                    self.targets.push(name);
+                    self.targets.push(effect.target.clone());
                     self.applied.push(None);
                     self.wanted.push(None);
                     self.targets.len() - 1
                 }
             };
-            self.applied[t] = Some(applied);
+            self.applied[t] = Some(effect.applied());
         }
     }
 

@@ -11,6 +11,9 @@ use tokio::time::Instant;
 
 mod build;
 mod effects;
+mod memory;
+
+pub use memory::{EngineMemory, SavedEffect};
 
 use effects::{Actions, Effects};
 
@@ -157,28 +160,12 @@ impl Engine {
         self.exprs.update(id, info, value, written);
     }
 
-    /// Takes over from `old` (a reload), so that only the difference is applied: contexts kept
-    /// by name stay active (no second activation), contexts no longer in the rules are
-    /// reported deactivated, and what `old` applied is resolved against the new rules at the
-    /// next step (restoring what removed rules changed).
+    /// Takes over from `old` (a reload), so that only the difference is applied (see
+    /// [`resume`](Engine::resume)).
     pub fn adopt(&mut self, old: Engine) {
-        for was in old.rules.iter().filter(|r| r.active) {
-            match self.rules.iter_mut().find(|r| r.name == was.name) {
-                Some(rule) => {
-                    rule.active = true;
-                    rule.since = was.since;
-                }
-                None => self.pending.push(Action::Deactivated(was.name.clone())),
-            }
-        }
-        self.active = (0..self.rules.len())
-            .filter(|&i| self.rules[i].active)
-            .collect();
-        self.sort_active();
-        self.values.adopt(old.values);
-        self.links.adopt(old.links);
-        self.runs.adopt(old.runs);
-        self.resolve = true;
+        let mut memory = EngineMemory::default();
+        old.save_into(&mut memory);
+        self.resume(&memory);
     }
 
     /// The contexts that hold now, by descending priority.

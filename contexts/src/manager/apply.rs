@@ -1,7 +1,7 @@
 //! Carrying out the engine's actions: writing values, relinking, starting and stopping
 //! modules, saving what was there first and putting it back; and the traces that say so.
 
-use std::collections::hash_map::Entry;
+use std::collections::btree_map::Entry;
 
 use anyhow::{anyhow, Context as _};
 use petrel_actors::{status, AnyHandle, Context};

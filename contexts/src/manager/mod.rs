@@ -6,7 +6,7 @@
 //! modules, and restoring what it changed when a context ends. Every activation and
 //! deactivation is traced and pushed to `out/changes`; `out/active` lists the active contexts.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
@@ -24,6 +24,9 @@ use crate::engine::{Action, Engine, Schema};
 use crate::rules::{LoadedRules, RuleError};
 
 mod apply;
+mod memory;
+
+pub use memory::ContextMemory;
 
 /// One context activation or deactivation, as pushed to `out/changes`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -124,9 +127,14 @@ pub struct ContextManager {
     /// Every property the rules mention, by address.
     handles: HashMap<Arc<str>, AnyHandle>,
     /// What the rules changed, as it was before: values, links, running states.
-    original_values: HashMap<Arc<str>, AnyValue>,
-    original_links: HashMap<Arc<str>, Option<String>>,
-    original_runs: HashMap<Arc<str>, bool>,
+    /// In address order, so `state/memory` lists them the same way at every save.
+    original_values: BTreeMap<Arc<str>, AnyValue>,
+    original_links: BTreeMap<Arc<str>, Option<String>>,
+    original_runs: BTreeMap<Arc<str>, bool>,
+    /// `state/memory`: what a restarted manager goes on from.
+    memory: Output<ContextMemory>,
+    /// The memory published two saves ago, to fill in place (see `save_memory`).
+    spare: Option<Arc<ContextMemory>>,
     reload_seen: u64,
     started: Option<Instant>,
     /// Contexts whose changes reach their own condition, to name in a loop report.
@@ -178,9 +186,15 @@ impl Module for ContextManager {
             engine: None,
             watched: Vec::new(),
             handles: HashMap::new(),
-            original_values: HashMap::new(),
-            original_links: HashMap::new(),
-            original_runs: HashMap::new(),
+            original_values: BTreeMap::new(),
+            original_links: BTreeMap::new(),
+            original_runs: BTreeMap::new(),
+            memory: ports.state(
+                "state/memory",
+                ContextMemory::default(),
+                "the active contexts, what they changed and what was there before: a restarted manager goes on from here",
+            ),
+            spare: None,
             reload_seen: 0,
             started: None,
             self_undoing: Vec::new(),
@@ -226,6 +240,8 @@ impl Module for ContextManager {
             .await
             .map_err(|errors| anyhow!("context rules rejected:\n{errors}"))?;
         self.engine = Some(engine);
+        self.resume_memory(ctx).await;
+        self.publish_active();
         Ok(())
     }
 
@@ -259,6 +275,10 @@ impl Module for ContextManager {
         }
         if switched {
             self.publish_active();
+        }
+        // Only actions change what is switched, applied or saved.
+        if !actions.is_empty() {
+            self.save_memory();
         }
         self.evaluations.set(evaluations);
         Ok(())

@@ -1,0 +1,123 @@
+//! What a context manager keeps in `state/memory`, so that a restarted manager (a crash, a
+//! restart on request, a move off the agent's thread) goes on where its predecessor was: the
+//! active contexts and what they applied, and what was there before, to put back when they
+//! end. Without it a restarted manager forgot that it had changed anything: a context that
+//! ended meanwhile left its values in place, and one still active saved its own values as the
+//! originals.
+
+use std::sync::Arc;
+
+use petrel_actors::{Context, FilePath, PropertyType};
+use serde::{Deserialize, Serialize};
+
+use super::ContextManager;
+use crate::engine::EngineMemory;
+
+/// `state/memory` of a `context.manager`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ContextMemory {
+    /// The rules file this memory is about (`params/rules`).
+    pub rules: FilePath,
+    /// The contexts switched on and the effects applied.
+    pub engine: EngineMemory,
+    /// Properties the contexts set, with their value from before (config form).
+    pub original_values: Vec<(Arc<str>, ron::Value)>,
+    /// Inputs the contexts relinked, with their link from before (none: unlinked).
+    pub original_links: Vec<(Arc<str>, Option<String>)>,
+    /// Modules the contexts started or stopped, with whether they ran before.
+    pub original_runs: Vec<(Arc<str>, bool)>,
+}
+
+impl PropertyType for ContextMemory {
+    const TYPE_NAME: &'static str = "context.memory";
+}
+
+impl ContextManager {
+    /// Saves what the engine switched and applied and the originals, if they changed. Two
+    /// buffers in turn, like the mission's memory: the one published two saves ago is filled
+    /// in place once no reader holds it.
+    pub(super) fn save_memory(&mut self) {
+        let mut next = self.spare.take().unwrap_or_default();
+        if Arc::get_mut(&mut next).is_none() {
+            // A reader (a tool, a recorder's tap) still holds it.
+            next = Arc::default();
+        }
+        let memory = Arc::get_mut(&mut next).expect("just made unique");
+        self.fill(memory);
+        if *next == *self.memory.get() {
+            self.spare = Some(next);
+            return;
+        }
+        self.spare = Some(self.memory.swap(next));
+    }
+
+    fn fill(&self, memory: &mut ContextMemory) {
+        let rules = self.rules.get();
+        if memory.rules != *rules {
+            memory.rules = (*rules).clone();
+        }
+        if let Some(engine) = &self.engine {
+            engine.save_into(&mut memory.engine);
+        }
+        memory.original_values.clear();
+        for (target, value) in &self.original_values {
+            let dynamic = self
+                .handles
+                .get(target)
+                .and_then(|h| h.type_info().to_dynamic(value).ok());
+            if let Some(dynamic) = dynamic {
+                memory.original_values.push((target.clone(), dynamic));
+            }
+        }
+        memory.original_links.clear();
+        memory.original_links.extend(
+            (self.original_links.iter()).map(|(input, link)| (input.clone(), link.clone())),
+        );
+        memory.original_runs.clear();
+        memory
+            .original_runs
+            .extend((self.original_runs.iter()).map(|(module, ran)| (module.clone(), *ran)));
+    }
+
+    /// Goes on from `state/memory` if it is about the same rules file: the engine takes over
+    /// the switches and effects, and the originals come back to be restored when their
+    /// contexts end. Targets the rules no longer mention are looked up so they can be.
+    pub(super) async fn resume_memory(&mut self, ctx: &Context) {
+        let memory = self.memory.get();
+        let rules = self.rules.get();
+        if memory.rules != *rules || *memory == ContextMemory::default() {
+            return;
+        }
+        for (target, _) in &memory.original_values {
+            if !self.handles.contains_key(target) {
+                if let Ok(handle) = ctx.blackboard().expr_handle(target).await {
+                    self.handles.insert(target.clone(), handle);
+                }
+            }
+        }
+        for (target, value) in &memory.original_values {
+            let restored = self
+                .handles
+                .get(target)
+                .map(|h| h.type_info().from_ron(value.clone()));
+            match restored {
+                Some(Ok(value)) => {
+                    self.original_values.insert(target.clone(), value);
+                }
+                _ => {
+                    tracing::warn!(%target, "state/memory: the value from before the context cannot be restored here")
+                }
+            }
+        }
+        self.original_links
+            .extend(memory.original_links.iter().cloned());
+        self.original_runs
+            .extend(memory.original_runs.iter().cloned());
+        if let Some(engine) = self.engine.as_mut() {
+            engine.resume(&memory.engine);
+        }
+        let active: Vec<&str> = memory.engine.active.iter().map(|(c, _)| &**c).collect();
+        tracing::info!(?active, "context manager resumed from state/memory");
+    }
+}
