@@ -1,8 +1,8 @@
 //! The context manager in a running agent: effects applied and undone, reload, start/stop.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use petrel::actors::{status, DEFAULT_STOP_TIMEOUT};
+use petrel::actors::{status, Agent, Blackboard, DEFAULT_STOP_TIMEOUT};
 
 use crate::support::{advance, start};
 
@@ -25,80 +25,100 @@ const LOST: &str = r#"Contexts(contexts: [
      relink: {"mapper/in/value": "odometry/out/value"}, set: {"localizer/params/increment": "0.0"}, stop: ["recorder"]),
 ])"#;
 
-#[tokio::test(start_paused = true)]
-async fn a_context_relinks_sets_and_stops_then_restores_everything() {
+/// An agent running `rules` (written to a temp file, which the test may rewrite and reload).
+struct Rig {
+    /// Holds the rules file.
+    _dir: tempfile::TempDir,
+    rules: PathBuf,
+    agent: Agent,
+    bb: Blackboard,
+}
+
+async fn rig(rules_text: &str) -> Rig {
     let dir = tempfile::tempdir().unwrap();
     let rules = dir.path().join("rules.ron");
-    std::fs::write(&rules, LOST).unwrap();
+    std::fs::write(&rules, rules_text).unwrap();
     let agent = start(&agent_with_rules(&rules)).await;
     let bb = agent.blackboard().clone();
-    bb.set("quality/in/value", 0.9).await.unwrap();
-    advance(50).await;
-    assert!(
-        *bb.get::<f64>("mapper/out/value").await.unwrap() < 100.0,
-        "mapper follows the localizer"
-    );
-    bb.set("quality/in/value", 0.1).await.unwrap();
+    Rig {
+        _dir: dir,
+        rules,
+        agent,
+        bb,
+    }
+}
+
+async fn text(bb: &Blackboard, key: &str) -> String {
+    (*bb.get::<String>(key).await.unwrap()).clone()
+}
+
+async fn num(bb: &Blackboard, key: &str) -> f64 {
+    *bb.get::<f64>(key).await.unwrap()
+}
+
+/// Sets the quality `lost` reads and lets 30 ms pass.
+async fn quality(bb: &Blackboard, value: f64) {
+    bb.set("quality/in/value", value).await.unwrap();
     advance(30).await;
-    assert_eq!(
-        *bb.get::<String>("contexts/out/active").await.unwrap(),
-        "lost"
-    );
-    assert!(
-        *bb.get::<f64>("mapper/out/value").await.unwrap() > 100.0,
-        "relinked to odometry"
-    );
-    assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
-        0.0
-    );
-    assert_eq!(
-        *bb.get::<String>("recorder/stats/status").await.unwrap(),
-        status::STOPPED
-    );
-    bb.set("quality/in/value", 0.4).await.unwrap();
-    advance(30).await;
-    assert_eq!(
-        *bb.get::<String>("contexts/out/active").await.unwrap(),
-        "lost",
-        "between thresholds: still lost"
-    );
-    bb.set("quality/in/value", 0.8).await.unwrap();
-    advance(30).await;
-    assert_eq!(*bb.get::<String>("contexts/out/active").await.unwrap(), "");
+}
+
+/// `lost` is active now (`why`), and once the quality is good again, what it changed is back.
+async fn assert_lost_holds_then_undone(bb: &Blackboard, why: &str) {
+    assert_eq!(text(bb, "contexts/out/active").await, "lost", "{why}");
+    quality(bb, 0.8).await;
+    assert_lost_undone(bb).await;
+}
+
+/// What `lost` changed is back: the mapper's link, the localizer's increment, the recorder.
+async fn assert_lost_undone(bb: &Blackboard) {
+    assert_eq!(text(bb, "contexts/out/active").await, "");
     assert_eq!(
         bb.link_of("mapper/in/value").await.unwrap().as_deref(),
         Some("localizer/out/value"),
         "link restored"
     );
     assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        num(bb, "localizer/params/increment").await,
         1.0,
-        "value restored"
+        "the value from before the context restored"
     );
     assert_eq!(
-        *bb.get::<String>("recorder/stats/status").await.unwrap(),
+        text(bb, "recorder/stats/status").await,
         status::RUNNING,
         "restarted"
     );
-    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_context_relinks_sets_and_stops_then_restores_everything() {
+    let r = rig(LOST).await;
+    let bb = &r.bb;
+    bb.set("quality/in/value", 0.9).await.unwrap();
+    advance(50).await;
+    assert!(
+        num(bb, "mapper/out/value").await < 100.0,
+        "mapper follows the localizer"
+    );
+    quality(bb, 0.1).await;
+    assert_eq!(text(bb, "contexts/out/active").await, "lost");
+    assert!(
+        num(bb, "mapper/out/value").await > 100.0,
+        "relinked to odometry"
+    );
+    assert_eq!(num(bb, "localizer/params/increment").await, 0.0);
+    assert_eq!(text(bb, "recorder/stats/status").await, status::STOPPED);
+    quality(bb, 0.4).await;
+    assert_lost_holds_then_undone(bb, "between thresholds: still lost").await;
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
 #[tokio::test(start_paused = true)]
 async fn a_context_manager_restarted_mid_context_goes_on_and_restores_what_was_there() {
-    let dir = tempfile::tempdir().unwrap();
-    let rules = dir.path().join("rules.ron");
-    std::fs::write(&rules, LOST).unwrap();
-    let agent = start(&agent_with_rules(&rules)).await;
-    let bb = agent.blackboard().clone();
-    bb.set("quality/in/value", 0.1).await.unwrap();
-    advance(30).await;
-    let active = bb.handle::<String>("contexts/out/active").await.unwrap();
-    assert_eq!(*active.get(), "lost");
-    assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
-        0.0
-    );
+    let r = rig(LOST).await;
+    let bb = &r.bb;
+    quality(bb, 0.1).await;
+    assert_eq!(text(bb, "contexts/out/active").await, "lost");
+    assert_eq!(num(bb, "localizer/params/increment").await, 0.0);
 
     // The manager crashes while `lost` is active (its next step, woken by the quality), and
     // the supervisor restarts it.
@@ -108,57 +128,29 @@ async fn a_context_manager_restarted_mid_context_goes_on_and_restores_what_was_t
     bb.set("quality/in/value", 0.4).await.unwrap();
     advance(1000).await;
     assert_eq!(*bb.get::<i64>("contexts/stats/restarts").await.unwrap(), 1);
-    assert_eq!(
-        *active.get(),
-        "lost",
-        "between thresholds a restarted manager keeps the context it had on"
-    );
-    bb.set("quality/in/value", 0.8).await.unwrap();
-    advance(30).await;
-    assert_eq!(*active.get(), "");
-    assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
-        1.0,
-        "the value from before the context, not the context's own"
-    );
-    assert_eq!(
-        bb.link_of("mapper/in/value").await.unwrap().as_deref(),
-        Some("localizer/out/value"),
-        "link restored"
-    );
-    assert_eq!(
-        *bb.get::<String>("recorder/stats/status").await.unwrap(),
-        status::RUNNING,
-        "restarted"
-    );
-    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    let why = "between thresholds a restarted manager keeps the context it had on";
+    assert_lost_holds_then_undone(bb, why).await;
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
 #[tokio::test(start_paused = true)]
 async fn reloading_applies_the_difference_and_a_broken_file_changes_nothing() {
-    let dir = tempfile::tempdir().unwrap();
-    let rules = dir.path().join("rules.ron");
-    std::fs::write(&rules, LOST).unwrap();
-    let agent = start(&agent_with_rules(&rules)).await;
-    let bb = agent.blackboard().clone();
-    bb.set("quality/in/value", 0.1).await.unwrap();
-    advance(30).await;
-    assert_eq!(
-        *bb.get::<String>("contexts/out/active").await.unwrap(),
-        "lost"
-    );
+    let r = rig(LOST).await;
+    let (bb, rules) = (&r.bb, &r.rules);
+    quality(bb, 0.1).await;
+    assert_eq!(text(bb, "contexts/out/active").await, "lost");
 
     std::fs::write(
-        &rules,
+        rules,
         "Contexts(contexts: [(name: \"lost\", when: \"quality/out/value <\")])",
     )
     .unwrap();
     bb.set("contexts/params/reload", 1_i64).await.unwrap();
     advance(20).await;
-    let errors = bb.get::<String>("contexts/out/errors").await.unwrap();
+    let errors = text(bb, "contexts/out/errors").await;
     assert!(errors.contains("rules.ron:1:"), "{errors}");
     assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        num(bb, "localizer/params/increment").await,
         0.0,
         "the running rules stay"
     );
@@ -166,84 +158,61 @@ async fn reloading_applies_the_difference_and_a_broken_file_changes_nothing() {
     // The new rules keep the relink but drop the parameter change and the stop.
     let kept = r#"Contexts(contexts: [(name: "lost", when: "quality/out/value < 0.3", until: "quality/out/value > 0.5",
         relink: {"mapper/in/value": "odometry/out/value"})])"#;
-    std::fs::write(&rules, kept).unwrap();
+    std::fs::write(rules, kept).unwrap();
     bb.set("contexts/params/reload", 2_i64).await.unwrap();
     advance(30).await;
-    assert_eq!(*bb.get::<String>("contexts/out/errors").await.unwrap(), "");
+    assert_eq!(text(bb, "contexts/out/errors").await, "");
     assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        num(bb, "localizer/params/increment").await,
         1.0,
         "what the removed rule changed is restored"
     );
-    assert_eq!(
-        *bb.get::<String>("recorder/stats/status").await.unwrap(),
-        status::RUNNING
-    );
+    assert_eq!(text(bb, "recorder/stats/status").await, status::RUNNING);
     assert_eq!(
         bb.link_of("mapper/in/value").await.unwrap().as_deref(),
         Some("odometry/out/value"),
         "the kept effect stays"
     );
-    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
 #[tokio::test(start_paused = true)]
 async fn reloaded_rules_wake_on_the_properties_they_newly_read() {
-    let dir = tempfile::tempdir().unwrap();
-    let rules = dir.path().join("rules.ron");
-    std::fs::write(&rules, LOST).unwrap();
-    let agent = start(&agent_with_rules(&rules)).await;
-    let bb = agent.blackboard().clone();
+    let r = rig(LOST).await;
+    let (bb, rules) = (&r.bb, &r.rules);
     let far = r#"Contexts(contexts: [(name: "far", when: "odometry/out/value > 115.5", stop: ["recorder"])])"#;
-    std::fs::write(&rules, far).unwrap();
+    std::fs::write(rules, far).unwrap();
     bb.set("contexts/params/reload", 1_i64).await.unwrap();
     advance(300).await;
-    assert!(*bb.get::<f64>("odometry/out/value").await.unwrap() > 116.0);
+    assert!(num(bb, "odometry/out/value").await > 116.0);
     assert_eq!(
-        *bb.get::<String>("contexts/out/active").await.unwrap(),
+        text(bb, "contexts/out/active").await,
         "far",
         "woken by odometry, read only since the reload"
     );
-    assert_eq!(
-        *bb.get::<String>("recorder/stats/status").await.unwrap(),
-        status::STOPPED
-    );
-    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(text(bb, "recorder/stats/status").await, status::STOPPED);
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
 #[tokio::test(start_paused = true)]
 async fn a_reload_applies_the_changed_set_values_of_a_context_that_stays_active() {
-    let dir = tempfile::tempdir().unwrap();
-    let rules = dir.path().join("rules.ron");
-    std::fs::write(&rules, LOST).unwrap();
-    let agent = start(&agent_with_rules(&rules)).await;
-    let bb = agent.blackboard().clone();
-    bb.set("quality/in/value", 0.1).await.unwrap();
-    advance(30).await;
-    assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
-        0.0
-    );
-    std::fs::write(&rules, LOST.replace(r#""0.0""#, r#""0.25""#)).unwrap();
+    let r = rig(LOST).await;
+    let (bb, rules) = (&r.bb, &r.rules);
+    quality(bb, 0.1).await;
+    assert_eq!(num(bb, "localizer/params/increment").await, 0.0);
+    std::fs::write(rules, LOST.replace(r#""0.0""#, r#""0.25""#)).unwrap();
     bb.set("contexts/params/reload", 1_i64).await.unwrap();
     advance(30).await;
+    assert_eq!(text(bb, "contexts/out/active").await, "lost");
     assert_eq!(
-        *bb.get::<String>("contexts/out/active").await.unwrap(),
-        "lost"
-    );
-    assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
+        num(bb, "localizer/params/increment").await,
         0.25,
         "the context stays active and applies its new value"
     );
     // It still restores the original value when it ends.
-    bb.set("quality/in/value", 0.9).await.unwrap();
-    advance(30).await;
-    assert_eq!(
-        *bb.get::<f64>("localizer/params/increment").await.unwrap(),
-        1.0
-    );
-    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    quality(bb, 0.9).await;
+    assert_lost_undone(bb).await;
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
 #[tokio::test(start_paused = true)]
