@@ -165,9 +165,12 @@ fn a_recorded_run_is_listed_and_replayed_in_place_of_a_module() {
 fn a_recorded_run_holds_the_first_items_its_modules_push() {
     let dir = tempfile::tempdir().unwrap();
     // The first batch goes out 1 ms after the start: only a recorder attached before the
-    // modules start sees it.
+    // modules start sees it. The queue holds the whole run (200 batches of 50), so a tap that
+    // lags on a loaded machine loses nothing: with the default 64 a second batch before the
+    // tap's first read overwrote the oldest items (a tap that lags drops, by design).
     let config = r#"Agent(name: "p", modules: [
-        (name: "producer", type: "demo.producer", values: {"params/period_ms": 1, "params/batch": 50}),
+        (name: "producer", type: "demo.producer", values: {"params/period_ms": 1, "params/batch": 50},
+         capacities: {"out/items": 20000}),
     ])"#;
     std::fs::write(dir.path().join("producer.ron"), config).unwrap();
     let out = petrel(
