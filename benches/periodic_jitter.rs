@@ -6,6 +6,11 @@
 //! over one long run. This target prints percentiles (p50, p99, max of |period − 1 ms|, µs),
 //! the alone row being the in-run baseline. Run with `cargo bench --bench periodic_jitter`;
 //! `PETREL_JITTER_SECS` sets each run's length (default 3 s).
+//!
+//! On an agent thread (the default scheduler) both rows are run again with
+//! `realtime_priority: 50` (the agent's and the fine timer's threads under `SCHED_FIFO`), last,
+//! since the timer thread keeps its priority for the rest of the process; where the OS refuses
+//! it, those rows say so.
 
 mod common;
 
@@ -70,11 +75,12 @@ impl Module for Busy {
     }
 }
 
-fn config(busy: usize) -> String {
+fn config(busy: usize, realtime: Option<u8>) -> String {
     let mut modules = String::from(r#"(name: "p", type: "bench.periodic"),"#);
-    // On an agent thread, busy modules are what `long_steps` is for: off the agent's thread.
+    // On an agent thread (the default), busy modules are what `long_steps` is for: off the
+    // agent's thread.
     let long = match common::scheduler().as_str() {
-        "agent_thread" => "long_steps: true, ",
+        "agent_thread" | "" => "long_steps: true, ",
         _ => "",
     };
     for i in 0..busy {
@@ -82,7 +88,8 @@ fn config(busy: usize) -> String {
             r#"(name: "b{i}", type: "bench.busy", {long}links: {{"in/value": "b{i}/out/value"}}),"#
         ));
     }
-    format!(r#"Agent(name: "bench", modules: [{modules}])"#)
+    let realtime = realtime.map_or(String::new(), |p| format!("realtime_priority: {p}, "));
+    format!(r#"Agent(name: "bench", {realtime}modules: [{modules}])"#)
 }
 
 /// What one run measured.
@@ -96,12 +103,21 @@ struct Run {
 }
 
 /// Runs the periodic module beside `busy` busy modules for `length`, then stops the agent
-/// (1 s stop timeout: a module not stopped by then is killed and named in the summary).
-fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> Run {
+/// (1 s stop timeout: a module not stopped by then is killed and named in the summary). An
+/// error says the agent was refused (a `realtime_priority` the OS does not allow).
+fn run(
+    rt: &tokio::runtime::Runtime,
+    busy: usize,
+    realtime: Option<u8>,
+    length: Duration,
+) -> Result<Run, String> {
     let mut registry = common::registry();
     registry.register::<Periodic>().register::<Busy>();
-    let file = ConfigFile::parse("jitter.ron", &common::scheduled(&config(busy))).unwrap();
-    let agent = rt.block_on(async { Agent::start(&file, &registry).await.unwrap() });
+    let text = common::scheduled(&config(busy, realtime));
+    let file = ConfigFile::parse("jitter.ron", &text).unwrap();
+    let agent = rt
+        .block_on(Agent::start(&file, &registry))
+        .map_err(|e| e.to_string())?;
     STEPS.lock().unwrap().clear();
     std::thread::sleep(length);
     let steps = std::mem::take(&mut *STEPS.lock().unwrap());
@@ -129,11 +145,11 @@ fn run(rt: &tokio::runtime::Runtime, busy: usize, length: Duration) -> Run {
     if killed > 0 {
         println!("periodic_jitter: {killed} module(s) killed at the stop timeout");
     }
-    Run {
+    Ok(Run {
         jitter,
         busy_steps,
         stop,
-    }
+    })
 }
 
 fn percentile(sorted: &[f64], p: f64) -> f64 {
@@ -153,12 +169,23 @@ fn main() {
         .unwrap_or(3.0);
     let length = Duration::from_secs_f64(secs);
     let rt = common::runtime();
-    for (name, busy) in [("alone", 0), ("with_20_busy", 20)] {
+    let mut rows = vec![("alone", 0, None), ("with_20_busy", 20, None)];
+    if common::scheduler() != "shared" {
+        rows.push(("alone_realtime", 0, Some(50)));
+        rows.push(("with_20_busy_realtime", 20, Some(50)));
+    }
+    for (name, busy, realtime) in rows {
         let Run {
             jitter,
             busy_steps,
             stop,
-        } = run(&rt, busy, length);
+        } = match run(&rt, busy, realtime, length) {
+            Ok(run) => run,
+            Err(e) => {
+                println!("periodic_jitter/{name}: not run: {e}");
+                continue;
+            }
+        };
         println!(
             "periodic_jitter/{name}: {} periods in {secs} s; |period - 1 ms| p50 {:.0} µs, p90 {:.0} µs, p99 {:.0} µs, max {:.0} µs (goal p99 <= 100 µs); stop took {:.0} ms ({busy_steps} busy steps, the stop included)",
             jitter.len(),

@@ -155,7 +155,7 @@ impl Agent {
         let name = cfg.name.clone();
         let thread = match cfg.scheduler {
             Scheduler::Shared => None,
-            Scheduler::AgentThread => AgentThread::start(&name)
+            Scheduler::AgentThread => AgentThread::start(&name, cfg.realtime_priority)
                 .map_err(|e| StartError::Spawn(format!("the agent's thread: {e}")))?,
         };
         // Actors run on the runtime they are spawned from: the agent's thread, if it has one.

@@ -10,6 +10,7 @@
 //! spawned from, so the supervisor spawned here spawns its modules here too.
 
 use std::future::Future;
+use std::os::unix::thread::JoinHandleExt;
 
 use tokio::runtime::{Handle, RuntimeFlavor};
 use tokio::sync::oneshot;
@@ -26,18 +27,21 @@ pub(crate) struct AgentThread {
 impl AgentThread {
     /// A thread of its own for agent `name`, if the caller runs on a multi-thread runtime. On a
     /// current-thread runtime (`None`) the agent runs in place: it has one thread already, and
-    /// a paused test clock must stay the agent's clock.
-    pub fn start(name: &str) -> std::io::Result<Option<AgentThread>> {
+    /// a paused test clock must stay the agent's clock. With a `realtime_priority`, the thread
+    /// and the fine timer's run under `SCHED_FIFO` (see `realtime.rs`); an error says the OS
+    /// refused.
+    pub fn start(name: &str, realtime_priority: Option<u8>) -> Result<Option<AgentThread>, String> {
         let shared = Handle::current();
         if shared.runtime_flavor() == RuntimeFlavor::CurrentThread {
             return Ok(None);
         }
         let runtime = tokio::runtime::Builder::new_current_thread()
             .enable_all()
-            .build()?;
+            .build()
+            .map_err(|e| e.to_string())?;
         let handle = runtime.handle().clone();
         let (shutdown, ended) = oneshot::channel::<()>();
-        std::thread::Builder::new()
+        let thread = std::thread::Builder::new()
             .name(format!("petrel-agent-{name}"))
             .spawn(move || {
                 crate::fine_timer::mark_agent_thread();
@@ -46,12 +50,21 @@ impl AgentThread {
                     let _ = ended.await;
                 });
                 drop(runtime);
-            })?;
-        Ok(Some(AgentThread {
+            })
+            .map_err(|e| e.to_string())?;
+        let agent = AgentThread {
             runtime: handle,
             shared,
             shutdown: Some(shutdown),
-        }))
+        };
+        if let Some(priority) = realtime_priority {
+            // Dropping `agent` on an error ends the thread.
+            crate::realtime::set_fifo(thread.as_pthread_t(), priority)
+                .map_err(|e| crate::realtime::refused("the agent's thread", priority, &e))?;
+            crate::fine_timer::raise_priority(priority)
+                .map_err(|e| crate::realtime::refused("the fine timer thread", priority, &e))?;
+        }
+        Ok(Some(agent))
     }
 
     /// The shared runtime, where modules with `long_steps` run.

@@ -55,6 +55,10 @@ struct Deadlines {
 struct Timer {
     deadlines: Mutex<Deadlines>,
     earlier: Condvar,
+    /// The timer thread, which runs as long as the process.
+    thread: OnceLock<libc::pthread_t>,
+    /// The highest real-time priority asked for so far (0: none).
+    priority: Mutex<u8>,
 }
 
 fn timer() -> &'static Timer {
@@ -63,13 +67,32 @@ fn timer() -> &'static Timer {
         let timer: &'static Timer = Box::leak(Box::new(Timer {
             deadlines: Mutex::new(Deadlines::default()),
             earlier: Condvar::new(),
+            thread: OnceLock::new(),
+            priority: Mutex::new(0),
         }));
-        std::thread::Builder::new()
+        let thread = std::thread::Builder::new()
             .name("petrel-fine-timer".into())
             .spawn(move || timer.run())
             .expect("the fine timer thread could not be started");
+        let _ = timer
+            .thread
+            .set(std::os::unix::thread::JoinHandleExt::as_pthread_t(&thread));
         timer
     })
+}
+
+/// Runs the timer thread under `SCHED_FIFO` at `priority`, unless it runs at a higher one
+/// already (agents of one process may ask for different ones: the timer serves them all).
+pub(crate) fn raise_priority(priority: u8) -> std::io::Result<()> {
+    let timer = timer();
+    let mut applied = timer.priority.lock();
+    if priority <= *applied {
+        return Ok(());
+    }
+    let thread = *timer.thread.get().expect("set when the timer started");
+    crate::realtime::set_fifo(thread, priority)?;
+    *applied = priority;
+    Ok(())
 }
 
 impl Timer {

@@ -93,7 +93,7 @@ pub async fn start(text: &str) -> Agent {
 }
 
 /// `PETREL_BENCH_SCHEDULER=agent_thread` runs the bench agents with `scheduler: agent_thread`,
-/// so one build measures both schedulers (unset: the config's own, `shared` by default).
+/// so one build measures both schedulers (unset: the config's own, `agent_thread` by default).
 pub fn scheduler() -> String {
     std::env::var("PETREL_BENCH_SCHEDULER").unwrap_or_default()
 }

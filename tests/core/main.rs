@@ -11,6 +11,7 @@ mod ordering;
 mod ordering_modules;
 mod placement;
 mod queues;
+mod realtime;
 mod scheduling;
 mod snapshot;
 mod step_budget;

@@ -64,6 +64,11 @@ pub struct AgentConfig {
     /// When a module's steps are too long for its agent's thread (see [`StepBudget`]).
     #[serde(default)]
     pub step_budget: StepBudget,
+    /// A real-time (`SCHED_FIFO`) priority, 1..=99, for the agent's own thread and the
+    /// process's fine timer thread, so periodic modules keep their period while other threads
+    /// keep the CPUs busy; `agent_thread` only (see [`Scheduler`]). None: ordinary threads.
+    #[serde(default)]
+    pub realtime_priority: Option<u8>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -144,7 +149,8 @@ impl ConfigFile {
     }
 
     /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
-    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`; per module
+    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
+    /// `realtime_priority`; per module
     /// `type`, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
     /// and their `values`, `links` and `capacities` are merged key by key; modules only it
     /// has are appended.
@@ -171,6 +177,9 @@ impl ConfigFile {
         }
         if wrote("step_budget") {
             self.config.step_budget = overlay.config.step_budget;
+        }
+        if wrote("realtime_priority") {
+            self.config.realtime_priority = overlay.config.realtime_priority;
         }
         if wrote("name") && !overlay.config.name.is_empty() {
             self.config.name = overlay.config.name.clone();
@@ -238,6 +247,7 @@ impl ConfigFile {
         let mut errors = self.check_supervision();
         errors.extend(self.check_scheduler());
         errors.extend(self.check_step_budget());
+        errors.extend(self.check_realtime_priority());
         let mut names = HashSet::new();
         for m in &self.config.modules {
             if !names.insert(m.name.as_str()) {

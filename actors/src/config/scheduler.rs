@@ -1,5 +1,6 @@
 //! Where an agent's module actors run: the `scheduler:` field of an agent config, its
-//! `step_budget:` and each module's `long_steps:` (see ARCHITECTURE.md, "Scheduler").
+//! `step_budget:`, its `realtime_priority:` and each module's `long_steps:` (see
+//! ARCHITECTURE.md, "Scheduler").
 
 use serde::{Deserialize, Serialize};
 
@@ -131,6 +132,24 @@ impl ConfigFile {
             return ConfigError::at(file, text, at, message);
         }
         self.locate("step_budget", message)
+    }
+
+    /// `realtime_priority` out of 1..=99, or on an agent without a thread of its own.
+    pub(super) fn check_realtime_priority(&self) -> Vec<ConfigError> {
+        let Some(priority) = self.config.realtime_priority else {
+            return Vec::new();
+        };
+        let message = if !(1..=99).contains(&priority) {
+            format!("realtime_priority is {priority}; expected a SCHED_FIFO priority, 1..=99")
+        } else if self.config.scheduler != Scheduler::AgentThread {
+            format!(
+                "realtime_priority is for the agent's own thread, which only `scheduler: agent_thread` gives it; this agent's scheduler is `{}`: remove `realtime_priority` or use `scheduler: agent_thread`",
+                self.config.scheduler.name()
+            )
+        } else {
+            return Vec::new();
+        };
+        vec![self.locate("realtime_priority", message)]
     }
 
     /// `long_steps: true` asks for the shared runtime, where a `shared` agent runs every

@@ -1,5 +1,5 @@
-//! What a config says beyond properties — supervision, groups, recording, the scheduler and
-//! step budget, and each module's group, restart policy, watchdog, stop timeout and
+//! What a config says beyond properties — supervision, groups, recording, the scheduler,
+//! step budget and real-time priority, and each module's group, restart policy, watchdog, stop timeout and
 //! `long_steps` — kept with the registry so that a snapshot writes it back and a snapshot run
 //! behaves like the run it froze.
 
@@ -16,6 +16,7 @@ pub(crate) struct Settings {
     record: Option<RecordSection>,
     scheduler: Scheduler,
     step_budget: StepBudget,
+    realtime_priority: Option<u8>,
     modules: HashMap<String, ModuleSettings>,
 }
 
@@ -37,6 +38,7 @@ impl Settings {
             record: config.record.clone(),
             scheduler: config.scheduler,
             step_budget: config.step_budget,
+            realtime_priority: config.realtime_priority,
             modules: config
                 .modules
                 .iter()
@@ -68,6 +70,9 @@ impl Settings {
         }
         if self.step_budget != StepBudget::default() {
             fields.push(format!("step_budget: {}", ron_text(&self.step_budget)));
+        }
+        if let Some(priority) = self.realtime_priority {
+            fields.push(format!("realtime_priority: {priority}"));
         }
         fields
     }
