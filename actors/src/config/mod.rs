@@ -26,8 +26,10 @@ use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
 use crate::team::{LinkTarget, TeamConfig};
 
 mod error;
+mod overlay;
 mod record;
 mod scheduler;
+mod supervision;
 mod written;
 
 pub use error::{parse_ron, read_text, ConfigError, ConfigErrors};
@@ -148,80 +150,6 @@ impl ConfigFile {
         })
     }
 
-    /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
-    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
-    /// `realtime_priority`; per module
-    /// `type`, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
-    /// and their `values`, `links` and `capacities` are merged key by key; modules only it
-    /// has are appended.
-    pub fn overlay(&mut self, overlay: ConfigFile) {
-        let source = self.sources.len();
-        let wrote = |field: &str| overlay.written.contains(field);
-        if overlay.config.team.is_some() {
-            self.config.team = overlay.config.team.clone();
-        }
-        if overlay.config.record.is_some() {
-            self.config.record = overlay.config.record.clone();
-        }
-        if wrote("supervision") {
-            self.config.supervision = overlay.config.supervision.clone();
-        }
-        if wrote("groups") {
-            self.config.groups = overlay.config.groups.clone();
-        }
-        if wrote("contexts") {
-            self.config.contexts = overlay.config.contexts.clone();
-        }
-        if wrote("scheduler") {
-            self.config.scheduler = overlay.config.scheduler;
-        }
-        if wrote("step_budget") {
-            self.config.step_budget = overlay.config.step_budget;
-        }
-        if wrote("realtime_priority") {
-            self.config.realtime_priority = overlay.config.realtime_priority;
-        }
-        if wrote("name") && !overlay.config.name.is_empty() {
-            self.config.name = overlay.config.name.clone();
-        }
-        for m in &overlay.config.modules {
-            for key in m.values.keys() {
-                self.value_sources
-                    .insert((m.name.clone(), key.clone()), source);
-            }
-        }
-        for m in overlay.config.modules {
-            match self.config.modules.iter_mut().find(|b| b.name == m.name) {
-                Some(base) => {
-                    let wrote =
-                        |field: &str| overlay.written.contains(&format!("{}/{field}", m.name));
-                    base.type_name = m.type_name;
-                    if wrote("group") {
-                        base.group = m.group;
-                    }
-                    if wrote("restart") {
-                        base.restart = m.restart;
-                    }
-                    if wrote("watchdog_ms") {
-                        base.watchdog_ms = m.watchdog_ms;
-                    }
-                    if wrote("shutdown_timeout_ms") {
-                        base.shutdown_timeout_ms = m.shutdown_timeout_ms;
-                    }
-                    if wrote("long_steps") {
-                        base.long_steps = m.long_steps;
-                    }
-                    base.values.extend(m.values);
-                    base.links.extend(m.links);
-                    base.capacities.extend(m.capacities);
-                }
-                None => self.config.modules.push(m),
-            }
-        }
-        self.sources.extend(overlay.sources);
-        self.written.extend(overlay.written);
-    }
-
     /// The directory relative file paths of `module`'s value `key` are taken from: that of the
     /// file that gave the value.
     fn base_dir(&self, module: &str, key: &str) -> PathBuf {
@@ -340,98 +268,6 @@ impl ConfigFile {
         }
     }
 
-    /// Checks the `supervision` section, groups, and the modules' supervision fields.
-    fn check_supervision(&self) -> Vec<ConfigError> {
-        let mut errors = Vec::new();
-        let at = |needle: &str, message: String| self.locate(&format!("{needle}:"), message);
-        let s = &self.config.supervision;
-        let mut intensity = |what: &str, max: u32, within: f64, needle: &str| {
-            if max > MAX_RESTARTS_LIMIT {
-                errors.push(at(
-                    needle,
-                    format!("{what}: max_restarts is {max}; expected 0..={MAX_RESTARTS_LIMIT}"),
-                ));
-            }
-            if !(within > 0.0 && within <= MAX_WINDOW_S) {
-                errors.push(at(needle, format!("{what}: within_s is {within}; expected a number of seconds in (0, {MAX_WINDOW_S}]")));
-            }
-        };
-        intensity("supervision", s.max_restarts, s.within_s, "supervision");
-        for g in &self.config.groups {
-            intensity(
-                &format!("group `{}`", g.name),
-                g.max_restarts,
-                g.within_s,
-                "groups",
-            );
-        }
-        let b = &s.backoff;
-        if b.min_ms > b.max_ms {
-            errors.push(at(
-                "backoff",
-                format!(
-                    "supervision backoff: min_ms ({}) is above max_ms ({})",
-                    b.min_ms, b.max_ms
-                ),
-            ));
-        }
-        if !(0.0..=1.0).contains(&b.jitter) {
-            errors.push(at(
-                "jitter",
-                format!(
-                    "supervision backoff: jitter is {}; expected 0.0..=1.0",
-                    b.jitter
-                ),
-            ));
-        }
-        let mut seen = HashSet::new();
-        for g in &self.config.groups {
-            if !seen.insert(g.name.as_str()) {
-                errors.push(self.locate(
-                    &format!("\"{}\"", g.name),
-                    format!("duplicate group name `{}`", g.name),
-                ));
-            }
-        }
-        for m in &self.config.modules {
-            if m.name.starts_with('_') {
-                errors.push(self.error(
-                    &m.name,
-                    None,
-                    format!(
-                        "module name `{}`: names starting with `_` are reserved for the runtime",
-                        m.name
-                    ),
-                ));
-            }
-            if let Some(group) = &m.group {
-                if !seen.contains(group.as_str()) {
-                    let mut known: Vec<&str> =
-                        self.config.groups.iter().map(|g| g.name.as_str()).collect();
-                    known.dedup();
-                    let known = if known.is_empty() {
-                        "none are defined".to_string()
-                    } else {
-                        format!("groups: {}", known.join(", "))
-                    };
-                    errors.push(self.error(
-                        &m.name,
-                        Some(group),
-                        format!("module `{}`: unknown group `{group}` ({known})", m.name),
-                    ));
-                }
-            }
-            if m.watchdog_ms == Some(0) {
-                errors.push(self.error(
-                    &m.name,
-                    Some("watchdog_ms"),
-                    format!("module `{}`: watchdog_ms must be above 0", m.name),
-                ));
-            }
-        }
-        errors
-    }
-
     /// An error located at the first occurrence of `needle` in the last source that has it.
     pub fn locate(&self, needle: &str, message: String) -> ConfigError {
         for (file, text) in self.sources.iter().rev() {
@@ -474,11 +310,6 @@ impl ConfigFile {
         ConfigError::in_file(self.path(), message)
     }
 }
-
-/// Largest `max_restarts` accepted.
-const MAX_RESTARTS_LIMIT: u32 = 100_000;
-/// Longest intensity window accepted, seconds.
-const MAX_WINDOW_S: f64 = 86_400.0;
 
 /// Says which module and key a registry error is about, in config terms.
 pub(crate) fn describe(module: &str, path: &str, error: BlackboardError) -> String {

@@ -1,0 +1,79 @@
+//! Overlays: a config (e.g. a snapshot) applied on top of another.
+
+use super::ConfigFile;
+
+impl ConfigFile {
+    /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
+    /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
+    /// `realtime_priority`; per module
+    /// `type`, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
+    /// and their `values`, `links` and `capacities` are merged key by key; modules only it
+    /// has are appended.
+    pub fn overlay(&mut self, overlay: ConfigFile) {
+        let source = self.sources.len();
+        let wrote = |field: &str| overlay.written.contains(field);
+        if overlay.config.team.is_some() {
+            self.config.team = overlay.config.team.clone();
+        }
+        if overlay.config.record.is_some() {
+            self.config.record = overlay.config.record.clone();
+        }
+        if wrote("supervision") {
+            self.config.supervision = overlay.config.supervision.clone();
+        }
+        if wrote("groups") {
+            self.config.groups = overlay.config.groups.clone();
+        }
+        if wrote("contexts") {
+            self.config.contexts = overlay.config.contexts.clone();
+        }
+        if wrote("scheduler") {
+            self.config.scheduler = overlay.config.scheduler;
+        }
+        if wrote("step_budget") {
+            self.config.step_budget = overlay.config.step_budget;
+        }
+        if wrote("realtime_priority") {
+            self.config.realtime_priority = overlay.config.realtime_priority;
+        }
+        if wrote("name") && !overlay.config.name.is_empty() {
+            self.config.name = overlay.config.name.clone();
+        }
+        for m in &overlay.config.modules {
+            for key in m.values.keys() {
+                self.value_sources
+                    .insert((m.name.clone(), key.clone()), source);
+            }
+        }
+        for m in overlay.config.modules {
+            match self.config.modules.iter_mut().find(|b| b.name == m.name) {
+                Some(base) => {
+                    let wrote =
+                        |field: &str| overlay.written.contains(&format!("{}/{field}", m.name));
+                    base.type_name = m.type_name;
+                    if wrote("group") {
+                        base.group = m.group;
+                    }
+                    if wrote("restart") {
+                        base.restart = m.restart;
+                    }
+                    if wrote("watchdog_ms") {
+                        base.watchdog_ms = m.watchdog_ms;
+                    }
+                    if wrote("shutdown_timeout_ms") {
+                        base.shutdown_timeout_ms = m.shutdown_timeout_ms;
+                    }
+                    if wrote("long_steps") {
+                        base.long_steps = m.long_steps;
+                    }
+                    base.values.extend(m.values);
+                    base.links.extend(m.links);
+                    base.capacities.extend(m.capacities);
+                }
+                None => self.config.modules.push(m),
+            }
+        }
+        self.sources.extend(overlay.sources);
+        self.written.extend(overlay.written);
+    }
+}

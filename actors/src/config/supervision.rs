@@ -1,0 +1,104 @@
+//! Checks of the `supervision:` section, `groups:` and the modules' supervision fields.
+
+use std::collections::HashSet;
+
+use super::{ConfigError, ConfigFile};
+
+/// Largest `max_restarts` accepted.
+const MAX_RESTARTS_LIMIT: u32 = 100_000;
+/// Longest intensity window accepted, seconds.
+const MAX_WINDOW_S: f64 = 86_400.0;
+
+impl ConfigFile {
+    /// Checks the `supervision` section, groups, and the modules' supervision fields.
+    pub(super) fn check_supervision(&self) -> Vec<ConfigError> {
+        let mut errors = Vec::new();
+        let at = |needle: &str, message: String| self.locate(&format!("{needle}:"), message);
+        let s = &self.config.supervision;
+        let mut intensity = |what: &str, max: u32, within: f64, needle: &str| {
+            if max > MAX_RESTARTS_LIMIT {
+                errors.push(at(
+                    needle,
+                    format!("{what}: max_restarts is {max}; expected 0..={MAX_RESTARTS_LIMIT}"),
+                ));
+            }
+            if !(within > 0.0 && within <= MAX_WINDOW_S) {
+                errors.push(at(needle, format!("{what}: within_s is {within}; expected a number of seconds in (0, {MAX_WINDOW_S}]")));
+            }
+        };
+        intensity("supervision", s.max_restarts, s.within_s, "supervision");
+        for g in &self.config.groups {
+            intensity(
+                &format!("group `{}`", g.name),
+                g.max_restarts,
+                g.within_s,
+                "groups",
+            );
+        }
+        let b = &s.backoff;
+        if b.min_ms > b.max_ms {
+            errors.push(at(
+                "backoff",
+                format!(
+                    "supervision backoff: min_ms ({}) is above max_ms ({})",
+                    b.min_ms, b.max_ms
+                ),
+            ));
+        }
+        if !(0.0..=1.0).contains(&b.jitter) {
+            errors.push(at(
+                "jitter",
+                format!(
+                    "supervision backoff: jitter is {}; expected 0.0..=1.0",
+                    b.jitter
+                ),
+            ));
+        }
+        let mut seen = HashSet::new();
+        for g in &self.config.groups {
+            if !seen.insert(g.name.as_str()) {
+                errors.push(self.locate(
+                    &format!("\"{}\"", g.name),
+                    format!("duplicate group name `{}`", g.name),
+                ));
+            }
+        }
+        for m in &self.config.modules {
+            if m.name.starts_with('_') {
+                errors.push(self.error(
+                    &m.name,
+                    None,
+                    format!(
+                        "module name `{}`: names starting with `_` are reserved for the runtime",
+                        m.name
+                    ),
+                ));
+            }
+            if let Some(group) = &m.group {
+                if !seen.contains(group.as_str()) {
+                    let mut known: Vec<&str> =
+                        self.config.groups.iter().map(|g| g.name.as_str()).collect();
+                    known.dedup();
+                    let known = if known.is_empty() {
+                        "none are defined".to_string()
+                    } else {
+                        format!("groups: {}", known.join(", "))
+                    };
+                    errors.push(self.error(
+                        &m.name,
+                        Some(group),
+                        format!("module `{}`: unknown group `{group}` ({known})", m.name),
+                    ));
+                }
+            }
+            if m.watchdog_ms == Some(0) {
+                errors.push(self.error(
+                    &m.name,
+                    Some("watchdog_ms"),
+                    format!("module `{}`: watchdog_ms must be above 0", m.name),
+                ));
+            }
+        }
+        errors
+    }
+}
