@@ -2,9 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use petrel::actors::{status, Agent, Blackboard, DEFAULT_STOP_TIMEOUT};
+use petrel::actors::{status, Agent, Blackboard, ConfigFile, DEFAULT_STOP_TIMEOUT};
 
-use crate::support::{advance, start};
+use crate::support::{advance, registry, start};
 
 fn agent_with_rules(rules_path: &Path) -> String {
     format!(
@@ -131,6 +131,28 @@ async fn a_context_manager_restarted_mid_context_goes_on_and_restores_what_was_t
     let why = "between thresholds a restarted manager keeps the context it had on";
     assert_lost_holds_then_undone(bb, why).await;
     r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_agent_resumed_from_a_snapshot_mid_context_restores_what_was_there_before() {
+    let r = rig(LOST).await;
+    quality(&r.bb, 0.1).await;
+    assert_eq!(num(&r.bb, "localizer/params/increment").await, 0.0);
+    r.agent.stop_modules(DEFAULT_STOP_TIMEOUT).await;
+    let snapshot = r.agent.snapshot().await.unwrap();
+    r.agent.shutdown().await;
+
+    // The snapshot holds the context's value; its memory, the value from before.
+    let mut file = ConfigFile::parse("base.ron", &agent_with_rules(&r.rules)).unwrap();
+    file.overlay(ConfigFile::parse("snapshot.ron", &snapshot).unwrap_or_else(|e| panic!("{e}")));
+    let agent = Agent::start(&file, &registry())
+        .await
+        .unwrap_or_else(|e| panic!("{e}"));
+    let bb = agent.blackboard();
+    advance(30).await;
+    assert_eq!(num(bb, "localizer/params/increment").await, 0.0);
+    assert_lost_holds_then_undone(bb, "resumed with `lost` on").await;
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
 #[tokio::test(start_paused = true)]

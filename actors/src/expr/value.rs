@@ -5,9 +5,11 @@ use std::sync::Arc;
 
 use crate::value::{AnyValue, TypeInfo};
 
-/// The value of an expression or sub-expression (serializable, so what a context set can be
-/// kept in a module's `state/` memory).
+/// The value of an expression or sub-expression. Serializable, so what a context set can be
+/// kept in a module's `state/` memory: untagged (`true`, `0.5`, `"slow"`), since a snapshot
+/// is read through RON's dynamic values, which keep no enum variant names.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
 pub enum Value {
     /// A boolean.
     Bool(bool),
