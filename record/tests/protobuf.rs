@@ -40,7 +40,10 @@ fn encoded<T: petrel_actors::PropertyType>(value: T) -> (Codec, MessageDescripto
     let value: AnyValue = Arc::new(value);
     let codec = Codec::for_value(Format::Foxglove, &ti, &value);
     let schema = codec.schema(ti.name());
-    assert_eq!((schema.encoding, schema.message_encoding), ("protobuf", "protobuf"));
+    assert_eq!(
+        (schema.encoding, schema.message_encoding),
+        ("protobuf", "protobuf")
+    );
     let pool = DescriptorPool::decode(&schema.data[..]).expect("a valid FileDescriptorSet");
     let desc = pool
         .get_message_by_name(&schema.name)
@@ -109,7 +112,10 @@ fn a_grid_is_a_foxglove_grid_with_raw_cells() {
     assert_eq!(field(occupancy, "name").as_str(), Some("occupancy"));
     assert_eq!(field(occupancy, "type").as_enum_number(), Some(2), "INT8");
     let cells: Vec<u8> = grid().data.iter().map(|&c| c as u8).collect();
-    assert_eq!(field(&m, "data").as_bytes().map(|b| b.to_vec()), Some(cells));
+    assert_eq!(
+        field(&m, "data").as_bytes().map(|b| b.to_vec()),
+        Some(cells)
+    );
 }
 
 #[test]
@@ -150,7 +156,10 @@ fn an_image_is_a_foxglove_raw_image_with_raw_pixels() {
     let (_, desc, bytes) = encoded(image);
     check_fields(
         &desc,
-        &[("width", 2, FieldKind::Fixed32), ("data", 6, FieldKind::Bytes)],
+        &[
+            ("width", 2, FieldKind::Fixed32),
+            ("data", 6, FieldKind::Bytes),
+        ],
     );
     let m = DynamicMessage::decode(desc, &bytes[..]).unwrap();
     assert_eq!(field(&m, "width").as_u32(), Some(2));
@@ -208,7 +217,10 @@ fn a_damaged_message_is_an_error() {
         let _ = codec.decode(&ti, &bytes[..cut]);
     }
     let err = codec.decode(&ti, &bytes[..bytes.len() - 3]).unwrap_err();
-    assert!(err.contains("foxglove.Grid") && err.contains("at byte"), "{err}");
+    assert!(
+        err.contains("foxglove.Grid") && err.contains("at byte"),
+        "{err}"
+    );
     let mut flipped = bytes.clone();
     flipped[0] = 0x07;
     assert!(codec.decode(&ti, &flipped).is_err());

@@ -160,7 +160,9 @@ impl<'a> Reader<'a> {
                 return Ok(v);
             }
         }
-        Err(format!("at byte {start}: expected a varint of at most 10 bytes"))
+        Err(format!(
+            "at byte {start}: expected a varint of at most 10 bytes"
+        ))
     }
 
     fn take(&mut self, n: usize) -> Result<&'a [u8], String> {
@@ -197,7 +199,11 @@ impl<'a> Reader<'a> {
                 Value::Len(self.take(n)?)
             }
             FIXED32 => Value::Fixed32(u32::from_le_bytes(self.take(4)?.try_into().unwrap())),
-            w => return Err(format!("at byte {start}: expected wire type 0, 1, 2 or 5, got {w}")),
+            w => {
+                return Err(format!(
+                    "at byte {start}: expected wire type 0, 1, 2 or 5, got {w}"
+                ))
+            }
         };
         Ok(Some((field, value)))
     }
@@ -234,7 +240,17 @@ mod tests {
 
     #[test]
     fn varints_round_trip_at_every_length() {
-        for v in [0, 1, 127, 128, 300, 16_383, 16_384, u64::from(u32::MAX), u64::MAX] {
+        for v in [
+            0,
+            1,
+            127,
+            128,
+            300,
+            16_383,
+            16_384,
+            u64::from(u32::MAX),
+            u64::MAX,
+        ] {
             let mut out = Vec::new();
             uint(&mut out, 3, v);
             let mut r = Reader::new(&out);
@@ -266,9 +282,15 @@ mod tests {
         bytes(&mut out, 9, &[1, 2, 3, 4]);
         let cut = &out[..out.len() - 2];
         let mut r = Reader::new(cut);
-        assert_eq!(r.field().unwrap(), Some((4, Value::Fixed64(1.5_f64.to_bits()))));
+        assert_eq!(
+            r.field().unwrap(),
+            Some((4, Value::Fixed64(1.5_f64.to_bits())))
+        );
         let err = r.field().unwrap_err();
-        assert!(err.contains("at byte 11") && err.contains("expected 4 bytes"), "{err}");
+        assert!(
+            err.contains("at byte 11") && err.contains("expected 4 bytes"),
+            "{err}"
+        );
         let err = Reader::new(&[0x0f]).field().unwrap_err();
         assert!(err.contains("wire type"), "{err}");
         assert!(read_doubles(&[0; 12]).is_err());

@@ -56,10 +56,16 @@ const TIMESTAMP: File = File {
     package: "google.protobuf",
     dependencies: &[],
     message: "Timestamp",
-    fields: &[Field("seconds", 1, Ty::Int64, false), Field("nanos", 2, Ty::Int32, false)],
+    fields: &[
+        Field("seconds", 1, Ty::Int64, false),
+        Field("nanos", 2, Ty::Int32, false),
+    ],
     enums: &[],
 };
-const XY: &[Field] = &[Field("x", 1, Ty::Double, false), Field("y", 2, Ty::Double, false)];
+const XY: &[Field] = &[
+    Field("x", 1, Ty::Double, false),
+    Field("y", 2, Ty::Double, false),
+];
 const VECTOR2: File = file("foxglove/Vector2.proto", &[], "Vector2", XY);
 const VECTOR3: File = file(
     "foxglove/Vector3.proto",
