@@ -146,6 +146,32 @@ fn a_scan_is_a_foxglove_laser_scan_with_packed_ranges() {
 }
 
 #[test]
+fn a_pose_is_a_foxglove_pose_in_frame_with_its_exact_heading() {
+    let (codec, desc, bytes) = encoded(Pose2::new(1.25, -3.5, 2.5));
+    check_fields(&desc, &[("frame_id", 2, FieldKind::String)]);
+    let pose_field = desc.get_field_by_name("pose").unwrap();
+    assert_eq!(pose_field.number(), 3);
+    assert!(matches!(pose_field.kind(), FieldKind::Message(m) if m.full_name() == "foxglove.Pose"));
+    let m = DynamicMessage::decode(desc, &bytes[..]).unwrap();
+    assert_eq!(field(&m, "frame_id").as_str(), Some("map"));
+    let pose = sub(&m, "pose");
+    assert_eq!(field(&sub(&pose, "position"), "x").as_f64(), Some(1.25));
+    assert_eq!(field(&sub(&pose, "position"), "y").as_f64(), Some(-3.5));
+    let q = sub(&pose, "orientation");
+    let (z, w) = (
+        field(&q, "z").as_f64().unwrap(),
+        field(&q, "w").as_f64().unwrap(),
+    );
+    assert!((z - 1.25_f64.sin()).abs() < 1e-12 && (w - 1.25_f64.cos()).abs() < 1e-12);
+    assert_eq!(field(&pose, "theta").as_f64(), Some(2.5));
+    let back = codec.decode(&TypeInfo::of::<Pose2>(), &bytes).unwrap();
+    assert_eq!(
+        back.downcast_ref::<Pose2>(),
+        Some(&Pose2::new(1.25, -3.5, 2.5))
+    );
+}
+
+#[test]
 fn an_image_is_a_foxglove_raw_image_with_raw_pixels() {
     let image = Image {
         width: 2,

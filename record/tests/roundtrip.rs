@@ -134,9 +134,13 @@ fn every_kind_round_trips_through_the_mcap_reader() {
             let codec = Codec::from_channel(&schema.name, &m.channel.message_encoding, wrapped)
                 .unwrap_or_else(|| panic!("{} {}", schema.name, m.channel.message_encoding));
             let expected_schema = Codec::for_value(format, &spec.type_info, value);
-            // Binary where Foxglove reads protobuf: grids, scans, images (JSON in foxglove-json).
+            // Binary where Foxglove reads protobuf: grids, scans, poses, images (JSON in
+            // foxglove-json).
             let binary = format == Format::Foxglove
-                && matches!(codec.kind, Kind::Grid | Kind::LaserScan | Kind::Image);
+                && matches!(
+                    codec.kind,
+                    Kind::Grid | Kind::LaserScan | Kind::Pose | Kind::Image
+                );
             assert_eq!(schema.encoding == "protobuf", binary, "{}", m.channel.topic);
             if spec.url.is_empty() {
                 assert_eq!(codec.kind, Kind::Log);

@@ -14,7 +14,7 @@ use super::EXIT_BAD_INPUT;
 /// `--record-format`.
 #[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum RecordFormat {
-    /// Foxglove schemas: grids, scans and images as protobuf, the rest as JSON.
+    /// Foxglove schemas: grids, scans, poses and images as protobuf, the rest as JSON.
     Foxglove,
     /// Foxglove schemas, all as JSON (base64 cells and pixels): more CPU, larger files.
     FoxgloveJson,

@@ -5,7 +5,7 @@
 //! | petrel type | Foxglove | Foxglove JSON (`jsonschema`, `json`) | ROS 2 (`ros2msg`, `cdr`) |
 //! |---|---|---|---|
 //! | `LaserScan` | `foxglove.LaserScan` (`protobuf`) | `foxglove.LaserScan` | `sensor_msgs/msg/LaserScan` |
-//! | `Pose2` | `foxglove.PoseInFrame` (JSON) | `foxglove.PoseInFrame` | `geometry_msgs/msg/PoseStamped` |
+//! | `Pose2` | `foxglove.PoseInFrame` (`protobuf`) | `foxglove.PoseInFrame` | `geometry_msgs/msg/PoseStamped` |
 //! | `OccupancyGrid` | `foxglove.Grid` (`protobuf`) | `foxglove.Grid` | `nav_msgs/msg/OccupancyGrid` |
 //! | `Image` | `foxglove.RawImage` (`protobuf`) | `foxglove.RawImage` | `sensor_msgs/msg/Image` |
 //! | the log | `foxglove.Log` (JSON) | `foxglove.Log` | `rcl_interfaces/msg/Log` |
@@ -25,8 +25,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Format {
-    /// Foxglove schemas (Foxglove opens them without configuration): grids, scans and images
-    /// as protobuf (raw cells, pixels and ranges), the other types as JSON.
+    /// Foxglove schemas (Foxglove opens them without configuration): grids, scans, poses and
+    /// images as protobuf (raw cells and pixels, binary floats), the log and other types as JSON.
     #[default]
     Foxglove,
     /// Foxglove schemas, every one as JSON (grid cells and pixels as base64 text): for tools
@@ -188,10 +188,14 @@ impl Codec {
     pub fn schema(&self, type_name: &str) -> SchemaDef {
         let (name, data) = match (self.format, self.kind) {
             (_, Kind::Json { wrapped }) => return json_schema(type_name, wrapped),
-            (Format::Foxglove, k @ (Kind::Grid | Kind::LaserScan | Kind::Image)) => {
+            (Format::Foxglove, k @ (Kind::Grid | Kind::LaserScan | Kind::Pose | Kind::Image)) => {
                 let (name, data) = match k {
                     Kind::Grid => ("foxglove.Grid", foxglove::descriptor::grid()),
                     Kind::LaserScan => ("foxglove.LaserScan", foxglove::descriptor::laser_scan()),
+                    Kind::Pose => (
+                        "foxglove.PoseInFrame",
+                        foxglove::descriptor::pose_in_frame(),
+                    ),
                     _ => ("foxglove.RawImage", foxglove::descriptor::raw_image()),
                 };
                 return SchemaDef {
@@ -240,10 +244,11 @@ impl Codec {
     pub fn from_channel(schema: &str, message_encoding: &str, wrapped: bool) -> Option<Self> {
         let (format, kind) = match (schema, message_encoding) {
             ("foxglove.LaserScan", "protobuf") => (Format::Foxglove, Kind::LaserScan),
+            ("foxglove.PoseInFrame", "protobuf") => (Format::Foxglove, Kind::Pose),
             ("foxglove.Grid", "protobuf") => (Format::Foxglove, Kind::Grid),
             ("foxglove.RawImage", "protobuf") => (Format::Foxglove, Kind::Image),
             ("foxglove.LaserScan", "json") => (Format::FoxgloveJson, Kind::LaserScan),
-            ("foxglove.PoseInFrame", "json") => (Format::Foxglove, Kind::Pose),
+            ("foxglove.PoseInFrame", "json") => (Format::FoxgloveJson, Kind::Pose),
             ("foxglove.Grid", "json") => (Format::FoxgloveJson, Kind::Grid),
             ("foxglove.RawImage", "json") => (Format::FoxgloveJson, Kind::Image),
             ("foxglove.Log", "json") => (Format::Foxglove, Kind::Log),
@@ -282,8 +287,9 @@ impl Codec {
             Kind::Pose => {
                 let p = downcast::<Pose2>(value)?;
                 match f {
+                    Format::Foxglove => proto::pose_in_frame(out, p, stamp, fr),
+                    Format::FoxgloveJson => foxglove::pose_in_frame(out, p, stamp, fr),
                     Format::Ros2 => ros2::pose_stamped(out, p, stamp, fr),
-                    _ => foxglove::pose_in_frame(out, p, stamp, fr),
                 }
             }
             Kind::Grid => {
@@ -331,8 +337,9 @@ impl Codec {
                 Format::Ros2 => ros2::read_laser_scan(data)?,
             }),
             Kind::Pose if ti.is::<Pose2>() => Arc::new(match f {
+                Format::Foxglove => proto::read_pose_in_frame(data)?,
+                Format::FoxgloveJson => foxglove::read_pose_in_frame(data)?,
                 Format::Ros2 => ros2::read_pose_stamped(data)?,
-                _ => foxglove::read_pose_in_frame(data)?,
             }),
             Kind::Grid if ti.is::<OccupancyGrid>() => Arc::new(match f {
                 Format::Foxglove => proto::read_grid(data)?,

@@ -171,6 +171,16 @@ const LASER_SCAN: File = file(
         Field("range_max", 100, Ty::Double, false),
     ],
 );
+const POSE_IN_FRAME: File = file(
+    "foxglove/PoseInFrame.proto",
+    &["foxglove/Pose.proto", "google/protobuf/timestamp.proto"],
+    "PoseInFrame",
+    &[
+        Field("timestamp", 1, TIME, false),
+        Field("frame_id", 2, Ty::String, false),
+        Field("pose", 3, Ty::Message(".foxglove.Pose"), false),
+    ],
+);
 const RAW_IMAGE: File = file(
     "foxglove/RawImage.proto",
     &["google/protobuf/timestamp.proto"],
@@ -260,6 +270,11 @@ pub fn grid() -> Vec<u8> {
 /// `foxglove.LaserScan`'s `FileDescriptorSet`.
 pub fn laser_scan() -> Vec<u8> {
     set(&[&TIMESTAMP, &VECTOR3, &QUATERNION, &POSE, &LASER_SCAN])
+}
+
+/// `foxglove.PoseInFrame`'s `FileDescriptorSet`.
+pub fn pose_in_frame() -> Vec<u8> {
+    set(&[&TIMESTAMP, &VECTOR3, &QUATERNION, &POSE, &POSE_IN_FRAME])
 }
 
 /// `foxglove.RawImage`'s `FileDescriptorSet`.

@@ -1,6 +1,7 @@
-//! `foxglove.Grid`, `foxglove.LaserScan` and `foxglove.RawImage` as protobuf messages (schema
-//! encoding `protobuf`, [`super::descriptor`]): grid cells and image pixels go as raw bytes
-//! and ranges as packed doubles, where JSON needs base64 text and a decimal per float.
+//! `foxglove.Grid`, `foxglove.LaserScan`, `foxglove.PoseInFrame` and `foxglove.RawImage` as
+//! protobuf messages (schema encoding `protobuf`, [`super::descriptor`]): grid cells and image
+//! pixels go as raw bytes and numbers as little-endian doubles, where JSON needs base64 text
+//! and a decimal per float.
 
 use std::sync::Arc;
 
@@ -170,6 +171,27 @@ pub fn read_laser_scan(data: &[u8]) -> Result<LaserScan, String> {
         range_max,
         ranges: ranges.into(),
     })
+}
+
+/// Encodes a pose as `foxglove.PoseInFrame`.
+pub fn pose_in_frame(out: &mut Vec<u8>, p: &Pose2, stamp: Stamp, frame: &str) {
+    timestamp(out, 1, stamp);
+    bytes(out, 2, frame.as_bytes());
+    pose(out, 3, p);
+}
+
+/// Decodes a `foxglove.PoseInFrame`.
+pub fn read_pose_in_frame(data: &[u8]) -> Result<Pose2, String> {
+    let mut p = Pose2::default();
+    Reader::new(data)
+        .each(|field, value| {
+            if field == 3 {
+                p = read_pose(value.len()?)?;
+            }
+            Ok(())
+        })
+        .map_err(|e| format!("expected a foxglove.PoseInFrame protobuf message: {e}"))?;
+    Ok(p)
 }
 
 /// Encodes an image as `foxglove.RawImage`.
