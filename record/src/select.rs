@@ -161,7 +161,7 @@ impl Selection {
 pub fn log_topic(format: crate::Format) -> &'static str {
     match format {
         crate::Format::Ros2 => "/rosout",
-        crate::Format::Foxglove => "/log",
+        crate::Format::Foxglove | crate::Format::FoxgloveJson => "/log",
     }
 }
 

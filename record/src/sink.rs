@@ -129,16 +129,37 @@ pub struct SinkReport {
     pub channels: usize,
 }
 
-/// Counts the bytes going to the file (the split size), without asking the OS.
+/// The file as the `mcap` writer sees it: buffered, its length counted (the split size)
+/// without asking the OS, and its position tracked here. The writer asks for its position
+/// before every message index and summary record (hundreds per chunk with many channels);
+/// `BufWriter`'s `Seek` answers that by flushing and an `lseek`, which made each of those
+/// small records a system call of its own.
 struct Counted {
     file: BufWriter<File>,
+    /// The position in the file.
+    pos: u64,
+    /// The file's length (the furthest byte written), shared with the sink.
     len: Arc<AtomicU64>,
+}
+
+/// Write buffer: a chunk's compressed output and its indexes go out in a few large writes.
+const WRITE_BUFFER: usize = 256 * 1024;
+
+impl Counted {
+    fn new(file: File, len: Arc<AtomicU64>) -> Self {
+        Counted {
+            file: BufWriter::with_capacity(WRITE_BUFFER, file),
+            pos: 0,
+            len,
+        }
+    }
 }
 
 impl Write for Counted {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
         let n = self.file.write(buf)?;
-        self.len.fetch_add(n as u64, Ordering::Relaxed);
+        self.pos += n as u64;
+        self.len.fetch_max(self.pos, Ordering::Relaxed);
         Ok(n)
     }
     fn flush(&mut self) -> io::Result<()> {
@@ -148,7 +169,14 @@ impl Write for Counted {
 
 impl Seek for Counted {
     fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
-        self.file.seek(pos)
+        if pos == SeekFrom::Current(0) {
+            return Ok(self.pos);
+        }
+        self.pos = self.file.seek(pos)?;
+        Ok(self.pos)
+    }
+    fn stream_position(&mut self) -> io::Result<u64> {
+        Ok(self.pos)
     }
 }
 
@@ -208,13 +236,10 @@ impl Sink {
             std::fs::create_dir_all(dir)?;
         }
         self.file_len = Arc::default();
-        let file = Counted {
-            file: BufWriter::new(File::create(&path)?),
-            len: self.file_len.clone(),
-        };
+        let file = Counted::new(File::create(&path)?, self.file_len.clone());
         let profile = match self.format {
             Format::Ros2 => "ros2",
-            Format::Foxglove => "",
+            Format::Foxglove | Format::FoxgloveJson => "",
         };
         let (compression, level) = self.compression.mcap();
         let mut writer = WriteOptions::new()

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use petrel_actors::{AnyValue, Image, LaserScan, OccupancyGrid, Pose2, PropertyType, TypeInfo};
 use petrel_record::{
-    ChannelSpec, Codec, Entry, Format, LogLevel, LogRecord, Recording, Sink, SplitPolicy,
+    ChannelSpec, Codec, Entry, Format, Kind, LogLevel, LogRecord, Recording, Sink, SplitPolicy,
 };
 
 fn samples() -> Vec<(ChannelSpec, AnyValue)> {
@@ -108,7 +108,7 @@ fn same(ti: &TypeInfo, a: &AnyValue, b: &AnyValue) {
 
 #[test]
 fn every_kind_round_trips_through_the_mcap_reader() {
-    for format in [Format::Foxglove, Format::Ros2] {
+    for format in [Format::Foxglove, Format::FoxgloveJson, Format::Ros2] {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("run.mcap");
         write(&path, format, 3);
@@ -134,8 +134,17 @@ fn every_kind_round_trips_through_the_mcap_reader() {
             let codec = Codec::from_channel(&schema.name, &m.channel.message_encoding, wrapped)
                 .unwrap_or_else(|| panic!("{} {}", schema.name, m.channel.message_encoding));
             let expected_schema = Codec::for_value(format, &spec.type_info, value);
+            // Binary where Foxglove reads protobuf: grids, scans, poses, images (JSON in
+            // foxglove-json).
+            let binary = format == Format::Foxglove
+                && matches!(
+                    codec.kind,
+                    Kind::Grid | Kind::LaserScan | Kind::Pose | Kind::Image
+                );
+            assert_eq!(schema.encoding == "protobuf", binary, "{}", m.channel.topic);
             if spec.url.is_empty() {
-                assert_eq!(codec, Codec::log(format));
+                assert_eq!(codec.kind, Kind::Log);
+                assert_eq!(codec.format == Format::Ros2, format == Format::Ros2);
             } else {
                 assert_eq!(codec.kind, expected_schema.kind, "{}", m.channel.topic);
                 assert_eq!(m.channel.metadata["petrel.type"], spec.type_info.name());
@@ -308,13 +317,13 @@ fn files_cut_or_damaged_anywhere_never_panic_a_reader() {
 }
 
 #[test]
-fn foxglove_grids_and_images_carry_their_bytes_as_base64_in_valid_json() {
+fn foxglove_json_grids_and_images_carry_their_bytes_as_base64_in_valid_json() {
     let fields = |kind: &str| -> (serde_json::Value, Vec<u8>) {
         let (spec, value) = samples()
             .into_iter()
             .find(|(s, _)| s.type_info.name() == kind)
             .unwrap();
-        let codec = Codec::for_value(Format::Foxglove, &spec.type_info, &value);
+        let codec = Codec::for_value(Format::FoxgloveJson, &spec.type_info, &value);
         let mut out = Vec::new();
         codec
             .encode(&spec.type_info, &value, Default::default(), &mut out)

@@ -77,9 +77,13 @@ pub(crate) async fn start(
         .iter()
         .map(|a| (a.name().to_string(), a.blackboard().clone()))
         .collect();
-    let encoders = Arc::new(RecordEncoders {
-        format: format.unwrap_or_default(),
-    });
+    // The live view sends Foxglove types as JSON: the WebSocket protocol carries a schema as
+    // text (a protobuf one would be base64), and its clients and tests read JSON schemas.
+    let format = match format.unwrap_or_default() {
+        Format::Ros2 => Format::Ros2,
+        Format::Foxglove | Format::FoxgloveJson => Format::FoxgloveJson,
+    };
+    let encoders = Arc::new(RecordEncoders { format });
     let log = LiveLog::default();
     let options = ConsoleOptions { addr, token: None };
     let server = FoxgloveServer::start(options, sources, encoders, Some(log.clone()))

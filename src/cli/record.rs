@@ -14,8 +14,10 @@ use super::EXIT_BAD_INPUT;
 /// `--record-format`.
 #[derive(Clone, Copy, ValueEnum)]
 pub(crate) enum RecordFormat {
-    /// Foxglove schemas as JSON.
+    /// Foxglove schemas: grids, scans, poses and images as protobuf, the rest as JSON.
     Foxglove,
+    /// Foxglove schemas, all as JSON (base64 cells and pixels): more CPU, larger files.
+    FoxgloveJson,
     /// ROS 2 messages (ros2msg schemas, CDR), as rosbag2 writes them.
     Ros2,
 }
@@ -24,6 +26,7 @@ impl From<RecordFormat> for Format {
     fn from(f: RecordFormat) -> Self {
         match f {
             RecordFormat::Foxglove => Format::Foxglove,
+            RecordFormat::FoxgloveJson => Format::FoxgloveJson,
             RecordFormat::Ros2 => Format::Ros2,
         }
     }

@@ -1,5 +1,6 @@
-//! The standard robot types as Foxglove schemas (JSON schema encoding, JSON messages), so
-//! Foxglove shows the laser, the map, the image and the logs without configuration.
+//! The standard robot types as Foxglove schemas, so Foxglove shows the laser, the map, the
+//! image and the logs without configuration: here as JSON (JSON schema encoding, JSON
+//! messages); grids, scans and images also as protobuf ([`proto`], [`descriptor`]).
 //!
 //! A pose also carries petrel's exact heading (`theta`, radians) beside the quaternion, so a
 //! replay gives back the very pose that was recorded.
@@ -11,6 +12,8 @@ use petrel_actors::{Image, LaserScan, OccupancyGrid, Pose2};
 use serde::{Deserialize, Serialize};
 
 mod binary;
+pub mod descriptor;
+pub mod proto;
 mod schema;
 use binary::BASE64;
 

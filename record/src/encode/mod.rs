@@ -2,17 +2,18 @@
 //! shared by the recorder, replay and live views: pick a [`Codec`] for a property's type and
 //! [`Format`], ask it for its [`SchemaDef`], then [`Codec::encode`] / [`Codec::decode`].
 //!
-//! | petrel type | Foxglove (`jsonschema`, `json`) | ROS 2 (`ros2msg`, `cdr`) |
-//! |---|---|---|
-//! | `LaserScan` | `foxglove.LaserScan` | `sensor_msgs/msg/LaserScan` |
-//! | `Pose2` | `foxglove.PoseInFrame` | `geometry_msgs/msg/PoseStamped` |
-//! | `OccupancyGrid` | `foxglove.Grid` | `nav_msgs/msg/OccupancyGrid` |
-//! | `Image` | `foxglove.RawImage` | `sensor_msgs/msg/Image` |
-//! | the log | `foxglove.Log` | `rcl_interfaces/msg/Log` |
-//! | anything else | JSON with a JSON schema titled by the type | the same |
+//! | petrel type | Foxglove | Foxglove JSON (`jsonschema`, `json`) | ROS 2 (`ros2msg`, `cdr`) |
+//! |---|---|---|---|
+//! | `LaserScan` | `foxglove.LaserScan` (`protobuf`) | `foxglove.LaserScan` | `sensor_msgs/msg/LaserScan` |
+//! | `Pose2` | `foxglove.PoseInFrame` (`protobuf`) | `foxglove.PoseInFrame` | `geometry_msgs/msg/PoseStamped` |
+//! | `OccupancyGrid` | `foxglove.Grid` (`protobuf`) | `foxglove.Grid` | `nav_msgs/msg/OccupancyGrid` |
+//! | `Image` | `foxglove.RawImage` (`protobuf`) | `foxglove.RawImage` | `sensor_msgs/msg/Image` |
+//! | the log | `foxglove.Log` (JSON) | `foxglove.Log` | `rcl_interfaces/msg/Log` |
+//! | anything else | JSON with a JSON schema titled by the type | the same | the same |
 
 pub mod cdr;
 pub mod foxglove;
+pub mod protobuf;
 pub mod ros2;
 
 use std::sync::Arc;
@@ -24,9 +25,14 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Format {
-    /// Foxglove schemas as JSON (Foxglove opens them without configuration).
+    /// Foxglove schemas (Foxglove opens them without configuration): grids, scans, poses and
+    /// images as protobuf (raw cells and pixels, binary floats), the log and other types as JSON.
     #[default]
     Foxglove,
+    /// Foxglove schemas, every one as JSON (grid cells and pixels as base64 text): for tools
+    /// that read JSON only; more CPU and larger files than [`Format::Foxglove`].
+    #[serde(rename = "foxglove-json")]
+    FoxgloveJson,
     /// ROS 2 messages in CDR (rosbag2 and its tools read them).
     Ros2,
 }
@@ -36,8 +42,11 @@ impl std::str::FromStr for Format {
     fn from_str(s: &str) -> Result<Self, String> {
         match s {
             "foxglove" => Ok(Format::Foxglove),
+            "foxglove-json" => Ok(Format::FoxgloveJson),
             "ros2" => Ok(Format::Ros2),
-            other => Err(format!("expected `foxglove` or `ros2`, got `{other}`")),
+            other => Err(format!(
+                "expected `foxglove`, `foxglove-json` or `ros2`, got `{other}`"
+            )),
         }
     }
 }
@@ -179,7 +188,24 @@ impl Codec {
     pub fn schema(&self, type_name: &str) -> SchemaDef {
         let (name, data) = match (self.format, self.kind) {
             (_, Kind::Json { wrapped }) => return json_schema(type_name, wrapped),
-            (Format::Foxglove, k) => {
+            (Format::Foxglove, k @ (Kind::Grid | Kind::LaserScan | Kind::Pose | Kind::Image)) => {
+                let (name, data) = match k {
+                    Kind::Grid => ("foxglove.Grid", foxglove::descriptor::grid()),
+                    Kind::LaserScan => ("foxglove.LaserScan", foxglove::descriptor::laser_scan()),
+                    Kind::Pose => (
+                        "foxglove.PoseInFrame",
+                        foxglove::descriptor::pose_in_frame(),
+                    ),
+                    _ => ("foxglove.RawImage", foxglove::descriptor::raw_image()),
+                };
+                return SchemaDef {
+                    name: name.into(),
+                    encoding: "protobuf",
+                    data,
+                    message_encoding: "protobuf",
+                };
+            }
+            (Format::Foxglove | Format::FoxgloveJson, k) => {
                 let (name, data) = match k {
                     Kind::LaserScan => ("foxglove.LaserScan", foxglove::laser_scan_schema()),
                     Kind::Pose => ("foxglove.PoseInFrame", foxglove::pose_in_frame_schema()),
@@ -217,10 +243,14 @@ impl Codec {
     /// The codec of a recorded channel, from its schema name and message encoding.
     pub fn from_channel(schema: &str, message_encoding: &str, wrapped: bool) -> Option<Self> {
         let (format, kind) = match (schema, message_encoding) {
-            ("foxglove.LaserScan", "json") => (Format::Foxglove, Kind::LaserScan),
-            ("foxglove.PoseInFrame", "json") => (Format::Foxglove, Kind::Pose),
-            ("foxglove.Grid", "json") => (Format::Foxglove, Kind::Grid),
-            ("foxglove.RawImage", "json") => (Format::Foxglove, Kind::Image),
+            ("foxglove.LaserScan", "protobuf") => (Format::Foxglove, Kind::LaserScan),
+            ("foxglove.PoseInFrame", "protobuf") => (Format::Foxglove, Kind::Pose),
+            ("foxglove.Grid", "protobuf") => (Format::Foxglove, Kind::Grid),
+            ("foxglove.RawImage", "protobuf") => (Format::Foxglove, Kind::Image),
+            ("foxglove.LaserScan", "json") => (Format::FoxgloveJson, Kind::LaserScan),
+            ("foxglove.PoseInFrame", "json") => (Format::FoxgloveJson, Kind::Pose),
+            ("foxglove.Grid", "json") => (Format::FoxgloveJson, Kind::Grid),
+            ("foxglove.RawImage", "json") => (Format::FoxgloveJson, Kind::Image),
             ("foxglove.Log", "json") => (Format::Foxglove, Kind::Log),
             ("sensor_msgs/msg/LaserScan", "cdr") => (Format::Ros2, Kind::LaserScan),
             ("geometry_msgs/msg/PoseStamped", "cdr") => (Format::Ros2, Kind::Pose),
@@ -242,42 +272,47 @@ impl Codec {
         stamp: Stamp,
         out: &mut Vec<u8>,
     ) -> Result<(), String> {
+        use foxglove::proto;
         let fr = frame(self.kind);
-        let fox = self.format == Format::Foxglove;
+        let f = self.format;
         match self.kind {
             Kind::LaserScan => {
                 let s = downcast::<LaserScan>(value)?;
-                match fox {
-                    true => foxglove::laser_scan(out, s, stamp, fr),
-                    false => ros2::laser_scan(out, s, stamp, fr),
+                match f {
+                    Format::Foxglove => proto::laser_scan(out, s, stamp, fr),
+                    Format::FoxgloveJson => foxglove::laser_scan(out, s, stamp, fr),
+                    Format::Ros2 => ros2::laser_scan(out, s, stamp, fr),
                 }
             }
             Kind::Pose => {
                 let p = downcast::<Pose2>(value)?;
-                match fox {
-                    true => foxglove::pose_in_frame(out, p, stamp, fr),
-                    false => ros2::pose_stamped(out, p, stamp, fr),
+                match f {
+                    Format::Foxglove => proto::pose_in_frame(out, p, stamp, fr),
+                    Format::FoxgloveJson => foxglove::pose_in_frame(out, p, stamp, fr),
+                    Format::Ros2 => ros2::pose_stamped(out, p, stamp, fr),
                 }
             }
             Kind::Grid => {
                 let g = downcast::<OccupancyGrid>(value)?;
-                match fox {
-                    true => foxglove::grid(out, g, stamp, fr),
-                    false => ros2::occupancy_grid(out, g, stamp, fr),
+                match f {
+                    Format::Foxglove => proto::grid(out, g, stamp, fr),
+                    Format::FoxgloveJson => foxglove::grid(out, g, stamp, fr),
+                    Format::Ros2 => ros2::occupancy_grid(out, g, stamp, fr),
                 }
             }
             Kind::Image => {
                 let i = downcast::<Image>(value)?;
-                match fox {
-                    true => foxglove::raw_image(out, i, stamp, fr),
-                    false => ros2::image(out, i, stamp, fr),
+                match f {
+                    Format::Foxglove => proto::raw_image(out, i, stamp, fr),
+                    Format::FoxgloveJson => foxglove::raw_image(out, i, stamp, fr),
+                    Format::Ros2 => ros2::image(out, i, stamp, fr),
                 }
             }
             Kind::Log => {
                 let l = downcast::<LogRecord>(value)?;
-                match fox {
-                    true => foxglove::log(out, l),
-                    false => ros2::log(out, l),
+                match f {
+                    Format::Ros2 => ros2::log(out, l),
+                    _ => foxglove::log(out, l),
                 }
             }
             // Straight into the message buffer: no JSON of its own per value.
@@ -293,27 +328,32 @@ impl Codec {
 
     /// Decodes a message into a value of type `ti` (the property it is replayed into).
     pub fn decode(&self, ti: &TypeInfo, data: &[u8]) -> Result<AnyValue, String> {
-        let fox = self.format == Format::Foxglove;
+        use foxglove::proto;
+        let f = self.format;
         let value: AnyValue = match self.kind {
-            Kind::LaserScan if ti.is::<LaserScan>() => Arc::new(match fox {
-                true => foxglove::read_laser_scan(data)?,
-                false => ros2::read_laser_scan(data)?,
+            Kind::LaserScan if ti.is::<LaserScan>() => Arc::new(match f {
+                Format::Foxglove => proto::read_laser_scan(data)?,
+                Format::FoxgloveJson => foxglove::read_laser_scan(data)?,
+                Format::Ros2 => ros2::read_laser_scan(data)?,
             }),
-            Kind::Pose if ti.is::<Pose2>() => Arc::new(match fox {
-                true => foxglove::read_pose_in_frame(data)?,
-                false => ros2::read_pose_stamped(data)?,
+            Kind::Pose if ti.is::<Pose2>() => Arc::new(match f {
+                Format::Foxglove => proto::read_pose_in_frame(data)?,
+                Format::FoxgloveJson => foxglove::read_pose_in_frame(data)?,
+                Format::Ros2 => ros2::read_pose_stamped(data)?,
             }),
-            Kind::Grid if ti.is::<OccupancyGrid>() => Arc::new(match fox {
-                true => foxglove::read_grid(data)?,
-                false => ros2::read_occupancy_grid(data)?,
+            Kind::Grid if ti.is::<OccupancyGrid>() => Arc::new(match f {
+                Format::Foxglove => proto::read_grid(data)?,
+                Format::FoxgloveJson => foxglove::read_grid(data)?,
+                Format::Ros2 => ros2::read_occupancy_grid(data)?,
             }),
-            Kind::Image if ti.is::<Image>() => Arc::new(match fox {
-                true => foxglove::read_raw_image(data)?,
-                false => ros2::read_image(data)?,
+            Kind::Image if ti.is::<Image>() => Arc::new(match f {
+                Format::Foxglove => proto::read_raw_image(data)?,
+                Format::FoxgloveJson => foxglove::read_raw_image(data)?,
+                Format::Ros2 => ros2::read_image(data)?,
             }),
-            Kind::Log if ti.is::<LogRecord>() => Arc::new(match fox {
-                true => foxglove::read_log(data)?,
-                false => ros2::read_log(data)?,
+            Kind::Log if ti.is::<LogRecord>() => Arc::new(match f {
+                Format::Ros2 => ros2::read_log(data)?,
+                _ => foxglove::read_log(data)?,
             }),
             Kind::Json { wrapped: false } => ti.from_json(data)?,
             Kind::Json { wrapped: true } => {
