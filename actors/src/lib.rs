@@ -25,6 +25,7 @@ mod panic_report;
 mod ports;
 mod queue;
 mod range;
+mod settle;
 mod snapshot;
 pub mod stdout;
 mod step_clock;

@@ -258,6 +258,8 @@ pub struct Context {
     /// The step time, shared with the module's output handles.
     pub(crate) clock: Arc<StepClock>,
     pub(crate) reschedule: bool,
+    /// What [`Context::settle`] needs (see `settle.rs`).
+    pub(crate) settle: crate::settle::Settle,
 }
 
 impl Context {
@@ -280,6 +282,7 @@ impl Context {
             steps: 0,
             clock,
             reschedule: false,
+            settle: Default::default(),
         }
     }
 

@@ -143,6 +143,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             args.control,
             ports.clock.clone(),
         );
+        ctx.settle.signal = Some(binding.signal.clone());
         let init = catching(module.init(&mut ctx).instrument(span.clone())).await;
         let unrecoverable =
             matches!(&init, Ok(Err(e)) if e.downcast_ref::<Unrecoverable>().is_some());
@@ -352,6 +353,8 @@ impl<M: Module> Running<M> {
             Some(t) => self.ctx.clock.begin_at(t),
             None => self.ctx.clock.begin(),
         }
+        self.ctx.settle.timed = started.is_some();
+        self.ctx.settle.waited = Duration::ZERO;
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
         let mark = self.step_mark.clone();
         let in_step = mark.enter();
@@ -385,7 +388,8 @@ impl<M: Module> Running<M> {
             }
             self.ctx.steps += 1;
             if let Some(started) = started {
-                let took = started.elapsed();
+                // The modules it let run while it settled are not its time.
+                let took = started.elapsed().saturating_sub(self.ctx.settle.waited);
                 if self.stats.record(self.ctx.steps, started, took) {
                     self.publish_stats();
                 }
