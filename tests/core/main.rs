@@ -12,6 +12,7 @@ mod ordering_modules;
 mod placement;
 mod queues;
 mod scheduling;
+mod settle;
 mod snapshot;
 mod step_budget;
 mod supervision;
