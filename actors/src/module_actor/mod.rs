@@ -5,6 +5,7 @@
 //! after a wake-up (no mailbox hop on the hot path). ractor still supervises it: a panic or an
 //! error ends the actor and reaches the supervisor, and a kill drops the running step.
 
+use std::future::Future;
 use std::marker::PhantomData;
 use std::sync::Arc;
 use std::time::Duration;
@@ -356,15 +357,26 @@ impl<M: Module> Running<M> {
         self.ctx.settle.timed = started.is_some();
         self.ctx.settle.waited = Duration::ZERO;
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
+        let span = tracing::trace_span!("step");
         let mark = self.step_mark.clone();
         let in_step = mark.enter();
         // Taken for the step rather than cloned: no reference count traffic per step.
         let hold = self.hold.take();
-        let step = loop_watch::in_step(hops, self.signal.id(), self.run_step())
-            .instrument(tracing::trace_span!("step"));
-        let result = match &hold {
-            Some((hold, slot)) => hold.polls(*slot, step).await,
-            None => step.await,
+        let me = self.signal.id();
+        let result = {
+            // Polled in place, each poll in the span, with the hop current and marked on the
+            // agent's thread: wrapping the step in a combinator per concern moved the whole
+            // future at each layer, a copy of the largest futures (a mission's) at every step.
+            let mut step = std::pin::pin!(self.run_step());
+            std::future::poll_fn(|cx| {
+                let _in_span = span.enter();
+                let mut poll = || loop_watch::in_poll(hops, me, || step.as_mut().poll(cx));
+                match &hold {
+                    Some((hold, slot)) => hold.marked(*slot, poll),
+                    None => poll(),
+                }
+            })
+            .await
         };
         self.hold = hold;
         drop(in_step);
@@ -403,6 +415,10 @@ impl<M: Module> Running<M> {
     /// Runs the module's step (or the fault injected), under its watchdog if it has one.
     async fn run_step(&mut self) -> anyhow::Result<()> {
         let fault = self.take_fault();
+        if fault.is_none() && self.watchdog.is_none() {
+            // The usual step, awaited in place (see `step`).
+            return self.module.step(&mut self.ctx).await;
+        }
         let step = async {
             match fault.as_deref() {
                 Some("panic") => panic!("fault injected through control/fault: panic"),
