@@ -112,6 +112,12 @@ impl Signal {
         self.causes.swap(0, Ordering::Acquire)
     }
 
+    /// Takes the property changes raised since the last take, leaving every other cause;
+    /// whether there were any (see [`Context::settle`](crate::Context::settle)).
+    pub fn take_changes(&self) -> bool {
+        self.causes.fetch_and(!cause::CHANGE, Ordering::AcqRel) & cause::CHANGE != 0
+    }
+
     /// Whether step causes wait to be taken: the module will step again at once.
     pub fn pending(&self) -> bool {
         self.causes.load(Ordering::Acquire) & cause::STEPS != 0

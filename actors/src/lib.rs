@@ -26,6 +26,7 @@ mod ports;
 mod queue;
 mod range;
 mod realtime;
+mod settle;
 mod snapshot;
 pub mod stdout;
 mod step_clock;

@@ -54,8 +54,16 @@ pub(crate) fn current() -> Option<Hop> {
 }
 
 /// Runs the step of the module whose signal is `me`, `hops` steps down a chain.
+#[cfg(test)]
 pub(crate) async fn in_step<F: std::future::Future>(hops: u32, me: u32, step: F) -> F::Output {
     STEP.scope(Hop { hops, waker: me }, step).await
+}
+
+/// Runs `poll` (one poll of the step of the module whose signal is `me`, `hops` steps down a
+/// chain) with that hop current: for a step future polled in place rather than wrapped.
+#[inline]
+pub(crate) fn in_poll<R>(hops: u32, me: u32, poll: impl FnOnce() -> R) -> R {
+    STEP.sync_scope(Hop { hops, waker: me }, poll)
 }
 
 /// One module's loop state: when it was last reported, and how many looping steps since.

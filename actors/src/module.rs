@@ -260,6 +260,8 @@ pub struct Context {
     pub(crate) clock: Arc<StepClock>,
     pub(crate) reschedule: bool,
     pub(crate) restarting: bool,
+    /// What [`Context::settle`] needs (see `settle.rs`).
+    pub(crate) settle: crate::settle::Settle,
 }
 
 impl Context {
@@ -283,6 +285,7 @@ impl Context {
             clock,
             reschedule: false,
             restarting: false,
+            settle: Default::default(),
         }
     }
 

@@ -11,6 +11,7 @@
 //! once (a `held` supervisor event, written from the watcher: the supervisor cannot run) and
 //! asks the supervisor to move it to the shared runtime when its step returns.
 
+#[cfg(test)]
 use std::future::Future;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -42,18 +43,22 @@ impl ThreadHold {
     }
 
     /// Runs `future` with each of its polls marked as slot `slot`'s.
+    #[cfg(test)]
     pub async fn polls<F: Future>(&self, slot: usize, future: F) -> F::Output {
-        let slot = slot as u64 + 1;
         let mut future = std::pin::pin!(future);
-        std::future::poll_fn(|cx| {
-            let sequence = self.polls.load(Ordering::Relaxed).wrapping_add(1);
-            self.polls.store(sequence, Ordering::Relaxed);
-            self.word.store(sequence << 32 | slot, Ordering::Relaxed);
-            let output = future.as_mut().poll(cx);
-            self.word.store(0, Ordering::Relaxed);
-            output
-        })
-        .await
+        std::future::poll_fn(|cx| self.marked(slot, || future.as_mut().poll(cx))).await
+    }
+
+    /// Runs `poll` (one poll of slot `slot`'s step) marked as that slot's.
+    #[inline]
+    pub fn marked<R>(&self, slot: usize, poll: impl FnOnce() -> R) -> R {
+        let slot = slot as u64 + 1;
+        let sequence = self.polls.load(Ordering::Relaxed).wrapping_add(1);
+        self.polls.store(sequence, Ordering::Relaxed);
+        self.word.store(sequence << 32 | slot, Ordering::Relaxed);
+        let output = poll();
+        self.word.store(0, Ordering::Relaxed);
+        output
     }
 
     fn sample(&self) -> u64 {

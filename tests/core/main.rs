@@ -13,6 +13,7 @@ mod placement;
 mod queues;
 mod realtime;
 mod scheduling;
+mod settle;
 mod snapshot;
 mod step_budget;
 mod supervision;

@@ -8,6 +8,7 @@ mod cli;
 mod execution;
 mod guide;
 mod patrol;
+mod reaction;
 mod resilience;
 mod support;
 mod time;

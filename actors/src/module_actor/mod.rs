@@ -5,6 +5,7 @@
 //! after a wake-up (no mailbox hop on the hot path). ractor still supervises it: a panic or an
 //! error ends the actor and reaches the supervisor, and a kill drops the running step.
 
+use std::future::Future;
 use std::marker::PhantomData;
 use std::sync::Arc;
 use std::time::Duration;
@@ -145,6 +146,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             args.control,
             ports.clock.clone(),
         );
+        ctx.settle.signal = Some(binding.signal.clone());
         let init = catching(module.init(&mut ctx).instrument(span.clone())).await;
         let unrecoverable =
             matches!(&init, Ok(Err(e)) if e.downcast_ref::<Unrecoverable>().is_some());
@@ -357,16 +359,29 @@ impl<M: Module> Running<M> {
             Some(t) => self.ctx.clock.begin_at(t),
             None => self.ctx.clock.begin(),
         }
+        self.ctx.settle.timed = started.is_some();
+        self.ctx.settle.waited = Duration::ZERO;
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
+        let span = tracing::trace_span!("step");
         let mark = self.step_mark.clone();
         let in_step = mark.enter();
         // Taken for the step rather than cloned: no reference count traffic per step.
         let hold = self.hold.take();
-        let step = loop_watch::in_step(hops, self.signal.id(), self.run_step())
-            .instrument(tracing::trace_span!("step"));
-        let result = match &hold {
-            Some((hold, slot)) => hold.polls(*slot, step).await,
-            None => step.await,
+        let me = self.signal.id();
+        let result = {
+            // Polled in place, each poll in the span, with the hop current and marked on the
+            // agent's thread: wrapping the step in a combinator per concern moved the whole
+            // future at each layer, a copy of the largest futures (a mission's) at every step.
+            let mut step = std::pin::pin!(self.run_step());
+            std::future::poll_fn(|cx| {
+                let _in_span = span.enter();
+                let mut poll = || loop_watch::in_poll(hops, me, || step.as_mut().poll(cx));
+                match &hold {
+                    Some((hold, slot)) => hold.marked(*slot, poll),
+                    None => poll(),
+                }
+            })
+            .await
         };
         self.hold = hold;
         drop(in_step);
@@ -390,7 +405,8 @@ impl<M: Module> Running<M> {
             }
             self.ctx.steps += 1;
             if let Some(started) = started {
-                let took = started.elapsed();
+                // The modules it let run while it settled are not its time.
+                let took = started.elapsed().saturating_sub(self.ctx.settle.waited);
                 if self.stats.record(self.ctx.steps, started, took) {
                     self.publish_stats();
                 }
@@ -404,6 +420,10 @@ impl<M: Module> Running<M> {
     /// Runs the module's step (or the fault injected), under its watchdog if it has one.
     async fn run_step(&mut self) -> anyhow::Result<()> {
         let fault = self.take_fault();
+        if fault.is_none() && self.watchdog.is_none() {
+            // The usual step, awaited in place (see `step`).
+            return self.module.step(&mut self.ctx).await;
+        }
         let step = async {
             match fault.as_deref() {
                 Some("panic") => panic!("fault injected through control/fault: panic"),

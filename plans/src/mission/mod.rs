@@ -44,7 +44,11 @@
 //! Event-driven: the module steps the plan when a property read by a binding changes, when
 //! `in/conditions` changes, or a `held`/`age` deadline passes; within one module step, plan
 //! steps repeat while transitions fire (transitions enabled by a firing need the next plan
-//! step); `params/tick_ms` adds a periodic step (0 = none), needed only for conditions that
+//! step). When the rounds have started or ended actions and nothing more fires, the step lets
+//! the modules they switched on run once ([`Context::settle`](petrel_actors::Context::settle))
+//! and, if one answered at once, goes on firing in the same step: a quick action costs one
+//! mission step, not two (its marking while it ran is then not published in `out/marking`;
+//! `out/firings` still lists every transition in order); `params/tick_ms` adds a periodic step (0 = none), needed only for conditions that
 //! time alone changes and no deadline covers (`age(p) > 2` has one, `age(p) * 2 > 4` not). Conditions are levels: an action's `finished` must be
 //! false when it starts (reset what it reads with `set`). A module enabled by two actions running
 //! in parallel is disabled when the first of them ends.

@@ -157,13 +157,27 @@ impl Module for Mission {
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
         let mut fired_labels = Vec::new();
+        // Whether a round called an action (which may have enabled a module or written its
+        // input), and whether this step already let such modules answer.
+        let (mut called, mut settled) = (false, false);
         for round in 1.. {
             // Read at every round: an action's `set` may write the mission's own flags.
             let (report, labels) = run.round(t, &self.flags.get());
             relink(ctx, &mut run.bound.relinks).await;
             fired += report.fired.len();
             fired_labels.extend(labels);
-            if report.fired.is_empty() || run.state.status(&run.plan) != PlanStatus::Running {
+            called |= !report.calls.is_empty();
+            let running = run.state.status(&run.plan) == PlanStatus::Running;
+            if report.fired.is_empty() || !running {
+                // Nothing more fires now. A module an action has just switched on may answer
+                // at once (a quick action): let it, once per step, and go on with its answer
+                // in this step rather than stepping again for it (see `settle`).
+                if called && running && !settled {
+                    settled = true;
+                    if settle(ctx, &self.wake, run).await {
+                        continue;
+                    }
+                }
                 break;
             }
             if round == MAX_ROUNDS {
@@ -328,6 +342,24 @@ impl Mission {
         self.run = Some(run);
         Ok(())
     }
+}
+
+/// Lets the modules a mission step's calls woke run ([`Context::settle`]); true when a watched
+/// property changed meanwhile, for another round to read. Time and membership are read once
+/// per step, so when they changed meanwhile the mission asks for another step (`state/wake`)
+/// rather than take that change as seen.
+async fn settle(ctx: &mut Context, wake: &State<i64>, run: &Run) -> bool {
+    let outside = || {
+        let clock = run.clock.handle().map(|h| h.version());
+        let members = run.team.members.as_ref().map(|h| h.version());
+        (wake.read().version, clock, members)
+    };
+    let before = outside();
+    let changed = ctx.settle().await;
+    if outside() != before {
+        wake.set(wake.value() + 1);
+    }
+    changed
 }
 
 /// Carries out the relinks the plan step's calls asked for, in order; a refused one is logged
