@@ -39,12 +39,8 @@ impl ContextManager {
     /// in place once no reader holds it.
     pub(super) fn save_memory(&mut self) {
         let mut next = self.spare.take().unwrap_or_default();
-        if Arc::get_mut(&mut next).is_none() {
-            // A reader (a tool, a recorder's tap) still holds it.
-            next = Arc::default();
-        }
-        let memory = Arc::get_mut(&mut next).expect("just made unique");
-        self.fill(memory);
+        // Copied first only if a reader (a tool, a recorder's tap) still holds it.
+        self.fill(Arc::make_mut(&mut next));
         if *next == *self.memory.get() {
             self.spare = Some(next);
             return;
@@ -89,14 +85,12 @@ impl ContextManager {
         if memory.rules != *rules || *memory == ContextMemory::default() {
             return;
         }
-        for (target, _) in &memory.original_values {
+        for (target, value) in &memory.original_values {
             if !self.handles.contains_key(target) {
                 if let Ok(handle) = ctx.blackboard().expr_handle(target).await {
                     self.handles.insert(target.clone(), handle);
                 }
             }
-        }
-        for (target, value) in &memory.original_values {
             let restored = self
                 .handles
                 .get(target)
