@@ -114,8 +114,9 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
         "{stdout}"
     );
     // Each robot carried out its search, to the end, once, exploring frontiers of the merged
-    // map the coordinator gave it. (The search module prints its summary at every stop: a
-    // move off its agent's thread prints a `not done` one first.)
+    // map the coordinator gave it. (The summary after `team search: done` is the run's: the
+    // search's log is kept in `state/log`, so a move off its agent's thread does not start
+    // the counts over.)
     let Some((_, done)) = stdout.split_once("team search: done at t = ") else {
         panic!("the search was not done:\n{stdout}");
     };

@@ -2,10 +2,11 @@
 //! left the team when, who stalled, and which frontier of a departed robot went to whom, how
 //! long after.
 
-use petrel_actors::Point2;
+use petrel_actors::{Point2, PropertyType};
+use serde::{Deserialize, Serialize};
 
 /// A departed robot's frontier given to another robot.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Reassignment {
     /// The robot that left.
     pub from: String,
@@ -19,7 +20,7 @@ pub struct Reassignment {
     pub at: f64,
 }
 
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 struct RobotLog {
     name: String,
     present: bool,
@@ -29,8 +30,10 @@ struct RobotLog {
     stalled: usize,
 }
 
-/// The log of one search.
-#[derive(Clone, Debug)]
+/// The log of one search. Kept in the search module's `state/log`, so that a move or a
+/// restart of the module does not start its summary over.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct TeamLog {
     radius: f64,
     robots: Vec<RobotLog>,
@@ -40,7 +43,16 @@ pub struct TeamLog {
     done_at: Option<f64>,
 }
 
+impl PropertyType for TeamLog {
+    const TYPE_NAME: &'static str = "nav.team_log";
+}
+
 impl TeamLog {
+    /// Whether this is the log of a search by `robots` (in that order).
+    pub fn is_of(&self, robots: &[String]) -> bool {
+        !self.robots.is_empty() && self.robots.iter().map(|r| &r.name).eq(robots.iter())
+    }
+
     /// A log of `robots`; an assignment within `radius` metres of an orphaned frontier takes
     /// it over.
     pub fn new(robots: impl IntoIterator<Item = String>, radius: f64) -> Self {
@@ -219,5 +231,24 @@ mod tests {
             "{}",
             log.summary()
         );
+    }
+
+    #[test]
+    fn a_log_kept_in_state_comes_back_whole_even_through_a_snapshot() {
+        let names = ["r1", "r2"].map(String::from);
+        let mut log = TeamLog::new(names.clone(), 1.0);
+        log.membership(&names, 0.0);
+        log.assigned("r1", Point2::new(1.0, 1.0), 0.0);
+        log.assigned("r2", Point2::new(4.0, 1.0), 2.0);
+        // A snapshot is read back through RON's dynamic values.
+        let text = ron::to_string(&log).unwrap();
+        let back: TeamLog = ron::from_str::<ron::Value>(&text)
+            .unwrap()
+            .into_rust()
+            .unwrap();
+        assert_eq!(back, log);
+        assert!(back.is_of(&names));
+        assert!(!back.is_of(&names[..1]), "another team's log is not taken");
+        assert!(!TeamLog::default().is_of(&[]), "nothing kept yet");
     }
 }

@@ -48,6 +48,8 @@ pub struct TeamSearch {
     frontiers: Output<i64>,
     done: Output<bool>,
     reassigned: Output<i64>,
+    /// The search's log, kept across moves and restarts.
+    saved_log: Output<TeamLog>,
     state: Option<State>,
 }
 
@@ -93,6 +95,7 @@ impl Module for TeamSearch {
             frontiers: ports.output("out/frontiers", 0, "frontiers of the merged map reachable by a robot, at the last allocation"),
             done: ports.output("out/done", false, "the search is over: no robot can reach a frontier of the merged map"),
             reassigned: ports.output("out/reassigned", 0, "frontiers of departed robots given to others"),
+            saved_log: ports.state("state/log", TeamLog::default(), "who explored how many frontiers, who left, stalled or took over: the summary goes on from here after a restart"),
             state: None,
         }
     }
@@ -121,14 +124,42 @@ impl Module for TeamSearch {
             params,
             allocator: Allocator::new(self.keep_radius.value()),
             stalls: StallWatch::new(self.stall_s.value(), MIN_PROGRESS_M),
-            log: TeamLog::new(names.iter().cloned(), self.keep_radius.value()),
+            log: match self.saved_log.get() {
+                saved if saved.is_of(&names) => (*saved).clone(),
+                _ => TeamLog::new(names.iter().cloned(), self.keep_radius.value()),
+            },
             last_plan: f64::NEG_INFINITY,
         });
         Ok(())
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        let result = self.search(ctx);
+        if let Some(state) = &self.state {
+            if *self.saved_log.get() != state.log {
+                self.saved_log.set(state.log.clone());
+            }
+        }
+        result
+    }
+
+    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+        // The summary is the run's: not at a restart or a move, which the search survives.
+        if ctx.restarting() {
+            return Ok(());
+        }
+        if let Some(state) = &self.state {
+            petrel_actors::outln!("\n{}", state.log.summary());
+        }
+        Ok(())
+    }
+}
+
+impl TeamSearch {
+    /// One step of the search: membership, then (every `replan_s`) merge, allocate, tell.
+    fn search(&mut self, ctx: &Context) -> anyhow::Result<()> {
         let t = self.clock.value();
+
         let state = super::initialized(&mut self.state);
         let present = present(state);
         for left in state.log.membership(&present, t) {
@@ -251,17 +282,6 @@ impl Module for TeamSearch {
                 "[{}] t = {t:6.1} s  search done: no frontier left on the merged map",
                 ctx.module()
             );
-        }
-        Ok(())
-    }
-
-    async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        // The summary is the run's: not at a restart or a move, which the search survives.
-        if ctx.restarting() {
-            return Ok(());
-        }
-        if let Some(state) = &self.state {
-            petrel_actors::outln!("\n{}", state.log.summary());
         }
         Ok(())
     }
