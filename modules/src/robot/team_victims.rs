@@ -15,19 +15,20 @@ pub struct TeamVictimsModule {
     clock: Input<f64>,
     victims: Output<Path2>,
     found: Output<i64>,
+    saved: Output<TeamVictims>,
     core: Option<TeamVictims>,
 }
 
 impl Module for TeamVictimsModule {
     const TYPE: &'static str = "vision.team_victims";
     const DESCRIPTION: &'static str =
-        "Merges the victims the robots of a team report (messages `x y`) into one list: who found which.";
+        "Merges the victims the robots of a team report (messages `x y id`: a later report with the same id revises the robot's estimate) into one list: who found which.";
 
     fn declare(ports: &mut Ports) -> Self {
         TeamVictimsModule {
             inbox: ports.queue_in(
                 "in/inbox",
-                "victims reported by robots' vision.victim_mapper (`x y`, map frame)",
+                "victims reported by robots' vision.victim_mapper (`x y id`: map frame, metres, then the robot's id for the victim; without the id a report cannot be revised)",
             ),
             merge_radius: ports.param_in(
                 "params/merge_radius",
@@ -46,6 +47,7 @@ impl Module for TeamVictimsModule {
                 "the team's victims, in the order found",
             ),
             found: ports.output("out/found", 0, "the team's victims"),
+            saved: ports.state("state/list", TeamVictims::default(), "the list with every robot's latest report: a restarted module goes on from it"),
             core: None,
         }
     }
@@ -57,7 +59,7 @@ impl Module for TeamVictimsModule {
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let radius = self.merge_radius.value();
         positive("merge_radius", radius).map_err(|e| super::param_error(e, &[]))?;
-        self.core = Some(TeamVictims::new(radius));
+        self.core = Some(TeamVictims::new(radius).resume(&self.saved.get()));
         Ok(())
     }
 
@@ -65,8 +67,8 @@ impl Module for TeamVictimsModule {
         let core = super::initialized(&mut self.core);
         for item in self.inbox.drain() {
             let robot = item.from.split('/').next().unwrap_or(&item.from);
-            let Some(p) = parse(&item.body) else {
-                tracing::warn!(from = %item.from, body = %item.body, "not a victim report; expected `x y` in metres");
+            let Some((p, id)) = parse(&item.body) else {
+                tracing::warn!(from = %item.from, body = %item.body, "not a victim report; expected `x y` in metres, then the robot's id for the victim if it may revise it");
                 continue;
             };
             let t = self.clock.value();
@@ -74,23 +76,41 @@ impl Module for TeamVictimsModule {
                 true => format!(" at t = {t:.1} s"),
                 false => String::new(),
             };
-            match core.report(robot, p) {
-                Report::New(i) => {
-                    petrel_actors::outln!(
-                        "[{}] victim {} at ({:.2}, {:.2}), found by {robot}{when}",
-                        ctx.module(),
-                        i + 1,
-                        p.0.x,
-                        p.0.y
-                    );
-                    self.found.set(i as i64 + 1);
-                }
+            let m = ctx.module();
+            match core.report(robot, id, p) {
+                Report::New(i) => petrel_actors::outln!(
+                    "[{m}] victim {} at ({:.2}, {:.2}), found by {robot}{when}",
+                    i + 1,
+                    p.0.x,
+                    p.0.y
+                ),
                 Report::Known(i) => {
                     let v = &core.victims()[i];
                     petrel_actors::outln!(
-                        "[{}] victim {} at ({:.2}, {:.2}) from {} reports, the last by {robot}{when}",
-                        ctx.module(),
+                        "[{m}] victim {} at ({:.2}, {:.2}) from {} reports, the last by {robot}{when}",
                         i + 1,
+                        v.position.0.x,
+                        v.position.0.y,
+                        v.reports
+                    );
+                }
+                // Estimates improve as robots come closer: frequent, so not on the console.
+                Report::Revised(i) => {
+                    let v = &core.victims()[i];
+                    tracing::info!(
+                        victim = i + 1,
+                        x = v.position.0.x,
+                        y = v.position.0.y,
+                        by = robot,
+                        "victim revised"
+                    );
+                }
+                Report::Merged { kept, gone } => {
+                    let v = &core.victims()[kept];
+                    petrel_actors::outln!(
+                        "[{m}] victim {} is victim {}, at ({:.2}, {:.2}) from {} reports: {robot} revised its report{when}",
+                        gone + 1,
+                        kept + 1,
                         v.position.0.x,
                         v.position.0.y,
                         v.reports
@@ -98,9 +118,16 @@ impl Module for TeamVictimsModule {
                 }
             }
         }
+        let found = core.victims().len() as i64;
+        if found != self.found.value() {
+            self.found.set(found);
+        }
         let list: Vec<Point2> = core.victims().iter().map(|v| v.position).collect();
         if list[..] != self.victims.get().0[..] {
             self.victims.set(list.into());
+        }
+        if *self.saved.get() != *core {
+            self.saved.set(core.clone());
         }
         Ok(())
     }
@@ -116,13 +143,37 @@ impl Module for TeamVictimsModule {
     }
 }
 
-/// `x y`, two finite numbers.
-fn parse(body: &str) -> Option<Point2> {
-    let mut parts = body.split_whitespace().map(str::parse::<f64>);
-    match (parts.next(), parts.next(), parts.next()) {
-        (Some(Ok(x)), Some(Ok(y)), None) if x.is_finite() && y.is_finite() => {
-            Some(Point2::new(x, y))
+/// `x y` (two finite numbers), then optionally the reporter's id for the victim.
+fn parse(body: &str) -> Option<(Point2, Option<u64>)> {
+    let mut parts = body.split_whitespace();
+    let mut number = || parts.next()?.parse::<f64>().ok().filter(|v| v.is_finite());
+    let p = Point2::new(number()?, number()?);
+    let id = match parts.next() {
+        None => None,
+        Some(id) => Some(id.parse::<u64>().ok()?),
+    };
+    parts.next().is_none().then_some((p, id))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn reports_are_two_numbers_and_an_optional_id() {
+        use super::parse;
+        let p = petrel_actors::Point2::new(1.5, -2.0);
+        assert_eq!(parse("1.5 -2"), Some((p, None)));
+        assert_eq!(parse(" 1.5  -2 7 "), Some((p, Some(7))));
+        for bad in [
+            "",
+            "1.5",
+            "1.5 x",
+            "1.5 -2 -1",
+            "1.5 -2 7 8",
+            "NaN 1",
+            "1 inf 3",
+            "1 2 3.5",
+        ] {
+            assert_eq!(parse(bad), None, "{bad:?}");
         }
-        _ => None,
     }
 }

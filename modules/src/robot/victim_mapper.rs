@@ -35,7 +35,9 @@ pub struct VictimMapper {
     dismiss_done: Output<bool>,
     dismissed: Output<i64>,
     report_to: Input<String>,
+    report_move: Input<f64>,
     outbox: QueueWriter<Message>,
+    saved: Output<VictimMap>,
     /// The detections version last added (a step may be for a command only).
     frame_version: Option<u64>,
     core: Option<VictimMap>,
@@ -69,7 +71,9 @@ impl Module for VictimMapper {
             dismiss_done: ports.output("out/dismissDone", false, "in/dismiss was carried out (false again when in/dismiss is)"),
             dismissed: ports.output("out/dismissed", 0, "candidates dismissed so far"),
             report_to: ports.param("params/report_to", String::new(), "`agent/module` told of each victim seen (a team's vision.team_victims); empty = nobody"),
-            outbox: ports.queue_out("out/outbox", 64, "victims seen, as messages to params/report_to"),
+            report_move: ports.param_in("params/report_move", 0.3, Range::new(0.01, 100.0), "a victim told to params/report_to is told again when its estimate moved this far, m"),
+            outbox: ports.queue_out("out/outbox", 64, "victims seen, as messages to params/report_to (`x y id`; the same id again: a better estimate)"),
+            saved: ports.state("state/map", VictimMap::default(), "candidates, seen and reported victims: a restarted module goes on from them"),
             frame_version: None,
             core: None,
         }
@@ -94,7 +98,11 @@ impl Module for VictimMapper {
         params
             .validate()
             .map_err(|e| anyhow!("invalid parameter {e}"))?;
-        self.core = Some(VictimMap::new(params));
+        let saved = self.saved.get();
+        self.core = Some(match saved.is_empty() {
+            true => VictimMap::new(params),
+            false => VictimMap::resume(params, &saved),
+        });
         Ok(())
     }
 
@@ -124,13 +132,16 @@ impl Module for VictimMapper {
                         p.0.x,
                         p.0.y
                     );
-                    let to = self.report_to.get();
-                    if !to.is_empty() {
-                        // `x y` in metres: what vision.team_victims reads.
-                        let body = format!("{} {}", p.0.x, p.0.y);
-                        let (to, from) = ((*to).clone(), String::new());
-                        self.outbox.push(Message { to, from, body });
-                    }
+                }
+            }
+            let to = self.report_to.get();
+            if !to.is_empty() {
+                // `x y id`, metres: what vision.team_victims reads; a later message with the
+                // same id revises the estimate (it improves as the robot comes closer).
+                for (id, p) in core.news(self.report_move.value()) {
+                    let body = format!("{} {} {id}", p.0.x, p.0.y);
+                    let (to, from) = ((*to).clone(), String::new());
+                    self.outbox.push(Message { to, from, body });
                 }
             }
         }
@@ -189,6 +200,9 @@ impl Module for VictimMapper {
             {
                 self.target.set(t.approach);
             }
+        }
+        if *self.saved.get() != *core {
+            self.saved.set(core.clone());
         }
         Ok(())
     }

@@ -11,4 +11,4 @@ pub mod victim_map;
 
 pub use detector::{detect, Detection, Detections, DetectorOutput, DetectorParams};
 pub use team_victims::{Report, TeamVictim, TeamVictims};
-pub use victim_map::{VictimMap, VictimMapParams};
+pub use victim_map::{sighting_weight, VictimMap, VictimMapParams};

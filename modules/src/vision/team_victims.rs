@@ -1,35 +1,93 @@
 //! Victims reported by the robots of a team, merged into one list (pure).
 //!
-//! Each robot reports a victim once, from its own sightings and its own pose estimate, so two
+//! Each robot reports a victim from its own sightings and its own pose estimate, so two
 //! robots' reports of one victim are independent estimates: the list keeps their mean, which
-//! is closer than either alone (on the shaking rubble floor one report can land 2 m off).
+//! is closer than either alone. A robot's estimate improves as it comes closer (on the shaking
+//! rubble floor the first one can land 2 m off), so a report carries the robot's id for the
+//! victim and a later report with the same id *revises* it: the list always holds each
+//! robot's latest estimate. A revision can show that two entries were one victim (they are
+//! merged) or that a report was of another victim (it moves there).
 
 use petrel_actors::Point2;
+use serde::{Deserialize, Serialize};
 
 /// One victim of the team's list.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TeamVictim {
-    /// Where the reports put it: their mean (map frame).
+    /// Where the reports put it: the mean of each report's latest estimate (map frame).
     pub position: Point2,
-    /// How many reports were merged into it.
+    /// How many reports (robot and id) are merged into it.
     pub reports: usize,
     /// Who reported it first.
     pub found_by: String,
-    /// Who reported it again (each once), in order.
+    /// The other robots whose reports are merged into it, in order.
     pub also_by: Vec<String>,
+    /// The reports: robot, its id for the victim (None: a report that cannot be revised),
+    /// latest estimate.
+    sources: Vec<(String, Option<u64>, Point2)>,
 }
 
-/// What a report was.
+impl TeamVictim {
+    fn new(from: &str, id: Option<u64>, p: Point2) -> Self {
+        let mut v = TeamVictim {
+            position: p,
+            reports: 0,
+            found_by: from.to_string(),
+            also_by: Vec::new(),
+            sources: vec![(from.to_string(), id, p)],
+        };
+        v.update();
+        v
+    }
+
+    /// Recomputes what follows from the sources.
+    fn update(&mut self) {
+        self.position = mean(self.sources.iter().map(|s| s.2));
+        self.reports = self.sources.len();
+        self.also_by.clear();
+        for (robot, _, _) in &self.sources {
+            if *robot != self.found_by && !self.also_by.contains(robot) {
+                self.also_by.push(robot.clone());
+            }
+        }
+    }
+}
+
+/// The mean of some points (the origin for none).
+fn mean(points: impl Iterator<Item = Point2>) -> Point2 {
+    let (mut x, mut y, mut n) = (0.0, 0.0, 0.0);
+    for p in points {
+        (x, y, n) = (x + p.0.x, y + p.0.y, n + 1.0);
+    }
+    match n > 0.0 {
+        true => Point2::new(x / n, y / n),
+        false => Point2::default(),
+    }
+}
+
+/// What a report did to the list.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Report {
     /// A victim nobody had reported: its index in the list.
     New(usize),
     /// Within the merge radius of a known victim: its index.
     Known(usize),
+    /// A robot's new estimate of a victim it had reported: its index (the victim moved).
+    Revised(usize),
+    /// A revision brought two entries within the merge radius: entry `gone` was victim
+    /// `kept` (the earlier found); entries after `gone` move up by one.
+    Merged {
+        /// The index of the victim kept.
+        kept: usize,
+        /// The index of the entry merged into it, now removed.
+        gone: usize,
+    },
 }
 
 /// The team's victims: a report within `radius` of a known victim is that victim.
-#[derive(Clone, Debug)]
+///
+/// It is also the module's memory (`state/list`), hence serializable.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct TeamVictims {
     radius: f64,
     victims: Vec<TeamVictim>,
@@ -44,32 +102,81 @@ impl TeamVictims {
         }
     }
 
-    /// `from` (a robot) reports a victim at `p`.
-    pub fn report(&mut self, from: &str, p: Point2) -> Report {
-        let near = self
-            .victims
-            .iter()
-            .position(|v| (v.position.0 - p.0).norm() <= self.radius);
-        match near {
+    /// This list with the victims of `saved` (a restarted module's memory).
+    pub fn resume(self, saved: &TeamVictims) -> Self {
+        TeamVictims {
+            victims: saved.victims.clone(),
+            ..self
+        }
+    }
+
+    /// `from` (a robot) reports a victim at `p`; `id` is the robot's id for the victim, so a
+    /// later report with the same id revises this one (None: it cannot be revised).
+    pub fn report(&mut self, from: &str, id: Option<u64>, p: Point2) -> Report {
+        let held = id.and_then(|id| {
+            self.victims.iter().enumerate().find_map(|(i, v)| {
+                let k = v
+                    .sources
+                    .iter()
+                    .position(|s| s.0 == from && s.1 == Some(id))?;
+                Some((i, k))
+            })
+        });
+        if let Some((i, k)) = held {
+            let others = &self.victims[i].sources;
+            let near_the_others = others.len() == 1 || {
+                let rest = (0..others.len()).filter(|&j| j != k).map(|j| others[j].2);
+                (mean(rest).0 - p.0).norm() <= self.radius
+            };
+            if near_the_others {
+                self.victims[i].sources[k].2 = p;
+                self.victims[i].update();
+                return self.merge_into_a_neighbour(i).unwrap_or(Report::Revised(i));
+            }
+            // The robot now places it away from the others' reports: another victim.
+            self.victims[i].sources.remove(k);
+            self.victims[i].update();
+        }
+        self.add(from, id, p)
+    }
+
+    /// Adds a report to the nearest victim within the radius, or as a new victim.
+    fn add(&mut self, from: &str, id: Option<u64>, p: Point2) -> Report {
+        match self.nearest(p, None) {
             Some(i) => {
-                let v = &mut self.victims[i];
-                v.reports += 1;
-                v.position = Point2(v.position.0 + (p.0 - v.position.0) / v.reports as f64);
-                if v.found_by != from && !v.also_by.iter().any(|a| a == from) {
-                    v.also_by.push(from.to_string());
-                }
+                self.victims[i].sources.push((from.to_string(), id, p));
+                self.victims[i].update();
                 Report::Known(i)
             }
             None => {
-                self.victims.push(TeamVictim {
-                    position: p,
-                    reports: 1,
-                    found_by: from.to_string(),
-                    also_by: Vec::new(),
-                });
+                self.victims.push(TeamVictim::new(from, id, p));
                 Report::New(self.victims.len() - 1)
             }
         }
+    }
+
+    /// The victim nearest `p` within the radius, other than `except`.
+    fn nearest(&self, p: Point2, except: Option<usize>) -> Option<usize> {
+        self.victims
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| Some(*i) != except)
+            .map(|(i, v)| (i, (v.position.0 - p.0).norm()))
+            .filter(|(_, d)| *d <= self.radius)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    }
+
+    /// Merges victim `i`, which moved, with the nearest other victim within the radius: the
+    /// later found goes into the earlier.
+    fn merge_into_a_neighbour(&mut self, i: usize) -> Option<Report> {
+        let j = self.nearest(self.victims[i].position, Some(i))?;
+        let (kept, gone) = (i.min(j), i.max(j));
+        let gone_victim = self.victims.remove(gone);
+        let v = &mut self.victims[kept];
+        v.sources.extend(gone_victim.sources);
+        v.update();
+        Some(Report::Merged { kept, gone })
     }
 
     /// The list, in the order found.
@@ -110,25 +217,9 @@ impl TeamVictims {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn reports_near_a_known_victim_are_that_victim_and_finders_are_kept() {
-        let mut t = TeamVictims::new(1.0);
-        assert_eq!(t.report("r2", Point2::new(1.0, 1.0)), Report::New(0));
-        assert_eq!(t.report("r1", Point2::new(1.5, 1.2)), Report::Known(0));
-        assert_eq!(t.report("r1", Point2::new(1.4, 0.9)), Report::Known(0));
-        assert_eq!(t.report("r2", Point2::new(1.1, 0.9)), Report::Known(0));
-        assert_eq!(t.report("r1", Point2::new(5.0, 1.0)), Report::New(1));
-        assert_eq!(t.victims()[0].also_by, ["r1"]);
-        // The mean of the four reports.
-        assert_eq!(t.victims()[0].reports, 4);
-        assert_eq!(
-            t.summary(),
-            "team victims: 2\n  1 (1.25, 1.00) found by r2, also r1\n  2 (5.00, 1.00) found by r1\n  first found: r1: 1, r2: 1\n"
-        );
-        assert_eq!(TeamVictims::new(1.0).summary(), "team victims: 0\n");
-    }
+impl petrel_actors::PropertyType for TeamVictims {
+    const TYPE_NAME: &'static str = "vision.team_victims";
 }
+
+#[cfg(test)]
+mod tests;
