@@ -46,7 +46,7 @@ pub use team_member::{MemberNames, TeamMember};
 pub use team_search::TeamSearch;
 pub use team_victims::TeamVictimsModule;
 pub use victim_detector::VictimDetector;
-pub use victim_mapper::VictimMapper;
+pub use victim_mapper::{MapperMemory, VictimMapper};
 pub use world::SimWorld;
 pub use world_body::BodyNames;
 

@@ -7,8 +7,8 @@ use petrel_actors::{
     Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, Range, Schedule,
 };
 
-use crate::sim::context_log::ContextLog;
 use crate::sim::render::{save_png, RenderLayers};
+use crate::sim::run_record::{match_victims, RunRecord};
 use crate::sim::Rect;
 
 /// Trajectory colour while no context is active.
@@ -40,14 +40,9 @@ pub struct Recorder {
     contexts: Input<String>,
     activity: Input<String>,
     progress_s: Input<f64>,
-    /// Simulated time of the last progress line.
-    last_progress: f64,
     dark: Input<Vec<f64>>,
     rough: Input<Vec<f64>>,
     searched: Input<OccupancyGrid>,
-    context_log: ContextLog,
-    /// Colour of each trajectory point (the highest-priority active context).
-    colours: Vec<[u8; 3]>,
     collisions: Input<i64>,
     sim_time: Input<f64>,
     png: Input<String>,
@@ -56,12 +51,17 @@ pub struct Recorder {
     distance: Output<f64>,
     pose_error: Output<f64>,
     pose_error_max: Output<f64>,
-    /// Sum, count and maximum of the localization error samples.
-    error_stats: (f64, u64, f64),
-    trajectory: Vec<Point2>,
-    last: Option<Point2>,
+    /// The run so far, kept in `saved` (see [`SAVE_EVERY_S`]).
+    record: RunRecord,
+    saved: Output<RunRecord>,
+    /// Simulated time of the latest save.
+    saved_at: f64,
     started: Option<std::time::Instant>,
 }
+
+/// Simulated seconds between saves of the record to `state/run`: what a crash can lose (a
+/// restart or a move saves it first). Not at every step: the trajectory grows all run long.
+const SAVE_EVERY_S: f64 = 5.0;
 
 impl Module for Recorder {
     const TYPE: &'static str = "sim.recorder";
@@ -115,7 +115,6 @@ impl Module for Recorder {
                 Range::new(0.0, 1e7),
                 "print a progress line every this many simulated seconds (0 = none)",
             ),
-            last_progress: 0.0,
             dark: ports.input(
                 "in/darkAreas",
                 Vec::new(),
@@ -127,8 +126,6 @@ impl Module for Recorder {
                 "rough floor to tint, `[x0, y0, x1, y1, ...]`",
             ),
             searched: ports.input("in/searched", OccupancyGrid::default(), "optional: the floor the camera searched (nav.searched's out/searched); free floor not searched is tinted"),
-            context_log: ContextLog::default(),
-            colours: Vec::new(),
             collisions: ports.input("in/collisions", 0, "collision count"),
             sim_time: ports.input("in/simTime", 0.0, "simulated time, s"),
             png: ports.param(
@@ -159,9 +156,9 @@ impl Module for Recorder {
                 0.0,
                 "largest out/poseError so far, m",
             ),
-            error_stats: (0.0, 0, 0.0),
-            trajectory: Vec::new(),
-            last: None,
+            record: RunRecord::default(),
+            saved: ports.state("state/run", RunRecord::default(), "trajectory, contexts and pose errors so far: a restarted recorder goes on with them"),
+            saved_at: f64::NEG_INFINITY,
             started: None,
         }
     }
@@ -184,58 +181,54 @@ impl Module for Recorder {
             })?;
         }
         self.started = Some(std::time::Instant::now());
+        self.record = (*self.saved.get()).clone();
         Ok(())
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        self.context_log
-            .update(self.sim_time.value(), &self.contexts.get());
+        let t = self.sim_time.value();
+        self.record.contexts.update(t, &self.contexts.get());
         let p = self.pose.get().position();
         let estimate = self.estimate.read();
         if estimate.version > 0 && !ctx.cause().first() {
             let e = (estimate.value.position().0 - p.0).norm();
-            let (sum, n, max) = self.error_stats;
-            self.error_stats = (sum + e, n + 1, max.max(e));
+            self.record.error(e);
             self.pose_error.set(e);
             if e > self.pose_error_max.value() {
                 self.pose_error_max.set(e);
             }
         }
-        match self.last {
-            // The first pose read may be an unlinked default; the first real one is the start.
-            None if ctx.cause().first() => return Ok(()),
-            None => self.record(p),
-            Some(last) => {
-                let d = (p.0 - last.0).norm();
-                self.distance.set(self.distance.value() + d);
-                let sampled = self
-                    .trajectory
-                    .last()
-                    .map_or(f64::INFINITY, |q| (p.0 - q.0).norm());
-                if sampled >= self.sample_m.value() {
-                    self.record(p);
-                }
-            }
+        // The first pose read may be an unlinked default; the first real one is the start.
+        if self.record.last.is_none() && ctx.cause().first() {
+            return Ok(());
         }
-        self.last = Some(p);
-        let t = self.sim_time.value();
-        let every = self.progress_s.value();
-        if every > 0.0 && t - self.last_progress >= every {
-            self.last_progress = t;
+        let colour = self.colour();
+        let d = self.record.moved(p, self.sample_m.value(), colour);
+        if d > 0.0 {
+            self.distance.set(self.distance.value() + d);
+        }
+        if self.record.progress_due(t, self.progress_s.value()) {
             self.progress(t);
+        }
+        if t - self.saved_at >= SAVE_EVERY_S {
+            self.save(t);
         }
         Ok(())
     }
 
     async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        if let Some(p) = self.last {
-            self.record(p);
-        }
-        // The summary is the run's, printed when it ends, not at a restart or a move.
+        // The summary is the run's, printed when it ends, not at a restart or a move: the
+        // next instance goes on with the record.
         if ctx.restarting() {
+            self.save(self.sim_time.value());
             return Ok(());
         }
-        let wall = self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
+        if let Some(p) = self.record.last {
+            let colour = self.colour();
+            self.record.sample(p, colour);
+        }
+        let wall =
+            self.record.wall_before + self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
         let sim = self.sim_time.value();
         let goals: Vec<Pose2> = self
             .goals
@@ -278,7 +271,7 @@ impl Module for Recorder {
                 }
             }
         }
-        let totals = self.context_log.totals(sim);
+        let totals = self.record.contexts.totals(sim);
         if !totals.is_empty() {
             petrel_actors::outln!("contexts         (switches on, time active)");
             for (name, on, secs) in &totals {
@@ -291,7 +284,7 @@ impl Module for Recorder {
         }
         petrel_actors::outln!("path length      {:.1} m", self.distance.value());
         petrel_actors::outln!("collisions       {}", self.collisions.value());
-        if let (sum, n @ 1.., max) = self.error_stats {
+        if let (sum, n @ 1.., max) = self.record.errors {
             petrel_actors::outln!(
                 "pose error       mean {:.3} m, max {max:.3} m (estimate vs truth)",
                 sum / n as f64
@@ -324,11 +317,11 @@ impl Module for Recorder {
                 .collect();
             let searched = self.searched.get();
             let layers = RenderLayers {
-                trajectory: &self.trajectory,
+                trajectory: &self.record.trajectory,
                 // Without contexts, the trajectory shows time instead (blue to orange).
                 trajectory_colours: match totals.is_empty() {
                     true => &[],
-                    false => &self.colours,
+                    false => &self.record.colours,
                 },
                 areas: &areas,
                 searched: Some(&searched),
@@ -337,7 +330,7 @@ impl Module for Recorder {
                 path: path.points(),
                 goals: &goals,
                 reached: self.reached.value().max(0) as usize,
-                robot: self.last.map(|p| {
+                robot: self.record.last.map(|p| {
                     (
                         Pose2::new(p.0.x, p.0.y, self.pose.get().theta()),
                         self.robot_radius.value(),
@@ -395,38 +388,20 @@ impl Recorder {
         petrel_actors::outln!("{line}");
     }
 
-    /// Appends a trajectory point, coloured by the highest-priority active context.
-    fn record(&mut self, p: Point2) {
+    /// The colour of a trajectory point now: that of the highest-priority active context.
+    fn colour(&self) -> [u8; 3] {
         let active = self.contexts.get();
         let top = active.split(',').map(str::trim).find(|s| !s.is_empty());
-        let colour = top.map_or(NO_CONTEXT, |name| {
-            context_colour(name, self.context_log.index(name).unwrap_or(0))
-        });
-        self.trajectory.push(p);
-        self.colours.push(colour);
+        top.map_or(NO_CONTEXT, |name| {
+            context_colour(name, self.record.contexts.index(name).unwrap_or(0))
+        })
     }
-}
 
-/// For each true victim, the distance to the found one matched to it (greedy by distance,
-/// each found victim used once, within `radius`), or `None` when it was missed.
-pub(crate) fn match_victims(truth: &[Point2], found: &[Point2], radius: f64) -> Vec<Option<f64>> {
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-    for (i, t) in truth.iter().enumerate() {
-        for (j, f) in found.iter().enumerate() {
-            let d = (t.0 - f.0).norm();
-            if d <= radius {
-                pairs.push((d, i, j));
-            }
-        }
+    /// Keeps the record in `state/run`, with this instance's wall time so far.
+    fn save(&mut self, t: f64) {
+        let mut saved = self.record.clone();
+        saved.wall_before += self.started.map_or(0.0, |s| s.elapsed().as_secs_f64());
+        self.saved.set(saved);
+        self.saved_at = t;
     }
-    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out = vec![None; truth.len()];
-    let mut used = vec![false; found.len()];
-    for (d, i, j) in pairs {
-        if out[i].is_none() && !used[j] {
-            out[i] = Some(d);
-            used[j] = true;
-        }
-    }
-    out
 }

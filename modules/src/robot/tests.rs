@@ -309,3 +309,68 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     assert_eq!(grid.get(0, 5), Some(-1));
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_restarted_recorder_goes_on_with_the_runs_record() {
+    use crate::sim::run_record::RunRecord;
+    let agent = start(&format!(
+        r#"{},
+           (name: "recorder", type: "sim.recorder", values: {{"params/sample_m": 0.01}},
+            links: {{"in/pose": "robot/out/pose", "in/simTime": "robot/out/simTime"}})"#,
+        reactive()
+    ))
+    .await;
+    let bb = agent.blackboard();
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    agent.modules().restart("recorder").await.unwrap();
+    // What the first instance had when it stopped for the restart.
+    let before = bb.get::<RunRecord>("recorder/state/run").await.unwrap();
+    assert!(before.trajectory.len() > 10, "{before:?}");
+    assert!(before.wall_before > 0.0);
+    // Saved again within 5 simulated seconds (1 s at 5x): the new instance went on from it.
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let after = bb.get::<RunRecord>("recorder/state/run").await.unwrap();
+    assert!(
+        after.trajectory.len() > before.trajectory.len()
+            && after.trajectory.starts_with(&before.trajectory),
+        "{} points, then {}",
+        before.trajectory.len(),
+        after.trajectory.len()
+    );
+    assert!(after.wall_before >= before.wall_before);
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
+    use crate::robot::victim_mapper::MapperMemory;
+    use crate::vision::{Detection, Detections};
+    let agent = start(
+        r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 2})"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    let sighting = || {
+        Detections(vec![Detection {
+            bearing: 0.0,
+            range: 2.0,
+            confidence: 1.0,
+        }])
+    };
+    // One sighting: a candidate, not yet a victim (two confirm one).
+    bb.set("victims/in/detections", sighting()).await.unwrap();
+    for _ in 0..500 {
+        let memory = bb.get::<MapperMemory>("victims/state/map").await.unwrap();
+        if !memory.map.is_empty() {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    assert_eq!(*bb.get::<i64>("victims/out/pending").await.unwrap(), 0);
+    agent.modules().restart("victims").await.unwrap();
+    // The second sighting, seen by the new instance, confirms the first one's candidate
+    // (which the new instance does not count twice).
+    bb.set("victims/in/detections", sighting()).await.unwrap();
+    wait_for(&agent, "victims/out/pending", 1).await;
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

@@ -37,10 +37,23 @@ pub struct VictimMapper {
     report_to: Input<String>,
     report_move: Input<f64>,
     outbox: QueueWriter<Message>,
-    saved: Output<VictimMap>,
+    saved: Output<MapperMemory>,
     /// The detections version last added (a step may be for a command only).
     frame_version: Option<u64>,
     core: Option<VictimMap>,
+}
+
+/// What a restarted `vision.victim_mapper` goes on from (`state/map`).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MapperMemory {
+    /// Candidates, seen and reported victims.
+    pub map: VictimMap,
+    /// The `in/detections` version last added: a new instance must not add it again.
+    pub frame_version: Option<u64>,
+}
+
+impl petrel_actors::PropertyType for MapperMemory {
+    const TYPE_NAME: &'static str = "vision.victim_mapper_memory";
 }
 
 impl Module for VictimMapper {
@@ -73,7 +86,7 @@ impl Module for VictimMapper {
             report_to: ports.param("params/report_to", String::new(), "`agent/module` told of each victim seen (a team's vision.team_victims); empty = nobody"),
             report_move: ports.param_in("params/report_move", 0.3, Range::new(0.01, 100.0), "a victim told to params/report_to is told again when its estimate moved this far, m"),
             outbox: ports.queue_out("out/outbox", 64, "victims seen, as messages to params/report_to (`x y id`; the same id again: a better estimate)"),
-            saved: ports.state("state/map", VictimMap::default(), "candidates, seen and reported victims: a restarted module goes on from them"),
+            saved: ports.state("state/map", MapperMemory::default(), "candidates, seen and reported victims: a restarted module goes on from them"),
             frame_version: None,
             core: None,
         }
@@ -99,9 +112,10 @@ impl Module for VictimMapper {
             .validate()
             .map_err(|e| anyhow!("invalid parameter {e}"))?;
         let saved = self.saved.get();
-        self.core = Some(match saved.is_empty() {
+        self.frame_version = saved.frame_version;
+        self.core = Some(match saved.map.is_empty() {
             true => VictimMap::new(params),
-            false => VictimMap::resume(params, &saved),
+            false => VictimMap::resume(params, &saved.map),
         });
         Ok(())
     }
@@ -201,8 +215,12 @@ impl Module for VictimMapper {
                 self.target.set(t.approach);
             }
         }
-        if *self.saved.get() != *core {
-            self.saved.set(core.clone());
+        let saved = self.saved.get();
+        if saved.map != *core || saved.frame_version != self.frame_version {
+            self.saved.set(MapperMemory {
+                map: core.clone(),
+                frame_version: self.frame_version,
+            });
         }
         Ok(())
     }

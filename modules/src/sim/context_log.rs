@@ -2,7 +2,7 @@
 //! and the colours of its trajectory.
 
 /// Switch counts and active time per context, fed with the active list as it changes.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ContextLog {
     /// `(name, activations, seconds active, active since)` in order of first activation.
     entries: Vec<(String, u32, f64, Option<f64>)>,

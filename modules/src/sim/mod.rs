@@ -19,6 +19,7 @@ pub mod pgm;
 pub mod raycast;
 pub mod render;
 pub mod robot;
+pub mod run_record;
 
 use std::sync::Arc;
 
