@@ -9,11 +9,9 @@
 
 mod backlog;
 pub mod encode;
-pub mod grid_patch;
 pub mod select;
 pub mod sink;
 mod taps;
-mod unpatch;
 
 pub use encode::{Codec, Format, Kind, LogLevel, LogRecord, SchemaDef, Stamp};
 pub use select::{RecordOptions, Selection, SplitPolicy};

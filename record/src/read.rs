@@ -94,9 +94,6 @@ pub struct Recording {
     pub interrupted_at: Option<u64>,
     /// The file's length.
     pub len: u64,
-    /// The first grid patch that could not be made whole again (the rest of its channel stays
-    /// as patches), if any: the file was damaged.
-    pub unrebuilt: Option<String>,
 }
 
 impl Recording {
@@ -106,12 +103,6 @@ impl Recording {
         let bytes =
             std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
         let rec = Recording::parse(&bytes);
-        if let (Some(e), false) = (&rec.unrebuilt, salvage) {
-            return Err(format!(
-                "{}: {e} (the file is damaged; `--salvage` replays the rest)",
-                path.display()
-            ));
-        }
         match (&rec.problem, salvage) {
             (Some(p), false) => Err(format!(
                 "{}: {p} (the file is damaged or was cut; `--salvage` replays the {} messages before it)",
@@ -139,8 +130,6 @@ impl Recording {
         }
         let mut schemas = BTreeMap::new();
         rec.problem = rec.walk(bytes, MAGIC.len(), 0, &mut schemas).err();
-        // Grids recorded as patches read as the whole grids they were.
-        rec.unrebuilt = crate::unpatch::expand(&mut rec).err();
         rec
     }
 

@@ -1,8 +1,7 @@
 //! The writer core: recorded values → MCAP files through the `mcap` crate. Chunked, zstd or
 //! LZ4 compressed ([`ChunkCompression`]), indexed; files split by the [`SplitPolicy`]; drops
-//! counted per channel and written in the summary; occupancy grids written whole or as the
-//! patch of cells that changed ([`crate::grid_patch`]). Synchronous: the recorder runs it on
-//! its own thread.
+//! counted per channel and written in the summary. Synchronous: the recorder runs it on its
+//! own thread.
 
 mod file;
 
@@ -14,12 +13,11 @@ use std::sync::Arc;
 
 use mcap::records::{MessageHeader, Metadata};
 use mcap::Writer;
-use petrel_actors::{AnyValue, OccupancyGrid, TypeInfo};
+use petrel_actors::{AnyValue, TypeInfo};
 
 pub use file::{ChunkCompression, CHUNK_BYTES, ZSTD_LEVEL};
 
 use crate::encode::{Codec, Format, Kind, Stamp};
-use crate::grid_patch::{GridPatcher, GridWrite, PATCH_SUFFIX};
 use crate::select::{split_path, SplitPolicy};
 use file::Counted;
 
@@ -38,8 +36,6 @@ pub mod meta {
     pub const KIND: &str = "petrel.kind";
     /// `true` when JSON values sit in a `value` field.
     pub const WRAPPED: &str = "petrel.wrapped";
-    /// On a patch channel: the topic of the grid channel its patches belong to.
-    pub const PATCH_OF: &str = "petrel.patch_of";
 }
 
 /// One channel a recording writes to.
@@ -78,10 +74,6 @@ struct Channel {
     dropped: u64,
     /// Values that could not be encoded (counted, logged once).
     failed: u64,
-    /// For a grid channel: whole grid or patch, write by write (reset with each file).
-    patcher: GridPatcher,
-    /// Its patch channel's id in the current file, once added there.
-    patch_id: Option<u16>,
 }
 
 /// What a finished recording wrote.
@@ -163,11 +155,9 @@ impl Sink {
         self.writer = Some(writer);
         self.files.push(path);
         self.file_first_ns = None;
-        // Each file reads alone: its channels are added again, its grids start whole.
+        // Each file reads alone: its channels are added again.
         for c in &mut self.channels {
             c.id = None;
-            c.patch_id = None;
-            c.patcher = GridPatcher::default();
         }
         Ok(())
     }
@@ -186,8 +176,6 @@ impl Sink {
             written: 0,
             dropped: 0,
             failed: 0,
-            patcher: GridPatcher::default(),
-            patch_id: None,
         });
         i
     }
@@ -214,18 +202,9 @@ impl Sink {
             true => Codec::log(format),
             false => Codec::for_value(format, &c.spec.type_info, &entry.value),
         });
-        // A grid that changed in a few cells is written as those cells.
-        let patch: Option<AnyValue> = match entry.value.downcast_ref::<OccupancyGrid>() {
-            Some(grid) if codec.kind == Kind::Grid => match c.patcher.next(grid, entry.publish_ns) {
-                GridWrite::Full => None,
-                GridWrite::Patch(p) => Some(Arc::new(p)),
-            },
-            _ => None,
-        };
         self.buffer.clear();
         let stamp = Stamp::from_ns(entry.publish_ns);
-        let value = patch.as_ref().unwrap_or(&entry.value);
-        if let Err(e) = codec.encode(&c.spec.type_info, value, stamp, &mut self.buffer) {
+        if let Err(e) = codec.encode(&c.spec.type_info, &entry.value, stamp, &mut self.buffer) {
             if c.failed == 0 {
                 tracing::warn!(topic = %c.spec.topic, error = %e, "cannot record a value");
             }
@@ -233,18 +212,9 @@ impl Sink {
             return Ok(());
         }
         let writer = self.writer.as_mut().expect("a sink always has a file open");
-        let id = match (patch.is_some(), c.id, c.patch_id) {
-            (false, Some(id), _) | (true, _, Some(id)) => id,
-            (false, None, _) => {
-                let id = add_channel(writer, &c.spec, codec, None)?;
-                c.id = Some(id);
-                id
-            }
-            (true, _, None) => {
-                let id = add_channel(writer, &c.spec, codec, Some(&c.spec.topic))?;
-                c.patch_id = Some(id);
-                id
-            }
+        let id = match c.id {
+            Some(id) => id,
+            None => *c.id.insert(add_channel(writer, &c.spec, codec)?),
         };
         writer
             .write_to_known_channel(
@@ -304,24 +274,14 @@ impl Sink {
     }
 }
 
-/// Adds the channel of `spec` (or, with `patch_of`, the patch channel of the grid channel of
-/// that topic) and its schema to the current file.
-fn add_channel(
-    writer: &mut Writer<Counted>,
-    spec: &ChannelSpec,
-    codec: Codec,
-    patch_of: Option<&str>,
-) -> io::Result<u16> {
+/// Adds the channel of `spec` and its schema to the current file.
+fn add_channel(writer: &mut Writer<Counted>, spec: &ChannelSpec, codec: Codec) -> io::Result<u16> {
     let schema = codec.schema(spec.type_info.name());
     let schema_id = writer
         .add_schema(&schema.name, schema.encoding, &schema.data)
         .map_err(io::Error::other)?;
     let mut metadata = BTreeMap::new();
-    if let Some(base) = patch_of {
-        // Not the property's URL: readers that do not know patches must not take them for it.
-        metadata.insert(meta::PATCH_OF.into(), base.to_string());
-        metadata.insert(meta::TYPE.into(), spec.type_info.name().into());
-    } else if !spec.url.is_empty() {
+    if !spec.url.is_empty() {
         metadata.insert(meta::URL.into(), spec.url.clone());
         metadata.insert(meta::TYPE.into(), spec.type_info.name().into());
         let kind = if spec.queue { "queue" } else { "value" };
@@ -330,11 +290,7 @@ fn add_channel(
     if let Kind::Json { wrapped: true } = codec.kind {
         metadata.insert(meta::WRAPPED.into(), "true".into());
     }
-    let topic = match patch_of {
-        Some(base) => format!("{base}{PATCH_SUFFIX}"),
-        None => spec.topic.clone(),
-    };
     writer
-        .add_channel(schema_id, &topic, schema.message_encoding, &metadata)
+        .add_channel(schema_id, &spec.topic, schema.message_encoding, &metadata)
         .map_err(io::Error::other)
 }
