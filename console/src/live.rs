@@ -20,13 +20,13 @@ const LOG_BACKLOG: usize = 1024;
 pub struct LiveChannel {
     /// The topic, `/agent/module/path`.
     pub topic: String,
-    /// Message encoding (`json`, `cdr`).
+    /// Message encoding (`protobuf`, `json`, `cdr`).
     pub encoding: String,
     /// Schema name (`foxglove.LaserScan`, ...).
     pub schema_name: String,
-    /// Schema text.
+    /// Schema as text (a binary protobuf one base64-encoded, as the protocol carries it).
     pub schema: String,
-    /// Schema encoding (`jsonschema`, `ros2msg`).
+    /// Schema encoding (`protobuf`, `jsonschema`, `ros2msg`).
     pub schema_encoding: String,
 }
 

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use petrel_actors::{outln, Agent, AnyValue, TypeInfo};
 use petrel_console::live::{ChannelEncoder, LiveChannel, LiveEncoders, LiveLog};
 use petrel_console::{ConsoleOptions, FoxgloveServer};
+use petrel_record::encode::foxglove;
 use petrel_record::{select, Codec, Format, LogRecord, Stamp};
 
 /// The recorder's encoders, in `format`.
@@ -59,8 +60,8 @@ fn live_channel(
     let channel = LiveChannel {
         topic,
         encoding: schema.message_encoding.to_string(),
+        schema: foxglove::websocket_schema(&schema)?,
         schema_name: schema.name,
-        schema: String::from_utf8(schema.data).ok()?,
         schema_encoding: schema.encoding.to_string(),
     };
     Some((channel, Arc::new(Encoder { codec, type_info })))
@@ -77,13 +78,11 @@ pub(crate) async fn start(
         .iter()
         .map(|a| (a.name().to_string(), a.blackboard().clone()))
         .collect();
-    // The live view sends Foxglove types as JSON: the WebSocket protocol carries a schema as
-    // text (a protobuf one would be base64), and its clients and tests read JSON schemas.
-    let format = match format.unwrap_or_default() {
-        Format::Ros2 => Format::Ros2,
-        Format::Foxglove | Format::FoxgloveJson => Format::FoxgloveJson,
-    };
-    let encoders = Arc::new(RecordEncoders { format });
+    // The recording's encodings: protobuf grids, scans, poses and images by default (their
+    // schemas base64 in `advertise`, as the protocol carries binary schemas).
+    let encoders = Arc::new(RecordEncoders {
+        format: format.unwrap_or_default(),
+    });
     let log = LiveLog::default();
     let options = ConsoleOptions { addr, token: None };
     let server = FoxgloveServer::start(options, sources, encoders, Some(log.clone()))

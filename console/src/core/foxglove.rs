@@ -21,13 +21,14 @@ pub struct Channel {
     pub id: u32,
     /// The topic (`/agent/module/path`, as in a recording).
     pub topic: String,
-    /// Message encoding: `json` or `cdr`.
+    /// Message encoding: `protobuf`, `json` or `cdr`.
     pub encoding: String,
     /// Schema name, e.g. `foxglove.LaserScan`.
     pub schema_name: String,
-    /// The schema text (a JSON schema, or a `ros2msg` definition).
+    /// The schema as text: a JSON schema or a `ros2msg` definition as it is, a binary protobuf
+    /// `FileDescriptorSet` base64-encoded (as the protocol carries binary schemas).
     pub schema: String,
-    /// `jsonschema` or `ros2msg`.
+    /// `protobuf`, `jsonschema` or `ros2msg`.
     pub schema_encoding: String,
 }
 

@@ -363,3 +363,13 @@ pub fn read_log(data: &[u8]) -> Result<LogRecord, String> {
         line: l.line,
     })
 }
+
+/// A channel's schema as the Foxglove WebSocket protocol's `advertise` carries it, as text:
+/// a binary one (protobuf's `FileDescriptorSet`) base64-encoded, as the protocol asks, a text
+/// one (JSON schema, `ros2msg`) as it is; `None` for a text schema that is not UTF-8.
+pub fn websocket_schema(schema: &super::SchemaDef) -> Option<String> {
+    match schema.encoding {
+        "protobuf" => Some(BASE64.encode(&schema.data)),
+        _ => String::from_utf8(schema.data.clone()).ok(),
+    }
+}

@@ -1,63 +1,25 @@
 //! The writer core: recorded values → MCAP files through the `mcap` crate. Chunked, zstd or
-//! LZ4 compressed ([`ChunkCompression`]), indexed; files split by the [`SplitPolicy`]; drops counted per channel and
-//! written in the summary. Synchronous: the recorder runs it on its own thread.
+//! LZ4 compressed ([`ChunkCompression`]), indexed; files split by the [`SplitPolicy`]; drops
+//! counted per channel and written in the summary. Synchronous: the recorder runs it on its
+//! own thread.
+
+mod file;
 
 use std::collections::{BTreeMap, HashMap};
-use std::fs::File;
-use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::io::{self, Write};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use mcap::records::{MessageHeader, Metadata};
-use mcap::{Compression, WriteOptions, Writer};
+use mcap::Writer;
 use petrel_actors::{AnyValue, TypeInfo};
-use serde::{Deserialize, Serialize};
 
-use crate::encode::{Codec, Format, Stamp};
+pub use file::{ChunkCompression, CHUNK_BYTES, ZSTD_LEVEL};
+
+use crate::encode::{Codec, Format, Kind, Stamp};
 use crate::select::{split_path, SplitPolicy};
-
-/// Chunk size target: small enough that a killed run loses little, large enough to compress.
-pub const CHUNK_BYTES: u64 = 512 * 1024;
-
-/// zstd level of the chunks: the fastest standard level, and cheaper in CPU than the `mcap`
-/// crate's LZ4 frames, whose XXH32 content checksum its options cannot turn off (BENCHMARKS.md).
-pub const ZSTD_LEVEL: u32 = 1;
-
-/// How chunks are compressed. Every MCAP reader (Foxglove, the `mcap` CLI, rosbag2) reads both.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ChunkCompression {
-    /// zstd level 1: less CPU on the robot and smaller files than LZ4 on petrel's recordings
-    /// (BENCHMARKS.md, 2026-11-24).
-    #[default]
-    Zstd,
-    /// LZ4 frames: faster for readers to decompress, more CPU to write (the `mcap` crate's
-    /// frames carry a content checksum) and larger files.
-    Lz4,
-}
-
-impl ChunkCompression {
-    /// The `mcap` crate's compression and level for it.
-    fn mcap(self) -> (Compression, u32) {
-        match self {
-            ChunkCompression::Zstd => (Compression::Zstd, ZSTD_LEVEL),
-            // Level 0: LZ4's default fast mode (levels ≥ 3 are the slow LZ4 HC).
-            ChunkCompression::Lz4 => (Compression::Lz4, 0),
-        }
-    }
-}
-
-impl std::str::FromStr for ChunkCompression {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "zstd" => Ok(ChunkCompression::Zstd),
-            "lz4" => Ok(ChunkCompression::Lz4),
-            other => Err(format!("expected `zstd` or `lz4`, got `{other}`")),
-        }
-    }
-}
+use file::Counted;
 
 /// Name of the metadata record holding the drop counts (per topic) of a file.
 pub const DROPPED_METADATA: &str = "petrel.dropped";
@@ -129,57 +91,6 @@ pub struct SinkReport {
     pub channels: usize,
 }
 
-/// The file as the `mcap` writer sees it: buffered, its length counted (the split size)
-/// without asking the OS, and its position tracked here. The writer asks for its position
-/// before every message index and summary record (hundreds per chunk with many channels);
-/// `BufWriter`'s `Seek` answers that by flushing and an `lseek`, which made each of those
-/// small records a system call of its own.
-struct Counted {
-    file: BufWriter<File>,
-    /// The position in the file.
-    pos: u64,
-    /// The file's length (the furthest byte written), shared with the sink.
-    len: Arc<AtomicU64>,
-}
-
-/// Write buffer: a chunk's compressed output and its indexes go out in a few large writes.
-const WRITE_BUFFER: usize = 256 * 1024;
-
-impl Counted {
-    fn new(file: File, len: Arc<AtomicU64>) -> Self {
-        Counted {
-            file: BufWriter::with_capacity(WRITE_BUFFER, file),
-            pos: 0,
-            len,
-        }
-    }
-}
-
-impl Write for Counted {
-    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        let n = self.file.write(buf)?;
-        self.pos += n as u64;
-        self.len.fetch_max(self.pos, Ordering::Relaxed);
-        Ok(n)
-    }
-    fn flush(&mut self) -> io::Result<()> {
-        self.file.flush()
-    }
-}
-
-impl Seek for Counted {
-    fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
-        if pos == SeekFrom::Current(0) {
-            return Ok(self.pos);
-        }
-        self.pos = self.file.seek(pos)?;
-        Ok(self.pos)
-    }
-    fn stream_position(&mut self) -> io::Result<u64> {
-        Ok(self.pos)
-    }
-}
-
 /// Writes a recording.
 pub struct Sink {
     base: PathBuf,
@@ -232,42 +143,19 @@ impl Sink {
 
     fn open_next(&mut self) -> io::Result<()> {
         let path = split_path(&self.base, self.files.len());
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
         self.file_len = Arc::default();
-        let file = Counted::new(File::create(&path)?, self.file_len.clone());
-        let profile = match self.format {
-            Format::Ros2 => "ros2",
-            Format::Foxglove | Format::FoxgloveJson => "",
-        };
-        let (compression, level) = self.compression.mcap();
-        let mut writer = WriteOptions::new()
-            .compression(Some(compression))
-            .compression_level(level)
-            // On the writer thread itself: zstd's worker threads would add CPU, not save it.
-            .compression_threads(0)
-            .chunk_size(Some(CHUNK_BYTES))
-            .profile(profile)
-            .library(concat!("petrel-record/", env!("CARGO_PKG_VERSION")))
-            .create(file)
-            .map_err(io::Error::other)?;
-        let about = BTreeMap::from([
-            (
-                "format".to_string(),
-                format!("{:?}", self.format).to_lowercase(),
-            ),
-            ("part".to_string(), self.files.len().to_string()),
-        ]);
-        writer
-            .write_metadata(&Metadata {
-                name: RECORDING_METADATA.into(),
-                metadata: about,
-            })
-            .map_err(io::Error::other)?;
+        let part = self.files.len();
+        let writer = file::open_writer(
+            &path,
+            self.format,
+            self.compression,
+            part,
+            self.file_len.clone(),
+        )?;
         self.writer = Some(writer);
         self.files.push(path);
         self.file_first_ns = None;
+        // Each file reads alone: its channels are added again.
         for c in &mut self.channels {
             c.id = None;
         }
@@ -326,27 +214,7 @@ impl Sink {
         let writer = self.writer.as_mut().expect("a sink always has a file open");
         let id = match c.id {
             Some(id) => id,
-            None => {
-                let schema = codec.schema(c.spec.type_info.name());
-                let schema_id = writer
-                    .add_schema(&schema.name, schema.encoding, &schema.data)
-                    .map_err(io::Error::other)?;
-                let mut metadata = BTreeMap::new();
-                if !c.spec.url.is_empty() {
-                    metadata.insert(meta::URL.into(), c.spec.url.clone());
-                    metadata.insert(meta::TYPE.into(), c.spec.type_info.name().into());
-                    let kind = if c.spec.queue { "queue" } else { "value" };
-                    metadata.insert(meta::KIND.into(), kind.into());
-                }
-                if let crate::encode::Kind::Json { wrapped: true } = codec.kind {
-                    metadata.insert(meta::WRAPPED.into(), "true".into());
-                }
-                let id = writer
-                    .add_channel(schema_id, &c.spec.topic, schema.message_encoding, &metadata)
-                    .map_err(io::Error::other)?;
-                c.id = Some(id);
-                id
-            }
+            None => *c.id.insert(add_channel(writer, &c.spec, codec)?),
         };
         writer
             .write_to_known_channel(
@@ -404,4 +272,25 @@ impl Sink {
             channels: self.channels.len(),
         })
     }
+}
+
+/// Adds the channel of `spec` and its schema to the current file.
+fn add_channel(writer: &mut Writer<Counted>, spec: &ChannelSpec, codec: Codec) -> io::Result<u16> {
+    let schema = codec.schema(spec.type_info.name());
+    let schema_id = writer
+        .add_schema(&schema.name, schema.encoding, &schema.data)
+        .map_err(io::Error::other)?;
+    let mut metadata = BTreeMap::new();
+    if !spec.url.is_empty() {
+        metadata.insert(meta::URL.into(), spec.url.clone());
+        metadata.insert(meta::TYPE.into(), spec.type_info.name().into());
+        let kind = if spec.queue { "queue" } else { "value" };
+        metadata.insert(meta::KIND.into(), kind.into());
+    }
+    if let Kind::Json { wrapped: true } = codec.kind {
+        metadata.insert(meta::WRAPPED.into(), "true".into());
+    }
+    writer
+        .add_channel(schema_id, &spec.topic, schema.message_encoding, &metadata)
+        .map_err(io::Error::other)
 }
