@@ -385,7 +385,10 @@ impl<M: Module> Running<M> {
         };
         self.hold = hold;
         drop(in_step);
-        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now) {
+        // A looping step (a ring of modules) reads the step's time, which its writes have read
+        // already, rather than the clock again.
+        let clock = &self.ctx.clock;
+        if let Some(steps) = self.loops.observe(hops, || clock.now().into_std()) {
             let woken_by_itself = raised.waker == self.signal.id();
             let hint = self.module.loop_hint();
             let blackboard = self.ctx.blackboard().clone();
@@ -452,7 +455,9 @@ impl<M: Module> Running<M> {
     /// A fault injected through `control/fault` since the last step, if any. It fires once:
     /// `control/fault` is emptied, so a restarted instance does not fail again.
     fn take_fault(&mut self) -> Option<String> {
-        if self.builtins.fault.ep.version() == self.fault_seen {
+        // `control/...` cannot be linked, so its own cell is the one written: no `ArcSwap` load
+        // at every step.
+        if self.builtins.fault.ep.own.version() == self.fault_seen {
             return None;
         }
         let fault = self.builtins.fault.read().value.to_string();
