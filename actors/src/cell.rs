@@ -6,10 +6,11 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicU8, Ordering};
 use std::sync::Arc;
+use std::task::Poll;
 
 use arc_swap::ArcSwap;
+use atomic_waker::AtomicWaker;
 use parking_lot::{Mutex, RwLock};
-use tokio::sync::Notify;
 use tokio::time::Instant;
 
 use crate::loop_watch::Hop;
@@ -34,7 +35,14 @@ pub(crate) mod cause {
 ///
 /// Raising it never blocks and is never lost: if the module is busy, the next wait returns at once.
 pub(crate) struct Signal {
-    notify: Notify,
+    /// Raised since the waiter last woke: its next wait returns at once (a permit, like
+    /// `Notify`'s).
+    notified: AtomicBool,
+    /// The one task waiting on this signal. A signal has a single waiter (its module's step
+    /// loop, or one handle's `changed`), so a waker slot does what `tokio::sync::Notify` did
+    /// without its waiter list and the mutex around it (two locks per hand-over; BENCHMARKS.md,
+    /// "`caterpillar_ring`, where a hand-over goes").
+    waker: AtomicWaker,
     causes: AtomicU8,
     /// Step causes are recorded without waking the module (it is disabled): a write then
     /// wakes only the modules that will step, and the recorded causes make the module step
@@ -54,7 +62,8 @@ impl Default for Signal {
     fn default() -> Self {
         static NEXT_ID: AtomicU32 = AtomicU32::new(1);
         Signal {
-            notify: Notify::new(),
+            notified: AtomicBool::new(false),
+            waker: AtomicWaker::new(),
             causes: AtomicU8::new(0),
             quiet: AtomicBool::new(false),
             hops: AtomicU64::new(0),
@@ -94,7 +103,8 @@ impl Signal {
         if cause & !cause::STEPS == 0 && self.quiet.load(Ordering::Acquire) {
             return;
         }
-        self.notify.notify_one();
+        self.notified.store(true, Ordering::Release);
+        self.waker.wake();
     }
 
     /// Whether step causes should wait, recorded, instead of waking the module.
@@ -104,8 +114,24 @@ impl Signal {
 
     /// Waits for the next raise and returns the causes gathered since the last call.
     pub async fn wait(&self) -> u8 {
-        self.notify.notified().await;
+        std::future::poll_fn(|cx| {
+            if self.take_notified() {
+                return Poll::Ready(());
+            }
+            // Registered before the second look: a raise in between wakes this waker.
+            self.waker.register(cx.waker());
+            match self.take_notified() {
+                true => Poll::Ready(()),
+                false => Poll::Pending,
+            }
+        })
+        .await;
         self.take()
+    }
+
+    /// Takes the permit a raise left, if any.
+    fn take_notified(&self) -> bool {
+        self.notified.load(Ordering::Relaxed) && self.notified.swap(false, Ordering::Acquire)
     }
 
     pub fn take(&self) -> u8 {

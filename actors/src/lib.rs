@@ -26,6 +26,7 @@ mod ports;
 mod queue;
 mod range;
 mod realtime;
+pub mod run_queue;
 mod settle;
 mod snapshot;
 pub mod stdout;

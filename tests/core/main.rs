@@ -16,5 +16,6 @@ mod scheduling;
 mod settle;
 mod snapshot;
 mod step_budget;
+mod step_budget_load;
 mod supervision;
 mod support;

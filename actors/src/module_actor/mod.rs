@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use ractor::{Actor, ActorProcessingErr, ActorRef};
-use tokio::time::{Instant, MissedTickBehavior};
+use tokio::time::Instant;
 use tracing::Instrument;
 
 use crate::agent::{AgentControl, ModuleControl};
@@ -31,12 +31,14 @@ mod loops;
 mod publish;
 mod stats;
 mod stop;
+mod ticker;
 
 pub use builtins::status;
 pub(crate) use builtins::{declare_builtins, Builtins};
 use loops::{report_loop, Loop};
 use stats::StepStats;
 pub(crate) use stop::StopRequest;
+use ticker::{tick, Ticker};
 
 /// The longest a module steps back to back, while it has work waiting, before it lets the
 /// other tasks of its worker run.
@@ -130,7 +132,10 @@ impl<M: Module> Actor for ModuleActor<M> {
             reader.rewind();
         }
         let supervisor = args.modules.supervisor.clone();
-        let long_steps = args.step_budget.and_then(LongStepWatch::new);
+        let wait_known = crate::run_queue::run_queue_known();
+        let long_steps = args
+            .step_budget
+            .and_then(|budget| LongStepWatch::new(budget, wait_known));
         let mut ports = Ports::bound(&args.name, binding.handles);
         let builtins = declare_builtins(&mut ports);
         let mut module = M::declare(&mut ports);
@@ -332,14 +337,7 @@ impl<M: Module> Running<M> {
                 WatchTarget::Queue(reader) => reader.subscribe(&self.signal),
             }
         }
-        let ticker = period.map(|p| match crate::fine_timer::fine_clock_here() {
-            true => Ticker::Fine(crate::fine_timer::FineTicker::new(p)),
-            false => {
-                let mut t = tokio::time::interval_at(Instant::now() + p, p);
-                t.set_missed_tick_behavior(MissedTickBehavior::Skip);
-                Ticker::Tokio(t)
-            }
-        });
+        let ticker = period.map(Ticker::new);
         (ticker, timeout)
     }
 
@@ -359,6 +357,8 @@ impl<M: Module> Running<M> {
             Some(t) => self.ctx.clock.begin_at(t),
             None => self.ctx.clock.begin(),
         }
+        // Its run-queue wait too, when the step budget asks (`long_steps.rs`).
+        let queue_mark = started.and_then(|_| self.run_queue_mark());
         self.ctx.settle.timed = started.is_some();
         self.ctx.settle.waited = Duration::ZERO;
         // A span per step for timelines (`--trace-out`); disabled, it costs a callsite check.
@@ -385,7 +385,10 @@ impl<M: Module> Running<M> {
         };
         self.hold = hold;
         drop(in_step);
-        if let Some(steps) = self.loops.observe(hops, std::time::Instant::now) {
+        // A looping step (a ring of modules) reads the step's time, which its writes have read
+        // already, rather than the clock again.
+        let clock = &self.ctx.clock;
+        if let Some(steps) = self.loops.observe(hops, || clock.now().into_std()) {
             let woken_by_itself = raised.waker == self.signal.id();
             let hint = self.module.loop_hint();
             let blackboard = self.ctx.blackboard().clone();
@@ -410,7 +413,7 @@ impl<M: Module> Running<M> {
                 if self.stats.record(self.ctx.steps, started, took) {
                     self.publish_stats();
                 }
-                self.watch_step_budget(took);
+                self.watch_step_budget(took, queue_mark);
             }
         }
         self.ctx.clock.end();
@@ -452,7 +455,9 @@ impl<M: Module> Running<M> {
     /// A fault injected through `control/fault` since the last step, if any. It fires once:
     /// `control/fault` is emptied, so a restarted instance does not fail again.
     fn take_fault(&mut self) -> Option<String> {
-        if self.builtins.fault.ep.version() == self.fault_seen {
+        // `control/...` cannot be linked, so its own cell is the one written: no `ArcSwap` load
+        // at every step.
+        if self.builtins.fault.ep.own.version() == self.fault_seen {
             return None;
         }
         let fault = self.builtins.fault.read().value.to_string();
@@ -470,23 +475,5 @@ impl<M: Module> Running<M> {
                 None
             }
         }
-    }
-}
-
-/// A periodic module's clock: the fine timer where the runtime's clock cannot be paused (a
-/// tick within microseconds of its time, not tokio's 1 ms slots), else tokio's, which a paused
-/// test clock drives.
-enum Ticker {
-    Fine(crate::fine_timer::FineTicker),
-    Tokio(tokio::time::Interval),
-}
-
-async fn tick(ticker: &mut Option<Ticker>) {
-    match ticker {
-        Some(Ticker::Fine(t)) => t.tick().await,
-        Some(Ticker::Tokio(t)) => {
-            t.tick().await;
-        }
-        None => std::future::pending().await,
     }
 }

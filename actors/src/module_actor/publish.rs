@@ -7,17 +7,29 @@ use tokio::time::Instant;
 
 use super::{status, Running};
 use crate::module::Module;
+use crate::run_queue::RunQueueMark;
 
 impl<M: Module> Running<M> {
     /// On the agent's own thread, asks the supervisor to move the module to the shared runtime
     /// once its steps exceed the agent's `step_budget`; the move stops it at a step boundary.
-    pub(super) fn watch_step_budget(&mut self, took: Duration) {
-        let Some(mean) = self.long_steps.as_mut().and_then(|w| w.observe(took)) else {
+    /// `queue_mark`: the run-queue wait when the step began, if the watch asked for it.
+    pub(super) fn watch_step_budget(&mut self, took: Duration, queue_mark: Option<RunQueueMark>) {
+        let Some(watch) = self.long_steps.as_mut() else {
+            return;
+        };
+        let waited = queue_mark.and_then(|mark| mark.elapsed());
+        let Some(mean) = watch.observe(took, waited) else {
             return;
         };
         let msg = crate::supervisor::SupervisorMsg::Move(self.me, mean);
         // A supervisor that is gone is stopping the agent: nothing left to move.
         let _ = self.supervisor.cast(msg);
+    }
+
+    /// The run-queue wait so far, when the step budget's watch asks for it for the next step.
+    pub(super) fn run_queue_mark(&self) -> Option<RunQueueMark> {
+        let watch = self.long_steps.as_ref()?;
+        watch.wants_run_queue_wait().then(RunQueueMark::now)?
     }
 
     /// Publishes `status`, and the stats with it when the module is leaving its step loop
