@@ -374,3 +374,25 @@ async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
     wait_for(&agent, "victims/out/pending", 1).await;
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_restarted_world_goes_on_where_it_was() {
+    use petrel_actors::Pose2;
+    let agent = start(&reactive()).await;
+    let bb = agent.blackboard();
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let before = *bb.get::<Pose2>("robot/out/pose").await.unwrap();
+    let t_before = *bb.get::<f64>("robot/out/simTime").await.unwrap();
+    assert!(t_before > 5.0, "it ran: t = {t_before}");
+    agent.modules().restart("robot").await.unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    // Neither back at time 0 nor back at the start: where the first instance stopped.
+    let t_after = *bb.get::<f64>("robot/out/simTime").await.unwrap();
+    let after = *bb.get::<Pose2>("robot/out/pose").await.unwrap();
+    assert!(t_after >= t_before, "{t_after} after {t_before}");
+    assert!(
+        (after.position().0 - before.position().0).norm() < 0.5,
+        "{after:?} after {before:?}"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

@@ -16,6 +16,7 @@ use super::world_tracks::Tracks;
 use super::{check_params, param_error};
 use crate::sim::camera::{self, CameraMotion};
 use crate::sim::error::{non_negative, positive};
+use crate::sim::resume::WorldState;
 use crate::sim::{load_world, World, WorldFeatures, WorldMap};
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
@@ -102,6 +103,8 @@ pub struct SimWorld {
     _vibration: Output<f64>,
     dark_areas: Output<Vec<f64>>,
     rough_areas: Output<Vec<f64>>,
+    saved_world: Output<WorldState>,
+    saved_tracks: Output<Tracks>,
     sim: Option<Sim>,
 }
 
@@ -183,6 +186,8 @@ impl Module for SimWorld {
             _vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1 (an IMU would measure it): high on rough floor even when slow"),
             dark_areas: ports.output("out/darkAreas", Vec::new(), "dark areas of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
             rough_areas: ports.output("out/roughAreas", Vec::new(), "rough floor of the world file `[x0, y0, x1, y1, ...]` (for drawing)"),
+            saved_world: ports.state("state/world", WorldState::default(), "time and robots' motion, kept when stopped for a restart or a move: the next instance goes on from them (once)"),
+            saved_tracks: ports.state("state/tracks", Tracks::default(), "trajectories and departures for the picture, kept likewise"),
             sim: None,
         }
     }
@@ -297,8 +302,24 @@ impl Module for SimWorld {
             })?;
         }
         let members = ctx.blackboard().any_handle("_team/members").await.ok();
+        // An instance started again after a restart or a move goes on where the last one
+        // stopped, not with every robot back at its start at time 0. The memory is used once:
+        // an instance that failed left none, and starts over.
+        let saved = self.saved_world.get();
+        if saved.time > 0.0 {
+            match world.restore(&saved) {
+                Ok(()) => tracing::info!(module = ctx.module(), t = saved.time, "world resumed"),
+                Err(e) => tracing::warn!(module = ctx.module(), "world not resumed: {e}"),
+            }
+            self.saved_world.set(WorldState::default());
+        }
+        let tracks = match self.saved_tracks.get() {
+            saved if saved.is_of(names) => (*saved).clone(),
+            _ => Tracks::new(names),
+        };
+        self.saved_tracks.set(Tracks::default());
         self.sim = Some(Sim {
-            tracks: Tracks::new(names),
+            tracks,
             members: members.map(|h| (h, u64::MAX)),
             world,
             bodies: ios,
@@ -311,10 +332,16 @@ impl Module for SimWorld {
     }
 
     async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        // The picture is of the whole run: drawn when it ends, not at a restart or a move.
-        match ctx.restarting() {
-            true => Ok(()),
-            false => self.picture(),
+        // The picture is of the whole run: drawn when it ends, not at a restart or a move,
+        // where the next instance goes on from the world and tracks kept here.
+        match (ctx.restarting(), &self.sim) {
+            (true, Some(sim)) => {
+                self.saved_world.set(sim.world.state());
+                self.saved_tracks.set(sim.tracks.clone());
+                Ok(())
+            }
+            (true, None) => Ok(()),
+            (false, _) => self.picture(),
         }
     }
 

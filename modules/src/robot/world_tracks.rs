@@ -19,8 +19,9 @@ const COLOURS: [[u8; 3]; 6] = [
     [140, 86, 75],
 ];
 
-/// The bodies' trajectories and departures.
-pub(super) struct Tracks {
+/// The bodies' trajectories and departures; kept in `state/tracks` across a restart.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Tracks {
     names: Vec<String>,
     points: Vec<Vec<Point2>>,
     /// When and where each body's robot left the team (its agent died).
@@ -39,6 +40,11 @@ impl Tracks {
             present: vec![false; names.len()],
             next_sample: 0.0,
         }
+    }
+
+    /// Whether these are the tracks of the bodies `names` (a restarted world's memory).
+    pub fn is_of(&self, names: &[String]) -> bool {
+        !self.names.is_empty() && self.names == names
     }
 
     /// Records the bodies' true poses at simulated time `t`, every [`SAMPLE_S`].
@@ -112,6 +118,10 @@ impl Tracks {
         };
         save_png(path, &grid.to_occupancy(), &layers).map_err(|e| e.to_string())
     }
+}
+
+impl petrel_actors::PropertyType for Tracks {
+    const TYPE_NAME: &'static str = "sim.world_tracks";
 }
 
 #[cfg(test)]

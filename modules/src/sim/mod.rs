@@ -18,6 +18,7 @@ pub mod map_yaml;
 pub mod pgm;
 pub mod raycast;
 pub mod render;
+pub mod resume;
 pub mod robot;
 pub mod run_record;
 
