@@ -27,3 +27,20 @@ pub fn register(registry: &mut ModuleRegistry) {
     demo::register(registry);
     robot::register(registry);
 }
+
+/// Test helpers shared by the cores' unit tests.
+#[cfg(test)]
+mod test_support {
+    /// `value` written as RON and read back through RON's dynamic values, as a snapshot (and
+    /// a restarted module's `state/`) reads it.
+    pub(crate) fn through_ron_values<T>(value: &T) -> T
+    where
+        T: serde::Serialize + serde::de::DeserializeOwned,
+    {
+        let text = ron::to_string(value).unwrap();
+        ron::from_str::<ron::Value>(&text)
+            .unwrap()
+            .into_rust()
+            .unwrap()
+    }
+}

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use petrel::actors::{Agent, ConfigFile, Context, Input, Module, Output, Ports, Schedule};
 
-use crate::support::{config, registry};
+use crate::support::{config, registry, until};
 
 /// Released by the test when `test.slow` may stop holding its thread.
 static RELEASED: AtomicBool = AtomicBool::new(false);
@@ -56,26 +56,6 @@ impl Module for Slow {
         self.holding.set(false);
         Ok(())
     }
-}
-
-/// Waits (at most 20 s) until `ready` holds for property `key` of `agent`.
-async fn until<T: petrel::actors::PropertyType>(
-    agent: &Agent,
-    key: &str,
-    ready: impl Fn(&T) -> bool,
-) -> T {
-    let handle = agent.blackboard().handle::<T>(key).await.unwrap();
-    let waited = tokio::time::timeout(Duration::from_secs(20), async {
-        loop {
-            let value = handle.get();
-            if ready(&value) {
-                return (*value).clone();
-            }
-            handle.changed().await;
-        }
-    })
-    .await;
-    waited.unwrap_or_else(|_| panic!("{key} never got there: {:?}", handle.get()))
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use petrel::actors::{Agent, Context, Input, Module, Output, Ports, Schedule};
 
-use crate::support::{config, registry};
+use crate::support::{config, registry, until};
 
 /// The CPU the busy threads and the module's thread share: the first one this process may use.
 fn shared_cpu() -> usize {
@@ -112,26 +112,6 @@ fn hogs(cpu: usize, stop: &Arc<AtomicBool>) -> Vec<std::thread::JoinHandle<()>> 
             })
         })
         .collect()
-}
-
-/// Waits (at most 20 s) until `ready` holds for property `key` of `agent`.
-async fn until<T: petrel::actors::PropertyType>(
-    agent: &Agent,
-    key: &str,
-    ready: impl Fn(&T) -> bool,
-) -> T {
-    let handle = agent.blackboard().handle::<T>(key).await.unwrap();
-    let waited = tokio::time::timeout(Duration::from_secs(20), async {
-        loop {
-            let value = handle.get();
-            if ready(&value) {
-                return (*value).clone();
-            }
-            handle.changed().await;
-        }
-    })
-    .await;
-    waited.unwrap_or_else(|_| panic!("{key} never got there: {:?}", handle.get()))
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

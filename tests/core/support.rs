@@ -373,3 +373,23 @@ impl Module for ImageSink {
         Ok(())
     }
 }
+
+/// Waits (at most 20 s) until `ready` holds for property `key` of `agent`.
+pub async fn until<T: petrel::actors::PropertyType>(
+    agent: &Agent,
+    key: &str,
+    ready: impl Fn(&T) -> bool,
+) -> T {
+    let handle = agent.blackboard().handle::<T>(key).await.unwrap();
+    let waited = tokio::time::timeout(Duration::from_secs(20), async {
+        loop {
+            let value = handle.get();
+            if ready(&value) {
+                return (*value).clone();
+            }
+            handle.changed().await;
+        }
+    })
+    .await;
+    waited.unwrap_or_else(|_| panic!("{key} never got there: {:?}", handle.get()))
+}

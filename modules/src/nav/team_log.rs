@@ -241,11 +241,7 @@ mod tests {
         log.assigned("r1", Point2::new(1.0, 1.0), 0.0);
         log.assigned("r2", Point2::new(4.0, 1.0), 2.0);
         // A snapshot is read back through RON's dynamic values.
-        let text = ron::to_string(&log).unwrap();
-        let back: TeamLog = ron::from_str::<ron::Value>(&text)
-            .unwrap()
-            .into_rust()
-            .unwrap();
+        let back: TeamLog = crate::test_support::through_ron_values(&log);
         assert_eq!(back, log);
         assert!(back.is_of(&names));
         assert!(!back.is_of(&names[..1]), "another team's log is not taken");

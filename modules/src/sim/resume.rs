@@ -100,11 +100,7 @@ mod tests {
         let saved = w.state();
         assert!((saved.time - 1.0).abs() < 1e-9);
         // Through RON's dynamic values, as a snapshot reads it.
-        let text = ron::to_string(&saved).unwrap();
-        let saved: WorldState = ron::from_str::<ron::Value>(&text)
-            .unwrap()
-            .into_rust()
-            .unwrap();
+        let saved: WorldState = crate::test_support::through_ron_values(&saved);
         let mut fresh = world();
         fresh.restore(&saved).unwrap();
         assert_eq!(fresh.state(), saved);

@@ -122,11 +122,7 @@ mod tests {
         r.contexts.update(2.0, "rough");
         r.wall_before = 3.5;
         // A snapshot is read back through RON's dynamic values.
-        let text = ron::to_string(&r).unwrap();
-        let back: RunRecord = ron::from_str::<ron::Value>(&text)
-            .unwrap()
-            .into_rust()
-            .unwrap();
+        let back: RunRecord = crate::test_support::through_ron_values(&r);
         assert_eq!(back, r);
         assert_eq!(back.contexts.totals(3.0), r.contexts.totals(3.0));
     }

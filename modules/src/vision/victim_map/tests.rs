@@ -168,11 +168,7 @@ fn a_resumed_map_goes_on_where_the_saved_one_was() {
     m.report().unwrap();
     let told = m.news(0.3);
     // A snapshot is read back through RON's dynamic values.
-    let text = ron::to_string(&m).unwrap();
-    let saved: VictimMap = ron::from_str::<ron::Value>(&text)
-        .unwrap()
-        .into_rust()
-        .unwrap();
+    let saved: VictimMap = crate::test_support::through_ron_values(&m);
     let mut back = VictimMap::resume(VictimMapParams::default(), &saved);
     assert_eq!(back, m);
     assert_eq!(back.reported(), m.reported());
