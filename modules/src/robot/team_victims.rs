@@ -89,9 +89,9 @@ impl Module for TeamVictimsModule {
                     petrel_actors::outln!(
                         "[{m}] victim {} at ({:.2}, {:.2}) from {} reports, the last by {robot}{when}",
                         i + 1,
-                        v.position.0.x,
-                        v.position.0.y,
-                        v.reports
+                        v.position().0.x,
+                        v.position().0.y,
+                        v.reports()
                     );
                 }
                 // Estimates improve as robots come closer: frequent, so not on the console.
@@ -99,8 +99,8 @@ impl Module for TeamVictimsModule {
                     let v = &core.victims()[i];
                     tracing::info!(
                         victim = i + 1,
-                        x = v.position.0.x,
-                        y = v.position.0.y,
+                        x = v.position().0.x,
+                        y = v.position().0.y,
                         by = robot,
                         "victim revised"
                     );
@@ -111,9 +111,9 @@ impl Module for TeamVictimsModule {
                         "[{m}] victim {} is victim {}, at ({:.2}, {:.2}) from {} reports: {robot} revised its report{when}",
                         gone + 1,
                         kept + 1,
-                        v.position.0.x,
-                        v.position.0.y,
-                        v.reports
+                        v.position().0.x,
+                        v.position().0.y,
+                        v.reports()
                     );
                 }
             }
@@ -122,7 +122,7 @@ impl Module for TeamVictimsModule {
         if found != self.found.value() {
             self.found.set(found);
         }
-        let list: Vec<Point2> = core.victims().iter().map(|v| v.position).collect();
+        let list: Vec<Point2> = core.victims().iter().map(|v| v.position()).collect();
         if list[..] != self.victims.get().0[..] {
             self.victims.set(list.into());
         }

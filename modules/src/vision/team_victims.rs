@@ -14,14 +14,8 @@ use serde::{Deserialize, Serialize};
 /// One victim of the team's list.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TeamVictim {
-    /// Where the reports put it: the mean of each report's latest estimate (map frame).
-    pub position: Point2,
-    /// How many reports (robot and id) are merged into it.
-    pub reports: usize,
     /// Who reported it first.
     pub found_by: String,
-    /// The other robots whose reports are merged into it, in order.
-    pub also_by: Vec<String>,
     /// The reports: robot, its id for the victim (None: a report that cannot be revised),
     /// latest estimate.
     sources: Vec<(String, Option<u64>, Point2)>,
@@ -29,27 +23,31 @@ pub struct TeamVictim {
 
 impl TeamVictim {
     fn new(from: &str, id: Option<u64>, p: Point2) -> Self {
-        let mut v = TeamVictim {
-            position: p,
-            reports: 0,
+        TeamVictim {
             found_by: from.to_string(),
-            also_by: Vec::new(),
             sources: vec![(from.to_string(), id, p)],
-        };
-        v.update();
-        v
+        }
     }
 
-    /// Recomputes what follows from the sources.
-    fn update(&mut self) {
-        self.position = mean(self.sources.iter().map(|s| s.2));
-        self.reports = self.sources.len();
-        self.also_by.clear();
+    /// Where the reports put it: the mean of each report's latest estimate (map frame).
+    pub fn position(&self) -> Point2 {
+        mean(self.sources.iter().map(|s| s.2))
+    }
+
+    /// How many reports (robot and id) are merged into it.
+    pub fn reports(&self) -> usize {
+        self.sources.len()
+    }
+
+    /// The other robots whose reports are merged into it, in order.
+    pub fn also_by(&self) -> Vec<&str> {
+        let mut also: Vec<&str> = Vec::new();
         for (robot, _, _) in &self.sources {
-            if *robot != self.found_by && !self.also_by.contains(robot) {
-                self.also_by.push(robot.clone());
+            if *robot != self.found_by && !also.contains(&robot.as_str()) {
+                also.push(robot);
             }
         }
+        also
     }
 }
 
@@ -130,12 +128,10 @@ impl TeamVictims {
             };
             if near_the_others {
                 self.victims[i].sources[k].2 = p;
-                self.victims[i].update();
                 return self.merge_into_a_neighbour(i).unwrap_or(Report::Revised(i));
             }
             // The robot now places it away from the others' reports: another victim.
             self.victims[i].sources.remove(k);
-            self.victims[i].update();
         }
         self.add(from, id, p)
     }
@@ -145,7 +141,6 @@ impl TeamVictims {
         match self.nearest(p, None) {
             Some(i) => {
                 self.victims[i].sources.push((from.to_string(), id, p));
-                self.victims[i].update();
                 Report::Known(i)
             }
             None => {
@@ -161,7 +156,7 @@ impl TeamVictims {
             .iter()
             .enumerate()
             .filter(|(i, _)| Some(*i) != except)
-            .map(|(i, v)| (i, (v.position.0 - p.0).norm()))
+            .map(|(i, v)| (i, (v.position().0 - p.0).norm()))
             .filter(|(_, d)| *d <= self.radius)
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(i, _)| i)
@@ -170,12 +165,10 @@ impl TeamVictims {
     /// Merges victim `i`, which moved, with the nearest other victim within the radius: the
     /// later found goes into the earlier.
     fn merge_into_a_neighbour(&mut self, i: usize) -> Option<Report> {
-        let j = self.nearest(self.victims[i].position, Some(i))?;
+        let j = self.nearest(self.victims[i].position(), Some(i))?;
         let (kept, gone) = (i.min(j), i.max(j));
         let gone_victim = self.victims.remove(gone);
-        let v = &mut self.victims[kept];
-        v.sources.extend(gone_victim.sources);
-        v.update();
+        self.victims[kept].sources.extend(gone_victim.sources);
         Some(Report::Merged { kept, gone })
     }
 
@@ -188,15 +181,15 @@ impl TeamVictims {
     pub fn summary(&self) -> String {
         let mut out = format!("team victims: {}\n", self.victims.len());
         for (i, v) in self.victims.iter().enumerate() {
-            let also = match v.also_by.is_empty() {
-                true => String::new(),
-                false => format!(", also {}", v.also_by.join(", ")),
+            let also = match v.also_by() {
+                also if also.is_empty() => String::new(),
+                also => format!(", also {}", also.join(", ")),
             };
             out += &format!(
                 "  {} ({:.2}, {:.2}) found by {}{also}\n",
                 i + 1,
-                v.position.0.x,
-                v.position.0.y,
+                v.position().0.x,
+                v.position().0.y,
                 v.found_by
             );
         }
