@@ -11,6 +11,7 @@ use std::f64::consts::{PI, TAU};
 
 use petrel_actors::{LaserScan, Pose2, Twist2};
 
+use self::escape::{straight_free_length, Escape, Reach};
 use crate::sim::error::{non_negative, positive, ParamError};
 
 /// Obstacle avoidance parameters.
@@ -77,11 +78,13 @@ const TURN_SAMPLES: usize = 21;
 const MAX_ARC_ANGLE: f64 = PI;
 const MAX_LOOK: f64 = 3.0;
 
-/// The reactive controller (stateless apart from its parameters and a point buffer).
+/// The reactive controller (stateless apart from its parameters and point buffers).
 #[derive(Clone, Debug)]
 pub struct Avoidance {
     params: AvoidanceParams,
     points: Vec<(f64, f64)>,
+    /// Scratch space for the heading search.
+    rotated: Vec<(f64, f64)>,
 }
 
 impl Avoidance {
@@ -91,18 +94,29 @@ impl Avoidance {
         Ok(Avoidance {
             params,
             points: Vec::new(),
+            rotated: Vec::new(),
         })
     }
 
     /// The velocity command toward `target` (robot frame) given the latest `scan`.
+    ///
+    /// When the target's own direction is in view but blocked right ahead, the robot steers
+    /// for the best way out instead (see `escape`), and when no forward arc is admissible at
+    /// all, it turns in place toward that way out.
     pub fn step(&mut self, scan: &LaserScan, target: Pose2) -> Twist2 {
         self.collect_points(scan);
-        let p = &self.params;
+        let p = self.params.clone();
         let (tx, ty) = (target.x(), target.y());
         if tx.hypot(ty) < p.stop_distance || !(tx.is_finite() && ty.is_finite()) {
             return Twist2::default();
         }
-        let bearing = ty.atan2(tx);
+        let fov = self.field_of_view(scan);
+        let goal = if self.blocked_toward((tx, ty), fov) {
+            self.escape((tx, ty), fov).map_or((tx, ty), |e| e.point)
+        } else {
+            (tx, ty)
+        };
+        let bearing = goal.1.atan2(goal.0);
         let turn_toward =
             |angle: f64| Twist2::new(0.0, (2.0 * angle).clamp(-p.max_turn, p.max_turn));
         if bearing.abs() > p.turn_in_place_bearing {
@@ -119,7 +133,7 @@ impl Avoidance {
                 }
                 let s = free.min(v * p.lookahead_time);
                 let (ex, ey) = arc_point(v, omega, s);
-                let score = -(ex - tx).hypot(ey - ty)
+                let score = -(ex - goal.0).hypot(ey - goal.1)
                     + p.clearance_weight * free.min(1.0)
                     + 0.05 * v / p.max_speed;
                 if best.is_none_or(|(b, _)| score > b) {
@@ -127,13 +141,52 @@ impl Avoidance {
                 }
             }
         }
-        match best {
-            Some((_, cmd)) => cmd,
-            // Nothing forward is safe: turn in place, toward the target if it is off to one
-            // side, otherwise toward the side with more room.
+        if let Some((_, cmd)) = best {
+            return cmd;
+        }
+        // Nothing forward is safe: turn in place toward the way out; without one, toward
+        // the target if it is off to one side, otherwise toward the side with more room.
+        match self.escape((tx, ty), fov) {
+            Some(way_out) => turn_toward(way_out.heading),
             None if bearing.abs() > 0.2 => turn_toward(bearing),
             None => turn_toward(self.roomier_side(scan)),
         }
+    }
+
+    /// The footprint and step lengths of the heading search.
+    fn reach(&self) -> Reach {
+        let p = &self.params;
+        Reach {
+            radius: p.robot_radius,
+            margin: p.safety_margin,
+            min_step: p.max_speed / SPEED_SAMPLES as f64 * p.brake_time,
+            max_step: p.max_speed * p.lookahead_time,
+        }
+    }
+
+    /// Whether `target` lies in view and the robot could not drive straight toward it even
+    /// the slowest arc's braking distance (or the distance to the target, if shorter).
+    fn blocked_toward(&mut self, target: (f64, f64), fov: (f64, f64)) -> bool {
+        let bearing = target.1.atan2(target.0);
+        if !(fov.0..=fov.1).contains(&bearing) {
+            return false;
+        }
+        let reach = self.reach();
+        let needed = reach.min_step.min(target.0.hypot(target.1));
+        straight_free_length(&self.points, bearing, reach, &mut self.rotated) < needed
+    }
+
+    fn escape(&mut self, target: (f64, f64), fov: (f64, f64)) -> Option<Escape> {
+        let reach = self.reach();
+        escape::escape(&self.points, target, fov, reach, &mut self.rotated)
+    }
+
+    /// The angles the scan covers, robot frame.
+    fn field_of_view(&self, scan: &LaserScan) -> (f64, f64) {
+        let mount = self.params.laser_mount.theta();
+        let last = scan.angle(scan.ranges.len().saturating_sub(1));
+        let (a, b) = (scan.angle_min + mount, last + mount);
+        (a.min(b), a.max(b))
     }
 
     fn collect_points(&mut self, scan: &LaserScan) {
@@ -232,5 +285,6 @@ pub fn free_arc_length(points: &[(f64, f64)], v: f64, omega: f64, radius: f64, m
     free
 }
 
+mod escape;
 #[cfg(test)]
 mod tests;

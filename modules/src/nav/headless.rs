@@ -40,6 +40,9 @@ pub struct MissionParams {
     pub planner: PlannerParams,
     /// Avoidance parameters (its speeds should not exceed the robot's limits).
     pub avoidance: AvoidanceParams,
+    /// Other robots that stand still all mission long (a teammate that broke down), each a
+    /// body of the mission robot's radius at its pose (default none).
+    pub still_robots: Vec<Pose2>,
 }
 
 impl Default for MissionParams {
@@ -55,6 +58,7 @@ impl Default for MissionParams {
             map_resolution: 0.1,
             planner: PlannerParams::default(),
             avoidance: AvoidanceParams::default(),
+            still_robots: Vec::new(),
         }
     }
 }
@@ -121,6 +125,14 @@ pub fn run_mission(
         laser.rate_hz = Some(params.control_hz);
     }
     let mut world = World::new(grid.clone(), params.seed);
+    for &pose in &params.still_robots {
+        let body = RobotConfig {
+            radius: params.robot.radius,
+            laser: None,
+            ..RobotConfig::default()
+        };
+        world.add_robot(body, pose)?;
+    }
     let id = world.add_robot(robot, start)?;
     let mut localizer = Localizer::new(params.localizer.clone())?;
     let (x0, y0, x1, y1) = grid.bounds();

@@ -182,3 +182,113 @@ fn free_arc_length_matches_brute_force() {
         );
     }
 }
+
+/// Drives robot 1 by the controller alone toward a fixed world `target`, beside a still
+/// robot 0 at (1, 1) in the corner of two walls, for `seconds`; returns robot 1's final pose
+/// and its collision count.
+fn wedged_run(start: Pose2, target: (f64, f64), seconds: f64) -> (Pose2, u64) {
+    let mut g = Grid::new(40, 30, 0.1, 0.0, 0.0).unwrap();
+    g.fill_rect(0.0, 0.0, 4.0, 0.2);
+    g.fill_rect(0.0, 0.0, 0.2, 3.0);
+    let mut w = World::new(g, 3);
+    let laser = LaserConfig {
+        rate_hz: Some(10.0),
+        ..LaserConfig::default()
+    };
+    let body = RobotConfig {
+        laser: None,
+        ..RobotConfig::default()
+    };
+    w.add_robot(body, Pose2::new(1.0, 1.0, 0.0)).unwrap();
+    let me = w.add_robot(RobotConfig::with_laser(laser), start).unwrap();
+    let mut a = Avoidance::new(AvoidanceParams::default()).unwrap();
+    let dt = 0.02;
+    let mut collisions = 0;
+    for _ in 0..(seconds / dt) as usize {
+        let out = w.step(dt).unwrap()[me].clone();
+        collisions = out.collisions;
+        if let Some(scan) = out.scan {
+            let p = out.ground_truth.0;
+            let t = p.inverse() * nalgebra::Point2::new(target.0, target.1);
+            w.set_command(me, a.step(&scan, Pose2::new(t.x, t.y, 0.0)))
+                .unwrap();
+        }
+    }
+    (w.pose(me).unwrap(), collisions)
+}
+
+/// A robot that squeezed between a wall and a teammate's body, 5 cm from the body (inside
+/// the safety margin), used to turn back and forth there for good: every arc along its
+/// heading approached the body, and turning toward the target led back into the same wedge.
+/// The heading search turns it to a way out, from any heading, for targets on either side.
+#[test]
+fn a_robot_wedged_beside_a_body_gets_out_from_any_heading() {
+    for target in [(2.0, 0.6), (0.5, 1.5)] {
+        for h in 0..12 {
+            let heading = TAU * h as f64 / 12.0;
+            let (end, collisions) = wedged_run(Pose2::new(0.87, 0.57, heading), target, 30.0);
+            let left = (end.x() - target.0).hypot(end.y() - target.1);
+            assert!(
+                left < 0.1,
+                "target {target:?}, start heading {:.0} deg: stopped at ({:.2}, {:.2}), {left:.2} m short",
+                heading.to_degrees(),
+                end.x(),
+                end.y()
+            );
+            assert_eq!(collisions, 0, "target {target:?}, heading {heading}");
+        }
+    }
+}
+
+#[test]
+fn the_way_out_is_the_visible_heading_that_gains_most_and_none_when_nothing_gains() {
+    let reach = Reach {
+        radius: 0.2,
+        margin: 0.05,
+        min_step: 0.1,
+        max_step: 0.5,
+    };
+    let mut buf = Vec::new();
+    // A wall across the whole view 0.3 m ahead, open to the right beyond y = -0.4.
+    let wall: Vec<(f64, f64)> = (0..=40).map(|i| (0.3, -0.4 + 0.05 * i as f64)).collect();
+    let fov = (-PI / 2.0, PI / 2.0);
+    let out = escape::escape(&wall, (2.0, 0.0), fov, reach, &mut buf).unwrap();
+    assert!(
+        out.heading < -0.5,
+        "turns right, toward the opening: {out:?}"
+    );
+    let free = straight_free_length(&wall, out.heading, reach, &mut buf);
+    let step = out.point.0.hypot(out.point.1);
+    assert!(
+        step <= free + 1e-9 && step >= reach.min_step,
+        "{out:?}, free {free}"
+    );
+    // Straight ahead is blocked at once. At the end of a dead end (walls ahead and 0.3 m to
+    // either side), no visible heading is open far enough to gain: the search says so.
+    assert!(straight_free_length(&wall, 0.0, reach, &mut buf) < reach.min_step);
+    let mut dead_end: Vec<(f64, f64)> = (0..=12).map(|i| (0.3, -0.3 + 0.05 * i as f64)).collect();
+    for i in 0..=6 {
+        dead_end.extend([(0.05 * i as f64, 0.3), (0.05 * i as f64, -0.3)]);
+    }
+    assert_eq!(
+        escape::escape(&dead_end, (2.0, 0.0), fov, reach, &mut buf),
+        None
+    );
+    // A field of view too narrow for the guard, or NaN, leaves nothing to try; a scan
+    // claiming an enormous one is searched over one turn at most.
+    assert_eq!(
+        escape::escape(&[], (2.0, 0.0), (-0.1, 0.1), reach, &mut buf),
+        None
+    );
+    assert_eq!(
+        escape::escape(&[], (2.0, 0.0), (f64::NAN, 1.0), reach, &mut buf),
+        None
+    );
+    assert!(escape::escape(&[], (2.0, 0.0), (-1e300, 1e300), reach, &mut buf).is_some());
+    // In the open, straight at the target gains most.
+    let open = escape::escape(&[], (2.0, 0.0), fov, reach, &mut buf).unwrap();
+    assert!(
+        open.heading.abs() < 1e-9 && (open.point.0 - 0.5).abs() < 1e-9,
+        "{open:?}"
+    );
+}
