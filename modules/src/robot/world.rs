@@ -7,17 +7,17 @@ use petrel_actors::{
     CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Point2, Ports, Pose2,
     QueueWriter, Range, Schedule, Twist2, Unrecoverable,
 };
-use tokio::time::Instant;
 
 mod config;
+mod sim;
 
+use self::sim::Sim;
 use super::world_body::{check_bodies, start_pose, start_problem, BodyIo, BodyNames};
 use super::world_tracks::Tracks;
 use super::{check_params, param_error};
-use crate::sim::camera::{self, CameraMotion};
 use crate::sim::error::{non_negative, positive};
 use crate::sim::resume::WorldState;
-use crate::sim::{load_world, World, WorldFeatures, WorldMap};
+use crate::sim::{load_world, World, WorldMap};
 
 /// Core names of the robot's parameters that `sim.world` exposes under other property paths;
 /// `World::add_robot` checks the config and names the core parameter.
@@ -32,7 +32,7 @@ const ROBOT_PARAMS: &[(&str, &str)] = &[
 ];
 
 /// Side of the square around each victim that the simulator makes solid, metres (inside
-/// the camera's victim cylinder, [`camera::VICTIM_RADIUS`]).
+/// the camera's victim cylinder, [`crate::sim::camera::VICTIM_RADIUS`]).
 const VICTIM_BODY: f64 = 0.3;
 
 /// The world's walls with its victims filled in: victims are bodies on the floor, so a robot
@@ -45,10 +45,6 @@ fn with_victims(mut grid: crate::sim::grid::Grid, victims: &[Point2]) -> crate::
     }
     grid
 }
-
-/// Simulation steps run at most per wake-up in real-time mode: a host that falls further
-/// behind slows simulated time down instead of freezing in a catch-up burst.
-const MAX_CATCH_UP_STEPS: u32 = 10;
 
 /// `sim.world`: loads a world file and simulates robots in it.
 ///
@@ -106,23 +102,6 @@ pub struct SimWorld {
     saved_world: Output<WorldState>,
     saved_tracks: Output<Tracks>,
     sim: Option<Sim>,
-}
-
-/// What exists only after a successful init.
-struct Sim {
-    world: World,
-    /// The robots, by id.
-    bodies: Vec<BodyIo>,
-    dt: f64,
-    /// Real-time mode: simulated seconds owed to the wall clock since the last step.
-    owed: f64,
-    last_wake: Instant,
-    /// Victims and dark and rough areas, for the camera.
-    features: WorldFeatures,
-    /// Trajectories and departures, for the picture.
-    tracks: Tracks,
-    /// `_team/members` (an agent in a team): a robot whose agent leaves stops for good.
-    members: Option<(petrel_actors::AnyHandle, u64)>,
 }
 
 impl SimWorld {
@@ -346,82 +325,20 @@ impl Module for SimWorld {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let camera_config = match self.camera_enabled.value() {
-            true => Some(self.camera_config()?),
+        let camera = match self.camera_enabled.value() {
+            true => Some((self.camera_config()?, self.camera_rate.value())),
             false => None,
         };
+        let deterministic = self.deterministic.value();
+        let (scale, timeout) = (self.time_scale.value(), self.command_timeout.value());
         let sim = super::initialized(&mut self.sim);
-        let steps = if self.deterministic.value() {
-            1
-        } else {
-            let elapsed = ctx.now().duration_since(sim.last_wake).as_secs_f64();
-            sim.owed += elapsed * self.time_scale.value();
-            let n = (sim.owed / sim.dt).floor().min(MAX_CATCH_UP_STEPS as f64) as u32;
-            sim.owed = (sim.owed - n as f64 * sim.dt).min(sim.dt);
-            n
-        };
-        sim.last_wake = ctx.now();
-        if let Some((h, seen)) = sim
-            .members
-            .as_mut()
-            .filter(|(h, seen)| h.version() != *seen)
-        {
-            *seen = h.version();
-            let members = h
-                .get::<petrel_actors::team::TeamMembers>()
-                .unwrap_or_default();
-            let present: Vec<String> = members.0.iter().map(|m| m.agent.clone()).collect();
-            for robot in sim.tracks.members(&present, sim.world.time()) {
-                tracing::warn!(robot = %robot, t = sim.world.time(), "a robot's agent left the team: its body stops here");
-            }
-        }
-        let timeout = self.command_timeout.value();
-        let now = ctx.now();
-        for body in &mut sim.bodies {
-            let cmd = body.command(sim.world.time(), timeout);
-            sim.world.set_command(body.id, cmd)?;
-        }
+        let steps = sim.steps_due(ctx.now(), deterministic, scale);
+        sim.note_departures();
+        sim.take_commands(timeout)?;
+        let multi_robot = !self.bodies.get().0.is_empty();
         for _ in 0..steps {
-            let outputs = sim.world.step(sim.dt)?.to_vec();
-            for (body, out) in sim.bodies.iter_mut().zip(&outputs) {
-                let (x, y) = (out.ground_truth.x(), out.ground_truth.y());
-                let rough = sim.features.is_rough(x, y);
-                let vibration = match rough {
-                    true => 0.3 + 0.5 * out.speed.v.abs(),
-                    false => 0.05 * out.speed.v.abs(),
-                };
-                body.publish(out, vibration, now);
-                let due = out.odometry.stamp + 1e-9 >= body.next_frame;
-                let Some(world_cfg) = camera_config.as_ref().filter(|_| due) else {
-                    continue;
-                };
-                let cfg = &body.camera(world_cfg)?;
-                body.next_frame = out.odometry.stamp + 1.0 / self.camera_rate.value();
-                let motion = CameraMotion {
-                    speed: out.speed,
-                    rough,
-                };
-                let others = sim.world.footprints_except(body.id);
-                let pixels = camera::render_among(
-                    sim.world.grid(),
-                    &sim.features,
-                    &others,
-                    out.ground_truth,
-                    motion,
-                    cfg,
-                    &mut body.camera_rng,
-                );
-                let image = Image {
-                    width: cfg.width,
-                    height: cfg.height,
-                    encoding: "mono8".into(),
-                    data: pixels.into(),
-                };
-                body.publish_image(image, now);
-            }
-            let poses = outputs.iter().map(|o| o.ground_truth);
-            sim.tracks.sample(sim.world.time(), poses);
-            if !self.bodies.get().0.is_empty() {
+            sim.step(ctx.now(), camera.as_ref())?;
+            if multi_robot {
                 // The world's own clock, for tools and evaluators of a multi-robot world.
                 self.sim_time.set(sim.world.time());
             }
