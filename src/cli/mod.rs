@@ -12,6 +12,8 @@ mod follow;
 mod foxglove;
 mod graph;
 mod listing;
+mod load;
+pub(crate) use load::{bad_input, load};
 mod logging;
 mod modules;
 mod plan;
@@ -33,7 +35,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use petrel_actors::{ConfigErrors, ConfigFile, ModuleConfig, ModuleRegistry};
+use petrel_actors::ModuleRegistry;
 
 // Exit codes: one table, documented in docs/missions.md ("Exit codes").
 /// Exit code when a mission or plan failed, a module failed, or a check found errors.
@@ -373,93 +375,4 @@ fn stop_quietly_on_a_closed_pipe() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-}
-
-/// Loads a config with its overlays, and adds the `contexts` module its `contexts:` field asks for
-/// (on the clock of the agent's mission, when its `in/clock` is linked).
-pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile, ConfigErrors> {
-    let mut file = ConfigFile::load(config)?;
-    for overlay in overlays {
-        file.overlay(ConfigFile::load(overlay)?);
-    }
-    link_mission_clocks(&mut file);
-    if let Some(rules) = file.config.contexts.clone() {
-        // Relative to the config file, like every file path in it (resolved when built).
-        let taken = file
-            .config
-            .modules
-            .iter()
-            .find(|m| m.name == CONTEXTS_MODULE);
-        // A snapshot lists the manager itself; any other module of that name would silently
-        // replace it, and the rules would never run.
-        if let Some(m) = taken.filter(|m| m.type_name != "context.manager") {
-            let message = format!(
-                "the name `{CONTEXTS_MODULE}` is taken by the context manager that the agent's `contexts:` field adds; rename this `{}` module",
-                m.type_name
-            );
-            return Err(ConfigErrors(vec![file.error(
-                CONTEXTS_MODULE,
-                None,
-                message,
-            )]));
-        }
-        if taken.is_none() {
-            // Contexts run on the same clock as the agent's mission (`in/clock`), if it has one.
-            let clock = file
-                .config
-                .modules
-                .iter()
-                .filter(|m| m.type_name == "mission.pnp")
-                .find_map(|m| m.links.get("in/clock").cloned());
-            file.config.modules.push(ModuleConfig {
-                name: CONTEXTS_MODULE.into(),
-                type_name: "context.manager".into(),
-                values: [("params/rules".to_string(), ron::Value::String(rules))].into(),
-                links: clock
-                    .map(|c| [("in/clock".to_string(), c)].into())
-                    .unwrap_or_default(),
-                ..Default::default()
-            });
-        }
-    }
-    Ok(file)
-}
-
-/// The agent's clock is its simulator's when one drives it: a mission whose `in/clock` the
-/// config leaves unlinked, in an agent with exactly one `sim.world`, runs on that world's
-/// `out/simTime` (so `held(x, 2s)` is two simulated seconds, as the robot lives them).
-fn link_mission_clocks(file: &mut ConfigFile) {
-    let mut worlds = file
-        .config
-        .modules
-        .iter()
-        .filter(|m| m.type_name == "sim.world");
-    let (Some(world), None) = (worlds.next(), worlds.next()) else {
-        return;
-    };
-    let sim_time = format!("{}/out/simTime", world.name);
-    for m in file
-        .config
-        .modules
-        .iter_mut()
-        .filter(|m| m.type_name == "mission.pnp")
-    {
-        m.links
-            .entry("in/clock".to_string())
-            .or_insert_with(|| sim_time.as_str().into());
-    }
-}
-
-/// The name of the context manager that an agent's `contexts:` field adds.
-const CONTEXTS_MODULE: &str = "contexts";
-
-/// Prints config errors, one per line, and returns the bad-input exit code.
-pub(crate) fn bad_input(errors: &ConfigErrors) -> ExitCode {
-    eprintln!("{errors}");
-    let n = errors.0.len();
-    eprintln!(
-        "{n} error{} found; nothing was started",
-        if n == 1 { "" } else { "s" }
-    );
-    ExitCode::from(EXIT_BAD_INPUT)
 }
