@@ -6,7 +6,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
-use crate::cell::{Cell, Endpoint, Signal};
+use crate::cell::{Cell, Signal};
 use crate::ports::{Handle, Ports, PropertyDecl, PropertyKind};
 
 use super::error::BlackboardError;
@@ -17,11 +17,12 @@ mod module_graph;
 pub use module_graph::{GraphLink, GraphNode, ModuleGraph};
 mod remote;
 mod settings;
+mod values;
 mod watch;
 use crate::queue::{dropped_path, QueueCore};
 use crate::team::{LinkTarget, RemoteLinks};
 use crate::url::PropertyUrl;
-use crate::value::{AnyValue, TypeInfo};
+use crate::value::TypeInfo;
 use links::LinkGraph;
 pub use watch::{TapFilter, WatchedTap};
 
@@ -353,189 +354,6 @@ impl Registry {
                 _ => {}
             }
         }
-    }
-
-    /// Sets a property from a config value, checking its type.
-    pub fn set_from_ron(
-        &mut self,
-        address: &str,
-        value: ron::Value,
-    ) -> Result<(), BlackboardError> {
-        let key = self.key_of(address)?;
-        let ti = self.entries[&key].decl.type_info;
-        let value = match ti.from_ron(value.clone()) {
-            Ok(v) => v,
-            Err(reason) => {
-                // Say what a value looks like, from the property's current one.
-                let example = self.get(&key).ok().and_then(|(_, v)| ti.to_ron(&v).ok());
-                let reason = match example {
-                    Some(example) => crate::value::config_value_error(
-                        &reason,
-                        &crate::value::spaced_ron(&example),
-                        &value,
-                    ),
-                    None => reason,
-                };
-                return Err(BlackboardError::BadValue {
-                    key: key.clone(),
-                    expected: ti.name(),
-                    reason,
-                });
-            }
-        };
-        self.set(&key, ti, value)
-    }
-
-    /// Sets a property to a value of type `type_info`.
-    pub(crate) fn set(
-        &self,
-        address: &str,
-        type_info: TypeInfo,
-        value: AnyValue,
-    ) -> Result<(), BlackboardError> {
-        let key = self.key_of(address)?;
-        let decl = &self.entries[&key].decl;
-        let kind = decl.kind;
-        if !kind.settable() {
-            return Err(BlackboardError::NotSettable { key, kind });
-        }
-        if let Some(check) = decl.range {
-            if let Some(refused) = check.refuses(&value) {
-                return Err(BlackboardError::OutOfRange {
-                    value: crate::range::short_number(refused),
-                    range: check.range.expected(),
-                    doc: decl.doc.clone(),
-                    key,
-                });
-            }
-        }
-        self.set_runtime(&key, type_info, value)
-    }
-
-    /// Sets any value property, including runtime-owned `stats/...`.
-    pub(crate) fn set_runtime(
-        &self,
-        address: &str,
-        type_info: TypeInfo,
-        value: AnyValue,
-    ) -> Result<(), BlackboardError> {
-        let key = self.key_of(address)?;
-        let entry = &self.entries[&key];
-        if entry.decl.type_info != type_info {
-            return Err(BlackboardError::BadValue {
-                key,
-                expected: entry.decl.type_info.name(),
-                reason: format!("got a {}", type_info.name()),
-            });
-        }
-        match &entry.handle {
-            // A value set on a linked property goes to its target, like writing through a symlink.
-            Handle::Value(ep) => {
-                ep.write(value);
-                Ok(())
-            }
-            _ => Err(BlackboardError::NotSettable {
-                key,
-                kind: entry.decl.kind,
-            }),
-        }
-    }
-
-    /// Like [`get`](Registry::get), and for a queue its latest item (what expressions read).
-    pub fn get_or_latest(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
-        let ep = self.endpoint_or_latest(address)?;
-        Ok((ep.type_info(), ep.value()))
-    }
-
-    /// The current value of a property (of its link target, if linked).
-    pub fn get(&self, address: &str) -> Result<(TypeInfo, AnyValue), BlackboardError> {
-        let key = self.key_of(address)?;
-        match &self.entries[&key].handle {
-            Handle::Value(ep) => Ok((ep.type_info(), ep.value())),
-            _ => Err(BlackboardError::NotSettable {
-                kind: self.entries[&key].decl.kind,
-                key,
-            }),
-        }
-    }
-
-    /// The endpoint of a value property.
-    pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
-        let key = self.key_of(address)?;
-        match &self.entries[&key].handle {
-            Handle::Value(ep) => Ok(ep.clone()),
-            _ => Err(BlackboardError::NotSettable {
-                kind: self.entries[&key].decl.kind,
-                key,
-            }),
-        }
-    }
-
-    /// Like [`endpoint`](Registry::endpoint), and for a queue (output, or input read through
-    /// its link) its latest item as a value (see `QueueCore::latest`): what expressions read.
-    pub(crate) fn endpoint_or_latest(
-        &self,
-        address: &str,
-    ) -> Result<Arc<Endpoint>, BlackboardError> {
-        let key = self.key_of(address)?;
-        let queue = match &self.entries[&key].handle {
-            Handle::QueueOut(core) => Some(core.clone()),
-            Handle::QueueIn(reader) => Some(reader.source()),
-            _ => None,
-        };
-        if let Some(core) = queue {
-            return core
-                .latest(crate::types::sample_of(core.type_info))
-                .ok_or_else(|| BlackboardError::BadValue {
-                    key: key.clone(),
-                    expected: core.type_info.name(),
-                    reason: "this queue has no item yet and its item type has no known default: its latest item cannot be read as a value until one is pushed".into(),
-                });
-        }
-        match &self.entries[&key].handle {
-            Handle::Value(ep) => Ok(ep.clone()),
-            _ => Err(BlackboardError::NotSettable {
-                kind: self.entries[&key].decl.kind,
-                key,
-            }),
-        }
-    }
-
-    /// Sets the capacity of an output queue: 1 to [`MAX_QUEUE_CAPACITY`] items.
-    pub fn set_capacity(&mut self, address: &str, capacity: usize) -> Result<(), BlackboardError> {
-        let key = self.key_of(address)?;
-        let entry = &self.entries[&key];
-        // An input's own queue holds what another agent (a remote link) or a replay feeds it;
-        // a local link reads the output queue, whose capacity is the one that counts then.
-        let core = match (&entry.handle, &entry.own_queue) {
-            (Handle::QueueOut(core), _) => core,
-            (Handle::QueueIn(_), Some(own)) => own,
-            _ => {
-                return Err(BlackboardError::BadValue {
-                    key,
-                    expected: "a queue",
-                    reason: "only queues have a capacity".into(),
-                })
-            }
-        };
-        if !(1..=MAX_QUEUE_CAPACITY).contains(&capacity) {
-            return Err(BlackboardError::OutOfRange {
-                key,
-                value: capacity.to_string(),
-                range: format!("a capacity in 1..={MAX_QUEUE_CAPACITY}"),
-                doc: "items a queue holds until every reader has taken them; 0 could hold nothing"
-                    .into(),
-            });
-        }
-        core.set_capacity(capacity);
-        Ok(())
-    }
-
-    /// The capacity of queue input `entry`'s own queue (what a remote link or a replay feeds
-    /// it), when a config changed it from the default.
-    pub(crate) fn input_capacity(entry: &Entry) -> Option<usize> {
-        let own = entry.own_queue.as_ref()?;
-        (own.capacity() != crate::queue::DEFAULT_CAPACITY).then(|| own.capacity())
     }
 
     /// Every property with its current own value (not its link target's), links, and queue
