@@ -8,15 +8,15 @@
 //! an image), and a column is a victim column when it rises above the floor by more than
 //! `threshold` grey levels, all the way from the horizon to the victim's foot. Runs of at least
 //! [`MIN_COLUMNS`] such columns are detections; the bearing comes from the run's centre
-//! column, the range from the lowest textured row (where the victim meets the floor, seen
-//! from a camera [`CAMERA_HEIGHT`] above it). Nothing is faked: a dark image has little
+//! column, the range from the row where the textured band that runs down from the horizon
+//! ends (where the victim meets the floor, seen from a camera [`CAMERA_HEIGHT`] above it). Nothing is faked: a dark image has little
 //! contrast left, a blurred one has its squares averaged away, and both are missed. `deblur`
 //! sharpens first (unsharp masking, a real convolution per pixel), which restores some
 //! contrast that mild blur took and also amplifies noise.
 
 use serde::{Deserialize, Serialize};
 
-use crate::sim::camera::{CAMERA_HEIGHT, VICTIM_RADIUS};
+use crate::sim::camera::{CAMERA_HEIGHT, CHECKER, VICTIM_RADIUS};
 
 /// Fewest adjacent textured columns that make a detection.
 pub const MIN_COLUMNS: usize = 3;
@@ -27,6 +27,9 @@ const NOISE_FACTOR: f64 = 2.0;
 const WINDOW: usize = 10;
 /// Textured runs this close (columns) are one victim: checker squares leave gaps.
 const MERGE_GAP: usize = 4;
+/// Untextured rows inside a victim, in checker squares, beyond which its textured band has
+/// ended (its squares' edges are textured; blur may fade one).
+const FOOT_GAP_SQUARES: f64 = 1.5;
 
 /// Detector parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -201,11 +204,12 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         let cols = (start + c0)..(c + c0);
         let floor = floor_of[start..c].iter().sum::<f64>() / (c - start) as f64;
         let excess = texture[start..c].iter().map(|t| t - floor).sum::<f64>() / (c - start) as f64;
-        // The lowest row whose texture across the run still stands out: the victim's foot.
-        let bottom = (r0..r1).rev().find(|&r| {
+        let textured = |r: usize| {
             cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64 > floor + threshold
-        });
-        let Some(bottom) = bottom else { continue };
+        };
+        let Some(bottom) = foot_row(textured, (h / 2).max(r0), r1, h / 2) else {
+            continue;
+        };
         let below_horizon = bottom as f64 + 1.0 - h as f64 / 2.0;
         if below_horizon < 3.0 {
             continue;
@@ -235,6 +239,40 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         brightness,
         sharpness,
     })
+}
+
+/// The victim's foot: the lowest row of the textured band that runs down from `from`, rows
+/// `from..to`, where `textured` says whether a row's texture stands out; `horizon` is the
+/// horizon's row.
+///
+/// The band is followed down rather than the lowest textured row taken: a checkerboard is
+/// textured at every edge between squares, so a gap of untextured rows longer than a square
+/// or so (how many rows one spans grows with the depth below the horizon) is the floor in
+/// front of the victim. A noise row further down (sharpening amplifies noise) or the base of
+/// something nearer would otherwise be taken for the foot, and the victim placed metres short
+/// of where it is: two such frames made a seventh, false victim in a rescue team's run.
+fn foot_row(
+    textured: impl Fn(usize) -> bool,
+    from: usize,
+    to: usize,
+    horizon: usize,
+) -> Option<usize> {
+    let mut foot: Option<usize> = None;
+    for r in from..to {
+        if textured(r) {
+            foot = Some(r);
+            continue;
+        }
+        let Some(end) = foot else { continue };
+        // Squares are as many rows high as the depth below the horizon where the band has
+        // got to, times CHECKER / CAMERA_HEIGHT.
+        let below = (end + 1).saturating_sub(horizon) as f64;
+        let square_rows = CHECKER / CAMERA_HEIGHT * below;
+        if (r - end) as f64 > 1.0 + (FOOT_GAP_SQUARES * square_rows).ceil() {
+            break;
+        }
+    }
+    foot
 }
 
 /// Unsharp masking: `img + amount * (img - 3x3 mean)`.
