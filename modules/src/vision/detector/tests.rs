@@ -42,6 +42,29 @@ fn image(
     )
 }
 
+/// The shipped rescue world (configs/rescue/rescue.txt).
+fn rescue_world() -> crate::sim::WorldMap {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/rescue/rescue.txt");
+    crate::sim::load_world(std::path::Path::new(path)).unwrap()
+}
+
+/// A frame of `w` from `pose`, the camera still.
+fn still_frame(
+    w: &crate::sim::WorldMap,
+    pose: Pose2,
+    cfg: &CameraConfig,
+    rng: &mut rand::rngs::StdRng,
+) -> Vec<u8> {
+    render(
+        &w.grid,
+        &w.features,
+        pose,
+        CameraMotion::default(),
+        cfg,
+        rng,
+    )
+}
+
 fn run(img: &[u8], p: &DetectorParams) -> DetectorOutput {
     detect(img, 160, 120, p).unwrap()
 }
@@ -167,8 +190,7 @@ fn blurred_images_miss_victims_and_lose_sharpness_deblur_costs_and_helps_a_littl
 fn no_false_victims_in_the_dark_room_of_the_rescue_world() {
     // Looking around the dark storeroom with exposure and gain raised: walls lit through the
     // door saturate beside dark, amplified, noisy ones. Noise is not a victim.
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/rescue/rescue.txt");
-    let w = crate::sim::load_world(std::path::Path::new(path)).unwrap();
+    let w = rescue_world();
     let cfg = CameraConfig {
         exposure_ms: 30.0,
         gain: 4.0,
@@ -191,14 +213,7 @@ fn no_false_victims_in_the_dark_room_of_the_rescue_world() {
             if w.grid.disc_collides(pose.x(), pose.y(), 0.25) {
                 continue;
             }
-            let img = render(
-                &w.grid,
-                &w.features,
-                pose,
-                CameraMotion::default(),
-                &cfg,
-                &mut rng,
-            );
+            let img = still_frame(&w, pose, &cfg, &mut rng);
             frames += 1;
             for d in run(&img, &p).detections {
                 let a = pose.theta() + d.bearing;
@@ -246,8 +261,7 @@ fn another_robot_in_view_is_not_a_victim() {
 /// team's run). Every sighting placed from these poses must land on a victim.
 #[test]
 fn a_far_victim_is_not_placed_short_by_a_noisy_row_of_floor() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/rescue/rescue.txt");
-    let w = crate::sim::load_world(std::path::Path::new(path)).unwrap();
+    let w = rescue_world();
     let cfg = CameraConfig::default();
     let p = DetectorParams {
         deblur: 1.0,
@@ -262,14 +276,7 @@ fn a_far_victim_is_not_placed_short_by_a_noisy_row_of_floor() {
         let pose = Pose2::new(x, y, heading.to_radians());
         for seed in 0..40 {
             let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-            let img = render(
-                &w.grid,
-                &w.features,
-                pose,
-                CameraMotion::default(),
-                &cfg,
-                &mut rng,
-            );
+            let img = still_frame(&w, pose, &cfg, &mut rng);
             for d in run(&img, &p).detections {
                 sightings += 1;
                 let a = pose.theta() + d.bearing;
