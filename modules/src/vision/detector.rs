@@ -207,7 +207,7 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         let textured = |r: usize| {
             cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64 > floor + threshold
         };
-        let Some(bottom) = foot_row(textured, (h / 2).max(r0), r1, h / 2) else {
+        let Some(bottom) = foot_row(textured, (h / 2).max(r0), r1, h / 2, cols.len()) else {
             continue;
         };
         let below_horizon = bottom as f64 + 1.0 - h as f64 / 2.0;
@@ -243,20 +243,27 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
 
 /// The victim's foot: the lowest row of the textured band that runs down from `from`, rows
 /// `from..to`, where `textured` says whether a row's texture stands out; `horizon` is the
-/// horizon's row.
+/// horizon's row and `width` the run's width in columns.
 ///
 /// The band is followed down rather than the lowest textured row taken: a checkerboard is
 /// textured at every edge between squares, so a gap of untextured rows longer than a square
-/// or so (how many rows one spans grows with the depth below the horizon) is the floor in
-/// front of the victim. A noise row further down (sharpening amplifies noise) or the base of
-/// something nearer would otherwise be taken for the foot, and the victim placed metres short
+/// or so is the floor in front of the victim. A noisy row of floor further down (sharpening
+/// amplifies noise) would otherwise be taken for the foot, and the victim placed metres short
 /// of where it is: two such frames made a seventh, false victim in a rescue team's run.
+///
+/// How many rows a square spans depends on the victim's distance, which is what the foot
+/// tells; two lower bounds serve instead, the larger taken: the run's width (a victim is
+/// `2 * VICTIM_RADIUS` wide, a square `CHECKER` high, so a run of a whole victim gives its
+/// squares' height; a victim partly hidden gives less), and the depth below the horizon the
+/// band has reached (the foot is at least that low, so the victim at most that far).
 fn foot_row(
     textured: impl Fn(usize) -> bool,
     from: usize,
     to: usize,
     horizon: usize,
+    width: usize,
 ) -> Option<usize> {
+    let by_width = CHECKER / (2.0 * VICTIM_RADIUS) * width as f64;
     let mut foot: Option<usize> = None;
     for r in from..to {
         if textured(r) {
@@ -264,10 +271,8 @@ fn foot_row(
             continue;
         }
         let Some(end) = foot else { continue };
-        // Squares are as many rows high as the depth below the horizon where the band has
-        // got to, times CHECKER / CAMERA_HEIGHT.
-        let below = (end + 1).saturating_sub(horizon) as f64;
-        let square_rows = CHECKER / CAMERA_HEIGHT * below;
+        let by_depth = CHECKER / CAMERA_HEIGHT * (end + 1).saturating_sub(horizon) as f64;
+        let square_rows = by_width.max(by_depth);
         if (r - end) as f64 > 1.0 + (FOOT_GAP_SQUARES * square_rows).ceil() {
             break;
         }

@@ -254,6 +254,36 @@ fn another_robot_in_view_is_not_a_victim() {
     assert!(run(&img, &DetectorParams::default()).detections.is_empty());
 }
 
+/// Near a victim its squares are many rows high, so the band from the horizon down is
+/// textured only every so many rows: the foot is still found at the bottom, not at the first
+/// gap (a rescue mission confirms a victim as it approaches it; following the band with gaps
+/// judged by the depth reached alone, it dismissed one).
+#[test]
+fn a_near_victim_is_found_at_its_range() {
+    let cfg = CameraConfig::default();
+    for deblur in [0.0, 1.0] {
+        let p = DetectorParams {
+            deblur,
+            ..DetectorParams::default()
+        };
+        for distance in [1.25, 1.4, 1.5, 1.75] {
+            let img = image(
+                &[(1.0 + distance, 2.5)],
+                false,
+                CameraMotion::default(),
+                &cfg,
+                3,
+            );
+            let out = run(&img, &p);
+            assert!(
+                out.detections.len() == 1 && (out.detections[0].range - distance).abs() < 0.25,
+                "deblur {deblur}, victim {distance} m ahead: {:?}",
+                out.detections
+            );
+        }
+    }
+}
+
 /// The foot is where the victim's textured band ends, not the lowest row that happens to be
 /// textured: sharpened noise on the floor in front of a far victim was taken for its foot in
 /// about one frame in ten from this doorway of the rescue world, placing the victim at
