@@ -71,6 +71,13 @@ macro_rules! read_methods {
             pub fn key(&self) -> &str {
                 &self.ep.key
             }
+
+            /// How many times the value seen through this handle was written, read without a
+            /// lock: a cheap "did it change?" check before reading it.
+            #[inline]
+            pub fn version(&self) -> u64 {
+                self.ep.version()
+            }
         }
 
         impl<T: PropertyType + Copy> $handle<T> {

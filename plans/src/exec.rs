@@ -16,8 +16,9 @@
 //! net size, except the goal / fail check (proportional to the number of
 //! goal / fail places).
 
-use std::collections::{BTreeSet, HashSet};
+use std::collections::HashSet;
 use std::fmt;
+use std::sync::Arc;
 
 use crate::hot::Hot;
 use crate::label::CallKind;
@@ -68,8 +69,8 @@ impl PlanStatus {
 /// A call made during a step (sub-plans included).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CallRecord {
-    /// Executable name.
-    pub executable: String,
+    /// Executable name (shared with the plan: recording a call does not copy it).
+    pub executable: Arc<str>,
     /// The call.
     pub kind: CallKind,
 }
@@ -99,7 +100,9 @@ pub struct StepReport {
 #[derive(Debug, Clone)]
 pub struct PlanState {
     tokens: Vec<u32>,
-    marked: BTreeSet<u32>,
+    /// The marked places, sorted: a few words a step walks several times, cheaper to walk,
+    /// insert into and remove from than a tree while few places are marked (the usual plan).
+    marked: Vec<u32>,
     subs: Vec<Option<Box<PlanState>>>,
     /// The executables that are sub-plans (the `Some`s of `subs`), so that walking the
     /// sub-plan states does not cost the number of executables.
@@ -204,13 +207,17 @@ impl PlanState {
 
     fn add(&mut self, place: usize, n: u32) {
         self.tokens[place] = self.tokens[place].saturating_add(n);
-        self.marked.insert(place as u32);
+        if let Err(at) = self.marked.binary_search(&(place as u32)) {
+            self.marked.insert(at, place as u32);
+        }
     }
 
     fn take(&mut self, place: usize, n: u32) {
         self.tokens[place] -= n;
         if self.tokens[place] == 0 {
-            self.marked.remove(&(place as u32));
+            if let Ok(at) = self.marked.binary_search(&(place as u32)) {
+                self.marked.remove(at);
+            }
         }
     }
 
@@ -225,15 +232,16 @@ impl PlanState {
     fn running_into(&self, plan: &Plan, ex: &mut Vec<usize>) {
         let pe = &plan.hot().place_exec;
         ex.clear();
-        ex.extend(
-            self.marked
-                .iter()
-                .map(|&p| pe[p as usize])
-                .filter(|&e| e != Hot::NO_EXEC)
-                .map(|e| e as usize),
-        );
-        ex.sort_unstable();
-        ex.dedup();
+        for &p in &self.marked {
+            let e = pe[p as usize];
+            if e != Hot::NO_EXEC {
+                ex.push(e as usize);
+            }
+        }
+        if ex.len() > 1 {
+            ex.sort_unstable();
+            ex.dedup();
+        }
     }
 }
 
@@ -320,7 +328,12 @@ impl PlanState {
         let n = (key[0] & !FAILED_BIT) as usize;
         for pair in key[1..1 + 2 * n].chunks_exact(2) {
             self.tokens[pair[0] as usize] = pair[1];
-            self.marked.insert(pair[0]);
+            self.marked.push(pair[0]);
+        }
+        // Keys list places in order (`encode`); one from elsewhere may not.
+        if !self.marked.is_sorted() {
+            self.marked.sort_unstable();
+            self.marked.dedup();
         }
         let mut rest = &key[1 + 2 * n..];
         for &e in &self.sub_execs {
@@ -344,7 +357,7 @@ impl PlanState {
     fn empty() -> PlanState {
         PlanState {
             tokens: Vec::new(),
-            marked: BTreeSet::new(),
+            marked: Vec::new(),
             subs: Vec::new(),
             sub_execs: Vec::new(),
             failed: None,
@@ -386,6 +399,21 @@ pub fn step(plan: &Plan, state: &mut PlanState, env: &mut dyn Environment) -> St
     let mut report = StepReport::default();
     step_into(plan, state, env, &mut report, true);
     report
+}
+
+/// Like [`step`], into `report` (cleared first): a caller stepping often (a mission's rounds)
+/// reuses one report's buffers instead of allocating them at every step.
+pub fn step_with(
+    plan: &Plan,
+    state: &mut PlanState,
+    env: &mut dyn Environment,
+    report: &mut StepReport,
+) {
+    report.fired.clear();
+    report.calls.clear();
+    report.unknown_conditions.clear();
+    report.unhandled_failure = None;
+    step_into(plan, state, env, report, true);
 }
 
 fn step_into(
@@ -432,14 +460,13 @@ fn step_into(
         return;
     }
     candidates.clear();
-    candidates.extend(
-        state
-            .marked
-            .iter()
-            .flat_map(|&p| plan.output_transitions(p as usize).iter().copied()),
-    );
-    candidates.sort_unstable();
-    candidates.dedup();
+    for &p in &state.marked {
+        candidates.extend_from_slice(plan.output_transitions(p as usize));
+    }
+    if candidates.len() > 1 {
+        candidates.sort_unstable();
+        candidates.dedup();
+    }
     enabled.clear();
     for &ti in &candidates {
         let h = hot.trans[ti as usize];
@@ -544,7 +571,7 @@ fn make_call(
 ) {
     let exe = &plan.executables()[e];
     report.calls.push(CallRecord {
-        executable: exe.name.clone(),
+        executable: plan.hot().exec_names[e].clone(),
         kind,
     });
     let (Some(sp), Some(sub)) = (&exe.subplan, state.subs[e].as_deref_mut()) else {

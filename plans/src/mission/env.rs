@@ -155,7 +155,13 @@ impl Environment for MissionEnv<'_> {
             self.dispatch.call(name, kind);
             return;
         }
-        let Some(a) = self.bound.actions.get_mut(name) else {
+        let Bound {
+            actions,
+            exprs,
+            relinks,
+            ..
+        } = &mut *self.bound;
+        let Some(a) = actions.get_mut(name) else {
             return;
         };
         if a.unbound {
@@ -171,21 +177,15 @@ impl Environment for MissionEnv<'_> {
             CallKind::Start | CallKind::Resume => {
                 // Time in the action's conditions counts from here: a `held` window opened
                 // before it ran does not count, and `elapsed()` starts at 0.
-                let ids: Vec<_> = a.exprs().collect();
-                for id in ids {
-                    self.bound.exprs.set_origin(id, Some(now));
+                for id in a.exprs() {
+                    exprs.set_origin(id, Some(now));
                 }
-                let Some(a) = self.bound.actions.get_mut(name) else {
-                    return;
-                };
                 if let Some(text) = &a.log {
                     tracing::info!(action = name, "{text}");
                 }
-                a.activate(&mut self.bound.relinks, stamp);
+                a.activate(relinks, stamp);
             }
-            CallKind::End | CallKind::Interrupt | CallKind::Fail => {
-                a.deactivate(&mut self.bound.relinks, stamp)
-            }
+            CallKind::End | CallKind::Interrupt | CallKind::Fail => a.deactivate(relinks, stamp),
         }
     }
 }

@@ -131,7 +131,7 @@ impl Module for Mission {
         let (now, secs) = (run.clock.now(stamp), run.clock.secs(stamp));
         let t = StepTime { now, secs, stamp };
         if run.team.serve_mode {
-            if run.serve_round(t, &self.flags.get(), &self.inbox) {
+            if run.serve_round(t, &self.flags, &self.inbox) {
                 run.save(&self.memory);
             }
             run.team.send(&self.outbox);
@@ -149,26 +149,26 @@ impl Module for Mission {
         }
         if !may_step {
             // Waiting for robots' conditions: the watches must still go out (and be answered).
-            run.answer_watches(t, &self.flags.get());
+            run.answer_watches(t, &self.flags);
             run.team.send(&self.outbox);
             return Ok(());
         }
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
-        let mut fired_labels = Vec::new();
+        run.fired.clear();
         // Whether a round called an action (which may have enabled a module or written its
         // input), and whether this step already let such modules answer.
         let (mut called, mut settled) = (false, false);
         for round in 1.. {
-            // Read at every round: an action's `set` may write the mission's own flags.
-            let (report, labels) = run.round(t, &self.flags.get());
-            relink(ctx, &mut run.bound.relinks).await;
-            fired += report.fired.len();
-            fired_labels.extend(labels);
-            called |= !report.calls.is_empty();
+            let report = run.round(t, &self.flags);
+            if !run.bound.relinks.is_empty() {
+                relink(ctx, &mut run.bound.relinks).await;
+            }
+            fired += report.fired;
+            called |= report.called;
             let running = run.state.status(&run.plan) == PlanStatus::Running;
-            if report.fired.is_empty() || !running {
+            if report.fired == 0 || !running {
                 // Nothing more fires now. A module an action has just switched on may answer
                 // at once (a quick action): let it, once per step, and go on with its answer
                 // in this step rather than stepping again for it (see `settle`).
@@ -185,24 +185,26 @@ impl Module for Mission {
                 break;
             }
         }
-        run.answer_watches(t, &self.flags.get());
+        run.answer_watches(t, &self.flags);
         run.team.send(&self.outbox);
         if run.clock.is_wall() {
             set_deadline(&run.timer, run.bound.exprs.next_deadline());
         }
         if fired > 0 {
-            // Once per step, however many rounds fired: what the plan left.
-            run.save(&self.memory);
+            // Once per step, however many rounds fired: what the plan left (a call counted in
+            // the actions' records, so the memory changed).
+            run.save_changed(&self.memory, called);
+            let transitions = (!run.fired.is_empty()).then(|| run.labels(&run.fired));
             let news = run.shown.news(&run.plan, &run.state, &run.memory.marking);
             if news.running {
                 self.running.set(news.texts.running.clone());
             }
             // Before the marking: a reader following the marking reads the count with it.
             self.fired.set(self.fired.value() + fired as i64);
-            if !fired_labels.is_empty() {
+            if let Some(transitions) = transitions {
                 self.firings.push(PlanFiring {
                     time_s: secs,
-                    transitions: fired_labels,
+                    transitions,
                     marking: news.texts.marking.clone(),
                 });
             }
@@ -325,6 +327,9 @@ impl Mission {
             loops: Default::default(),
             shown,
             spare: None,
+            report: Default::default(),
+            fired: Vec::new(),
+            flags: Default::default(),
         };
         let memory = self.memory.get();
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {
@@ -352,7 +357,7 @@ async fn settle(ctx: &mut Context, wake: &State<i64>, run: &Run) -> bool {
     let outside = || {
         let clock = run.clock.handle().map(|h| h.version());
         let members = run.team.members.as_ref().map(|h| h.version());
-        (wake.read().version, clock, members)
+        (wake.version(), clock, members)
     };
     let before = outside();
     let changed = ctx.settle().await;
