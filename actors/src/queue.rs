@@ -12,6 +12,7 @@
 //! the items of the step that failed are delivered again (unless evicted by capacity).
 
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use arc_swap::ArcSwap;
@@ -252,6 +253,9 @@ pub(crate) struct ReaderEndpoint {
     source: ArcSwap<QueueCore>,
     signal: Mutex<Option<Arc<Signal>>>,
     pub dropped: Arc<Endpoint>,
+    /// Items were taken since the last acknowledgement: without, an acknowledgement (after
+    /// every step of the module) has nothing to do and takes no lock.
+    unacked: AtomicBool,
 }
 
 impl ReaderEndpoint {
@@ -271,6 +275,7 @@ impl ReaderEndpoint {
             source: ArcSwap::new(source),
             signal: Mutex::new(None),
             dropped,
+            unacked: AtomicBool::new(false),
         })
     }
 
@@ -296,7 +301,11 @@ impl ReaderEndpoint {
     }
 
     pub fn take(&self, max: usize, out: &mut Vec<QueueItem>) {
-        self.source.load().take(self.id, max, out)
+        let before = out.len();
+        self.source.load().take(self.id, max, out);
+        if out.len() > before {
+            self.unacked.store(true, Ordering::Release);
+        }
     }
 
     pub fn pending(&self) -> usize {
@@ -304,7 +313,11 @@ impl ReaderEndpoint {
     }
 
     pub fn ack(&self) {
-        self.source.load().ack(self.id)
+        // Only taking moves the delivery cursor past the acknowledged one (an eviction moves
+        // both), so with nothing taken there is nothing to acknowledge.
+        if self.unacked.swap(false, Ordering::AcqRel) {
+            self.source.load().ack(self.id)
+        }
     }
 
     pub fn rewind(&self) {

@@ -136,11 +136,15 @@ impl Module for Mission {
             }
             run.team.send(&self.outbox);
             if run.clock.is_wall() {
-                set_deadline(&run.timer, run.bound.exprs.next_deadline());
+                run.timer.set(run.bound.exprs.next_deadline());
             }
             return Ok(());
         }
-        let may_step = run.team.take_news(&self.inbox);
+        // Items wake the mission (ITEMS), and its first step reads what a predecessor left.
+        let cause = ctx.cause();
+        let may_step = run
+            .team
+            .take_news(&self.inbox, cause.items() || cause.first());
         if run.team.dispatch.has_conditions() {
             publish(
                 &self.robot_conditions,
@@ -188,7 +192,7 @@ impl Module for Mission {
         run.answer_watches(t, &self.flags);
         run.team.send(&self.outbox);
         if run.clock.is_wall() {
-            set_deadline(&run.timer, run.bound.exprs.next_deadline());
+            run.timer.set(run.bound.exprs.next_deadline());
         }
         if fired > 0 {
             // Once per step, however many rounds fired: what the plan left (a call counted in
@@ -197,7 +201,7 @@ impl Module for Mission {
             let transitions = (!run.fired.is_empty()).then(|| run.labels(&run.fired));
             let news = run.shown.news(&run.plan, &run.state, &run.memory.marking);
             if news.running {
-                self.running.set(news.texts.running.clone());
+                self.running.set(news.texts.running.to_string());
             }
             // Before the marking: a reader following the marking reads the count with it.
             self.fired.set(self.fired.value() + fired as i64);
@@ -209,7 +213,7 @@ impl Module for Mission {
                 });
             }
             if news.marking {
-                self.marking.set(news.texts.marking.clone());
+                self.marking.set(news.texts.marking.to_string());
             }
         }
         let status = run.state.status(&run.plan);
@@ -245,7 +249,7 @@ impl Module for Mission {
 
     async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(run) = self.run.as_mut() {
-            set_deadline(&run.timer, None);
+            run.timer.set(None);
             // At a restart or a move the plan goes on from `state/memory`: no summary yet.
             if self.is_mission.value() && !run.memory.actions.is_empty() && !ctx.restarting() {
                 // The run summary of a plan-driven mission: the plan's result and what each
@@ -292,6 +296,10 @@ impl Mission {
             .await?;
         let (timer, rx) = watch::channel(None);
         tokio::spawn(deadline_timer(rx, wake));
+        let timer = Timer {
+            tx: timer,
+            told: None,
+        };
         tracing::info!(
             plan = plan.name(),
             actions = bound.actions.len(),
@@ -389,18 +397,32 @@ fn publish(out: &Output<String>, v: &str) {
     }
 }
 
-/// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
-/// Tells the timer task about a new deadline. Only a change wakes it: a wake-up per mission step
-/// would put a second task on the run queue at every reaction, and tokio then brings in another
-/// worker thread to steal it, which costs more than the reaction itself.
-fn set_deadline(timer: &watch::Sender<Option<Instant>>, deadline: Option<Instant>) {
-    timer.send_if_modified(|d| {
-        let changed = *d != deadline;
-        *d = deadline;
-        changed
-    });
+/// The sender to the task that bumps `state/wake` when the next deadline passes, with the
+/// deadline it was told last.
+pub(super) struct Timer {
+    tx: watch::Sender<Option<Instant>>,
+    told: Option<Instant>,
 }
 
+impl Timer {
+    /// Tells the timer task about a new deadline. Only a change wakes it: a wake-up per mission
+    /// step would put a second task on the run queue at every reaction, and tokio then brings
+    /// in another worker thread to steal it, which costs more than the reaction itself. The
+    /// deadline told last is kept here, so an unchanged one costs no lock of the channel.
+    pub fn set(&mut self, deadline: Option<Instant>) {
+        if deadline == self.told {
+            return;
+        }
+        self.told = deadline;
+        self.tx.send_if_modified(|d| {
+            let changed = *d != deadline;
+            *d = deadline;
+            changed
+        });
+    }
+}
+
+/// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
 async fn deadline_timer(mut rx: watch::Receiver<Option<Instant>>, wake: petrel_actors::AnyHandle) {
     loop {
         let deadline = *rx.borrow_and_update();

@@ -4,7 +4,6 @@ use std::sync::Arc;
 
 use petrel_actors::expr::{Clock, ExprId};
 use petrel_actors::{Input, State};
-use tokio::sync::watch;
 use tokio::time::Instant;
 
 use super::bind::Bound;
@@ -33,7 +32,7 @@ pub(super) struct Run {
     pub state: PlanState,
     pub bound: Bound,
     /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
-    pub timer: watch::Sender<Option<Instant>>,
+    pub timer: super::module::Timer,
     pub done: bool,
     /// Scratch for the expressions a round changed, kept to avoid allocating per round.
     pub changed: Vec<ExprId>,
@@ -131,12 +130,9 @@ impl Run {
         }
     }
 
-    /// Transitions `fired` as the log and `out/firings` show them.
-    pub fn labels(&self, fired: &[usize]) -> Vec<String> {
-        fired
-            .iter()
-            .map(|&t| self.shown.label(t).to_string())
-            .collect()
+    /// Transitions `fired` as the log and `out/firings` show them (shared, not copied).
+    pub fn labels(&self, fired: &[usize]) -> Vec<Arc<str>> {
+        fired.iter().map(|&t| self.shown.label(t).clone()).collect()
     }
 
     /// Reports the plan when its rounds fire in a circle without ever waiting.

@@ -6,6 +6,8 @@
 //! then joined) cost as much as the plan step. Plans come back to the same markings (a loop,
 //! a waiting place), so the texts are kept by marking.
 
+use std::sync::Arc;
+
 use crate::exec::PlanState;
 use crate::model::{Plan, Transition};
 
@@ -13,19 +15,19 @@ use crate::model::{Plan, Transition};
 /// markings pays what it paid before, no memory grows without bound).
 const MAX_TEXTS: usize = 256;
 
-/// The texts of one marking.
+/// The texts of one marking, shared: `out/firings` items hold them without a copy.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub(super) struct Texts {
     /// Marked places, `label` or `label*n`, comma-separated (`out/marking`).
-    pub marking: String,
+    pub marking: Arc<str>,
     /// Running actions, comma-separated (`out/running`).
-    pub running: String,
+    pub running: Arc<str>,
 }
 
 /// Transition labels and the texts of the markings seen, for one plan.
 #[derive(Debug, Default)]
 pub(super) struct Shown {
-    labels: Vec<String>,
+    labels: Vec<Arc<str>>,
     texts: foldhash::HashMap<Vec<u32>, Texts>,
     /// The marking key whose texts were published last (its buffer reused).
     published: Option<Vec<u32>>,
@@ -45,14 +47,14 @@ impl Shown {
     /// The labels of `plan`'s transitions, computed once.
     pub fn new(plan: &Plan) -> Shown {
         Shown {
-            labels: plan.transitions().iter().map(shown).collect(),
+            labels: plan.transitions().iter().map(|t| shown(t).into()).collect(),
             texts: foldhash::HashMap::default(),
             published: None,
         }
     }
 
     /// Transition `t` as the log and `out/firings` show it.
-    pub fn label(&self, t: usize) -> &str {
+    pub fn label(&self, t: usize) -> &Arc<str> {
         &self.labels[t]
     }
 
@@ -86,8 +88,8 @@ impl Shown {
                 self.texts.clear();
             }
             let texts = Texts {
-                marking: marking(plan, state),
-                running: state.running_actions(plan).join(", "),
+                marking: marking(plan, state).into(),
+                running: state.running_actions(plan).join(", ").into(),
             };
             self.texts.insert(key.to_vec(), texts);
         }
@@ -139,8 +141,8 @@ mod tests {
         let state = PlanState::new(&plan);
         let key = state.save();
         let first = shown.texts(&plan, &state, &key).clone();
-        assert_eq!(first.marking, marking(&plan, &state));
-        assert_eq!(first.running, state.running_actions(&plan).join(", "));
+        assert_eq!(*first.marking, marking(&plan, &state));
+        assert_eq!(*first.running, state.running_actions(&plan).join(", "));
         // A second state of another marking gets its own texts.
         let mut other = state.clone();
         let last = plan.places().len() as u32 - 1;
@@ -167,7 +169,7 @@ mod tests {
         other.restore(&plan, &[1, last, 1]).unwrap();
         let next = shown.news(&plan, &other, &other.save());
         assert!(next.marking && !next.running, "{:?}", next.texts);
-        assert_eq!(next.texts.marking, marking(&plan, &other));
+        assert_eq!(*next.texts.marking, marking(&plan, &other));
     }
 
     #[test]
