@@ -144,6 +144,11 @@ impl Signal {
         self.causes.fetch_and(!cause::CHANGE, Ordering::AcqRel) & cause::CHANGE != 0
     }
 
+    /// Whether property changes were raised since the causes were last taken.
+    pub fn changes_pending(&self) -> bool {
+        self.causes.load(Ordering::Acquire) & cause::CHANGE != 0
+    }
+
     /// Whether step causes wait to be taken: the module will step again at once.
     pub fn pending(&self) -> bool {
         self.causes.load(Ordering::Acquire) & cause::STEPS != 0

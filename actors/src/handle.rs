@@ -309,6 +309,14 @@ impl<T: PropertyType> QueueWriter<T> {
         self.core.push(value, self.clock.now())
     }
 
+    /// Appends the item `make` builds, only if the queue has a reader (a module linked to it,
+    /// a recorder's or a console's tap, an expression): items nobody reads are dropped, so
+    /// they need not be built.
+    pub fn push_with(&self, make: impl FnOnce() -> T) {
+        self.core
+            .push_with(|| Arc::new(make()) as AnyValue, self.clock.now())
+    }
+
     /// Items held for readers that have not consumed them yet.
     pub fn len(&self) -> usize {
         self.core.len()

@@ -124,6 +124,20 @@ impl QueueCore {
         self.inner.lock().items.len()
     }
 
+    /// Like [`push`](Self::push), making the item only if someone will see it: a queue with
+    /// no reader (and no expression reading its latest item) drops what is pushed, so a
+    /// writer whose items cost something to build need not build them.
+    pub fn push_with(&self, make: impl FnOnce() -> AnyValue, stamp: Instant) {
+        if self.latest.get().is_none() {
+            let mut inner = self.inner.lock();
+            if inner.readers.is_empty() {
+                inner.next_seq += 1;
+                return;
+            }
+        }
+        self.push(make(), stamp)
+    }
+
     pub fn push(&self, value: AnyValue, stamp: Instant) {
         if let Some(latest) = self.latest.get() {
             latest.write_at(value.clone(), stamp);

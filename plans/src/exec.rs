@@ -124,6 +124,15 @@ struct Scratch {
     enabled: Vec<usize>,
 }
 
+impl Scratch {
+    /// Gives back the buffers a step took (its own, emptied: nothing to free).
+    fn put_back(&mut self, running: Vec<usize>, candidates: Vec<u32>, enabled: Vec<usize>) {
+        self.running = running;
+        self.candidates = candidates;
+        self.enabled = enabled;
+    }
+}
+
 impl PlanState {
     /// The initial state of `plan` (sub-plans at their initial marking).
     pub fn new(plan: &Plan) -> PlanState {
@@ -427,11 +436,10 @@ fn step_into(
         return;
     }
     // The step's buffers, taken out of the state while it is borrowed, and put back after.
-    let Scratch {
-        mut running,
-        mut candidates,
-        mut enabled,
-    } = std::mem::take(&mut state.scratch);
+    // Taken field by field: moving the whole struct out and back cost a stall on the copy.
+    let mut running = std::mem::take(&mut state.scratch.running);
+    let mut candidates = std::mem::take(&mut state.scratch.candidates);
+    let mut enabled = std::mem::take(&mut state.scratch.enabled);
     state.running_into(plan, &mut running);
     for &e in &running {
         let exe = &plan.executables()[e];
@@ -452,11 +460,7 @@ fn step_into(
         if report.unhandled_failure.is_none() {
             report.unhandled_failure = state.unhandled_failure(plan);
         }
-        state.scratch = Scratch {
-            running,
-            candidates,
-            enabled,
-        };
+        state.scratch.put_back(running, candidates, enabled);
         return;
     }
     candidates.clear();
@@ -496,11 +500,7 @@ fn step_into(
             }
         }
     }
-    state.scratch = Scratch {
-        running,
-        candidates,
-        enabled,
-    };
+    state.scratch.put_back(running, candidates, enabled);
 }
 
 /// The first running executable (in place order) that failed where no transition handles it.

@@ -25,6 +25,8 @@ pub(crate) struct MissionEnv<'a> {
     pub memory: &'a mut MissionMemory,
     /// Other robots' actions and conditions (`robot#...`): carried out over the team.
     pub dispatch: &'a mut Dispatch,
+    /// Names of ended actions' entries in `memory.running`, kept for the next start's entry.
+    pub keys: &'a mut Vec<String>,
 }
 
 impl BoundAction {
@@ -38,7 +40,7 @@ impl BoundAction {
             write(h, v.clone(), stamp);
         }
         for e in &self.enable {
-            write(e, std::sync::Arc::new(true), stamp);
+            write(e, shared_bool(true), stamp);
         }
         relinks.extend(self.links.iter().map(|(input, source, _)| Relink {
             input: input.clone(),
@@ -50,7 +52,7 @@ impl BoundAction {
     /// (into `relinks`) the links `link` changed. Writes are stamped `stamp`.
     pub fn deactivate(&mut self, relinks: &mut Vec<Relink>, stamp: Instant) {
         for e in &self.enable {
-            write(e, std::sync::Arc::new(false), stamp);
+            write(e, shared_bool(false), stamp);
         }
         if self.restore && self.saved.is_some() {
             relinks.extend(self.links.iter().map(|(input, _, original)| Relink {
@@ -73,6 +75,13 @@ impl BoundAction {
     }
 }
 
+/// `false` and `true` as values made once: switching a module on or off allocates nothing.
+fn shared_bool(b: bool) -> petrel_actors::AnyValue {
+    static VALUES: std::sync::OnceLock<[petrel_actors::AnyValue; 2]> = std::sync::OnceLock::new();
+    let values = VALUES.get_or_init(|| [std::sync::Arc::new(false), std::sync::Arc::new(true)]);
+    values[usize::from(b)].clone()
+}
+
 fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue, stamp: Instant) {
     // Types were checked at init (`from_ron` into the property's own type, `enabled` is bool).
     if let Err(e) = h.set_at(v, stamp) {
@@ -87,32 +96,39 @@ impl MissionEnv<'_> {
 
     /// Counts a call in the action's record and keeps its start time while it runs.
     fn remember(&mut self, name: &str, kind: CallKind) {
-        if !self.memory.actions.contains_key(name) {
-            self.memory
-                .actions
-                .insert(name.to_string(), Default::default());
+        let memory = &mut *self.memory;
+        if !memory.actions.contains_key(name) {
+            memory.actions.insert(name.to_string(), Default::default());
         }
-        let Some(stats) = self.memory.actions.get_mut(name) else {
+        let Some(stats) = memory.actions.get_mut(name) else {
             return;
         };
         match kind {
             CallKind::Start | CallKind::Resume => {
                 stats.starts += 1;
-                self.memory.running.insert(
-                    name.to_string(),
-                    RunningAction {
-                        started_s: self.secs,
-                        ..Default::default()
-                    },
-                );
+                let running = RunningAction {
+                    started_s: self.secs,
+                    ..Default::default()
+                };
+                match memory.running.get_mut(name) {
+                    Some(r) => *r = running,
+                    None => {
+                        // A key an ended action gave back: a start allocates no name.
+                        let mut key = self.keys.pop().unwrap_or_default();
+                        key.clear();
+                        key.push_str(name);
+                        memory.running.insert(key, running);
+                    }
+                }
                 return;
             }
             CallKind::End => stats.ends += 1,
             CallKind::Fail => stats.failures += 1,
             CallKind::Interrupt => stats.interrupts += 1,
         }
-        if let Some(run) = self.memory.running.remove(name) {
+        if let Some((key, run)) = memory.running.remove_entry(name) {
             stats.time_s += (self.secs - run.started_s).max(0.0);
+            self.keys.push(key);
         }
     }
 }

@@ -164,9 +164,12 @@ impl Module for Mission {
         // Whether a round called an action (which may have enabled a module or written its
         // input), and whether this step already let such modules answer.
         let (mut called, mut settled) = (false, false);
+        // Whether the watched properties must be looked at again (see `Run::round`).
+        let mut fresh = true;
         for round in 1.. {
-            let report = run.round(t, &self.flags);
-            if !run.bound.relinks.is_empty() {
+            let report = run.round(t, &self.flags, fresh || ctx.changes_pending());
+            fresh = !run.bound.relinks.is_empty();
+            if fresh {
                 relink(ctx, &mut run.bound.relinks).await;
             }
             fired += report.fired;
@@ -179,6 +182,8 @@ impl Module for Mission {
                 if called && running && !settled {
                     settled = true;
                     if settle(ctx, &self.wake, run).await {
+                        // The changes it took are this step's to read.
+                        fresh = true;
                         continue;
                     }
                 }
@@ -198,17 +203,17 @@ impl Module for Mission {
             // Once per step, however many rounds fired: what the plan left (a call counted in
             // the actions' records, so the memory changed).
             run.save_changed(&self.memory, called);
-            let transitions = (!run.fired.is_empty()).then(|| run.labels(&run.fired));
             let news = run.shown.news(&run.plan, &run.state, &run.memory.marking);
             if news.running {
                 self.running.set(news.texts.running.to_string());
             }
             // Before the marking: a reader following the marking reads the count with it.
             self.fired.set(self.fired.value() + fired as i64);
-            if let Some(transitions) = transitions {
-                self.firings.push(PlanFiring {
+            if !run.fired.is_empty() {
+                let (shown, fired) = (&run.shown, &run.fired);
+                self.firings.push_with(|| PlanFiring {
                     time_s: secs,
-                    transitions,
+                    transitions: shown.labels(fired),
                     marking: news.texts.marking.clone(),
                 });
             }
@@ -338,6 +343,7 @@ impl Mission {
             report: Default::default(),
             fired: Vec::new(),
             flags: Default::default(),
+            keys: Vec::new(),
         };
         let memory = self.memory.get();
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {

@@ -54,6 +54,8 @@ pub(super) struct Run {
     pub fired: Vec<usize>,
     /// `in/conditions` as last read.
     pub flags: FlagsSeen,
+    /// Spare keys for `memory.running` (see [`MissionEnv::keys`]).
+    pub keys: Vec<String>,
 }
 
 /// Plan steps run back to back in one module step at most (see [`Mission::step`]).
@@ -76,8 +78,11 @@ pub(super) struct FlagsSeen {
 }
 
 impl FlagsSeen {
-    /// The current flags of `input`.
-    pub fn current(&mut self, input: &Input<Flags>) -> &Flags {
+    /// The current flags of `input`; unless `fresh`, the flags read last (see [`Run::round`]).
+    pub fn current(&mut self, input: &Input<Flags>, fresh: bool) -> &Flags {
+        if !fresh && self.seen.is_some() {
+            return &self.flags;
+        }
         let version = input.version();
         if self.seen != Some(version) {
             // Read after the version: a write in between is read now and again next time.
@@ -92,18 +97,27 @@ impl Run {
     /// One plan step at time `t`: bring expressions up to date with changed properties, then
     /// step. What it did is left in `self.report`; the transitions it fired are added to
     /// `self.fired` unless the plan fires in a circle (the loop report names those).
-    pub fn round(&mut self, t: StepTime, flags: &Input<Flags>) -> Round {
-        self.refresh(t.now);
+    ///
+    /// `fresh`: a watched property may have changed since the last round (the first round of
+    /// a module step, one after the modules it woke ran, or one after a write that raised the
+    /// mission's signal). Otherwise the properties are not looked at again: nothing the mission
+    /// watches was written, and a write landing meanwhile wakes it again after this step.
+    pub fn round(&mut self, t: StepTime, flags: &Input<Flags>, fresh: bool) -> Round {
+        if fresh {
+            self.refresh_props(t.now);
+        }
+        self.evaluate(t.now);
         let mut env = MissionEnv {
             bound: &mut self.bound,
-            // Read at every round, from the cell only when it changed: an action's `set` may
-            // write the mission's own flags.
-            flags: self.flags.current(flags),
+            // From the cell only when it changed: an action's `set` may write the mission's
+            // own flags (which raises its signal, so the next round is fresh).
+            flags: self.flags.current(flags, fresh),
             now: t.now,
             secs: t.secs,
             stamp: t.stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
+            keys: &mut self.keys,
         };
         // Every condition is known here (unbound atoms read `in/conditions`), so the report's
         // `unknown_conditions` stays empty.
@@ -132,7 +146,7 @@ impl Run {
 
     /// Transitions `fired` as the log and `out/firings` show them (shared, not copied).
     pub fn labels(&self, fired: &[usize]) -> Vec<Arc<str>> {
-        fired.iter().map(|&t| self.shown.label(t).clone()).collect()
+        self.shown.labels(fired)
     }
 
     /// Reports the plan when its rounds fire in a circle without ever waiting.
@@ -159,6 +173,12 @@ impl Run {
 
     /// Brings the expressions up to date with the properties they read, at `now`.
     fn refresh(&mut self, now: Instant) {
+        self.refresh_props(now);
+        self.evaluate(now);
+    }
+
+    /// Feeds the expressions the watched properties that changed since they were last read.
+    fn refresh_props(&mut self, now: Instant) {
         let wall = self.clock.is_wall();
         for (id, h, seen) in &mut self.bound.watched {
             // A lock-free version check first: most rounds change few properties.
@@ -173,6 +193,10 @@ impl Run {
                 .exprs
                 .update(*id, h.type_info(), &s.value, written);
         }
+    }
+
+    /// Evaluates the expressions whose properties changed, and the time-dependent ones.
+    fn evaluate(&mut self, now: Instant) {
         self.bound.exprs.evaluate_into(now, &mut self.changed);
         for &id in &self.changed {
             if let Some(Err(e)) = self.bound.exprs.value(id) {
@@ -311,12 +335,13 @@ impl Run {
         let full = |local: &str| format!("{agent}#{local}");
         let mut env = MissionEnv {
             bound: &mut self.bound,
-            flags: self.flags.current(flags),
+            flags: self.flags.current(flags, true),
             now,
             secs,
             stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
+            keys: &mut self.keys,
         };
         use crate::exec::Environment;
         use crate::label::CallKind;
@@ -384,12 +409,13 @@ impl Run {
         let agent = self.team.agent.clone();
         let mut env = MissionEnv {
             bound: &mut self.bound,
-            flags: self.flags.current(flags),
+            flags: self.flags.current(flags, true),
             now: t.now,
             secs: t.secs,
             stamp: t.stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
+            keys: &mut self.keys,
         };
         self.team.serve.poll(
             |_| (false, true),

@@ -34,9 +34,9 @@ pub(super) struct Shown {
 }
 
 /// What a step has to publish (see [`Shown::news`]).
-pub(super) struct News<'a> {
-    /// The texts of the marking the step left.
-    pub texts: &'a Texts,
+pub(super) struct News {
+    /// The texts of the marking the step left (shared with the memo).
+    pub texts: Texts,
     /// The marking text differs from the one published last (or none was).
     pub marking: bool,
     /// So does the running text.
@@ -58,10 +58,15 @@ impl Shown {
         &self.labels[t]
     }
 
+    /// Transitions `fired` as the log and `out/firings` show them (shared, not copied).
+    pub fn labels(&self, fired: &[usize]) -> Vec<Arc<str>> {
+        fired.iter().map(|&t| self.labels[t].clone()).collect()
+    }
+
     /// The texts of `state` (marking key `key`), and which of them changed since the last
     /// call: the mission writes only those, without reading back what it wrote (a write wakes
     /// every reader; a read and compare per output cost as much as the write).
-    pub fn news(&mut self, plan: &Plan, state: &PlanState, key: &[u32]) -> News<'_> {
+    pub fn news(&mut self, plan: &Plan, state: &PlanState, key: &[u32]) -> News {
         self.texts(plan, state, key);
         let mut published = self.published.take().unwrap_or_default();
         let texts = &self.texts[key];
@@ -75,7 +80,7 @@ impl Shown {
         published.extend_from_slice(key);
         self.published = Some(published);
         News {
-            texts,
+            texts: texts.clone(),
             marking,
             running,
         }
