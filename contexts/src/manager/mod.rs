@@ -43,8 +43,12 @@ impl PropertyType for ContextChange {
     const TYPE_NAME: &'static str = "ContextChange";
 }
 
+/// The handles looked up for a rules file, by address: looked up at every effect applied, so
+/// hashed with a fast hasher.
+type Handles = foldhash::HashMap<Arc<str>, AnyHandle>;
+
 /// The handles looked up for a rules file, as the engine's schema.
-impl Schema for HashMap<Arc<str>, AnyHandle> {
+impl<S: std::hash::BuildHasher> Schema for HashMap<Arc<str>, AnyHandle, S> {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
         self.get(path).map(|h| (h.type_info(), h.value()))
     }
@@ -125,7 +129,7 @@ pub struct ContextManager {
     /// Properties the rules read.
     watched: Vec<Watched>,
     /// Every property the rules mention, by address.
-    handles: HashMap<Arc<str>, AnyHandle>,
+    handles: Handles,
     /// What the rules changed, as it was before: values, links, running states.
     /// In address order, so `state/memory` lists them the same way at every save.
     original_values: BTreeMap<Arc<str>, AnyValue>,
@@ -133,6 +137,13 @@ pub struct ContextManager {
     original_runs: BTreeMap<Arc<str>, bool>,
     /// `state/memory`: what a restarted manager goes on from.
     memory: Output<ContextMemory>,
+    /// The originals' config form, kept by target with the value it was made from: an
+    /// original put back and taken again is the same value, converted once.
+    originals_shown: foldhash::HashMap<Arc<str>, (AnyValue, ron::Value)>,
+    /// The `out/active` text published two switches ago, to fill in place.
+    active_spare: Option<Arc<String>>,
+    /// The engine's actions, a buffer reused from step to step.
+    actions: Vec<Action>,
     /// The memory published two saves ago, to fill in place (see `save_memory`).
     spare: Option<Arc<ContextMemory>>,
     reload_seen: u64,
@@ -185,7 +196,7 @@ impl Module for ContextManager {
             changes: ports.queue_out("out/changes", 256, "context activations and deactivations"),
             engine: None,
             watched: Vec::new(),
-            handles: HashMap::new(),
+            handles: Handles::default(),
             original_values: BTreeMap::new(),
             original_links: BTreeMap::new(),
             original_runs: BTreeMap::new(),
@@ -195,6 +206,9 @@ impl Module for ContextManager {
                 "the active contexts, what they changed and what was there before: a restarted manager goes on from here",
             ),
             spare: None,
+            originals_shown: Default::default(),
+            active_spare: None,
+            actions: Vec::new(),
             reload_seen: 0,
             started: None,
             self_undoing: Vec::new(),
@@ -246,9 +260,10 @@ impl Module for ContextManager {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let reload = self.reload.read();
-        if reload.version != self.reload_seen {
-            self.reload_seen = reload.version;
+        // The version alone, read without a lock: a reload is rare.
+        let reload = self.reload.version();
+        if reload != self.reload_seen {
+            self.reload_seen = reload;
             self.reload_rules(ctx).await;
         }
         let Some(engine) = self.engine.as_mut() else {
@@ -266,7 +281,9 @@ impl Module for ContextManager {
                 engine.update_prop(w.prop, w.handle.type_info(), &sample.value, written);
             }
         }
-        let actions = engine.step(now);
+        // The actions buffer is reused from step to step (taken while `apply` borrows self).
+        let mut actions = std::mem::take(&mut self.actions);
+        engine.step_into(now, &mut actions);
         let evaluations = engine.evaluations() as i64;
         let mut switched = false;
         for action in &actions {
@@ -280,6 +297,8 @@ impl Module for ContextManager {
         if !actions.is_empty() {
             self.save_memory();
         }
+        actions.clear();
+        self.actions = actions;
         self.evaluations.set(evaluations);
         Ok(())
     }
@@ -300,7 +319,7 @@ impl ContextManager {
             return Err("params/rules is empty; expected the path of a context rules file".into());
         }
         let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
-        let mut handles = HashMap::new();
+        let mut handles = Handles::default();
         for address in mentioned(&loaded) {
             // A queue's latest item too, for expressions such as `min(scan/out/ranges) < 0.6`.
             if let Ok(handle) = ctx.blackboard().expr_handle(&address).await {
@@ -357,15 +376,23 @@ impl ContextManager {
         }
     }
 
-    /// Publishes the active contexts in `out/active`.
+    /// Publishes the active contexts in `out/active`, if they changed. Two buffers in turn,
+    /// like `state/memory`: the text published two switches ago is written in place once no
+    /// reader holds it, so a context switching on and off allocates nothing.
     fn publish_active(&mut self) {
-        let mut active = String::new();
+        let mut next = self.active_spare.take().unwrap_or_default();
+        let active = Arc::make_mut(&mut next);
+        active.clear();
         for (k, name) in self.engine.iter().flat_map(Engine::active).enumerate() {
             if k > 0 {
                 active.push_str(", ");
             }
             active.push_str(name);
         }
-        self.active.set(active);
+        if *next == *self.active.get() {
+            self.active_spare = Some(next);
+            return;
+        }
+        self.active_spare = Some(self.active.swap(next));
     }
 }
