@@ -42,6 +42,25 @@ pub trait Environment {
     /// from scratch (step count 0); after `End` / `Fail` it is done with;
     /// after `Interrupt` it is kept for a later `Resume` or `Start`.
     fn call(&mut self, name: &str, kind: CallKind);
+
+    /// [`condition`](Self::condition) `plan.conditions()[c]`. The step asks by position, so
+    /// an environment that resolved a plan's names once answers without looking a name up
+    /// at every guard; by default it asks by name.
+    fn condition_at(&mut self, plan: &Plan, c: usize) -> Option<bool> {
+        self.condition(&plan.conditions()[c])
+    }
+
+    /// [`action_finished`](Self::action_finished) of `plan.executables()[e]` (see
+    /// [`condition_at`](Self::condition_at)).
+    fn action_finished_at(&mut self, plan: &Plan, e: usize) -> bool {
+        self.action_finished(&plan.executables()[e].name)
+    }
+
+    /// [`action_failed`](Self::action_failed) of `plan.executables()[e]` (see
+    /// [`condition_at`](Self::condition_at)).
+    fn action_failed_at(&mut self, plan: &Plan, e: usize) -> bool {
+        self.action_failed(&plan.executables()[e].name)
+    }
 }
 
 /// Where a plan stands.
@@ -519,7 +538,7 @@ fn unhandled_failure(
             let exe = &plan.executables()[e];
             match (&exe.subplan, state.subs[e].as_deref()) {
                 (Some(sp), Some(sub)) => sub.status(sp) == PlanStatus::Fail,
-                _ => env.action_failed(&exe.name),
+                _ => env.action_failed_at(plan, e),
             }
         })
 }
@@ -545,19 +564,17 @@ fn guard(
             };
             match (&exe.subplan, state.subs[e].as_deref()) {
                 (Some(sp), Some(sub)) => sub.status(sp) == want,
-                _ if want == PlanStatus::Goal => env.action_finished(&exe.name),
-                _ => env.action_failed(&exe.name),
+                _ if want == PlanStatus::Goal => env.action_finished_at(plan, e),
+                _ => env.action_failed_at(plan, e),
             }
         }
-        Atom::External(c) => {
+        Atom::External(c) => env.condition_at(plan, c).unwrap_or_else(|| {
             let name = &plan.conditions()[c];
-            env.condition(name).unwrap_or_else(|| {
-                if state.reported.insert(name.clone()) {
-                    report.unknown_conditions.push(name.clone());
-                }
-                false
-            })
-        }
+            if state.reported.insert(name.clone()) {
+                report.unknown_conditions.push(name.clone());
+            }
+            false
+        }),
     })
 }
 

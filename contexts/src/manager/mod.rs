@@ -142,8 +142,12 @@ pub struct ContextManager {
     originals_shown: foldhash::HashMap<Arc<str>, (AnyValue, ron::Value)>,
     /// The `out/active` text published two switches ago, to fill in place.
     active_spare: Option<Arc<String>>,
+    /// The `out/active` text published last, with the version of the output it left.
+    active_shown: Option<(Arc<String>, u64)>,
     /// The engine's actions, a buffer reused from step to step.
     actions: Vec<Action>,
+    /// When `out/evaluations` was last written.
+    evaluations_at: Option<Instant>,
     /// The memory published two saves ago, to fill in place (see `save_memory`).
     spare: Option<Arc<ContextMemory>>,
     reload_seen: u64,
@@ -192,7 +196,7 @@ impl Module for ContextManager {
                 String::new(),
                 "problems of the last (re)load, one per line",
             ),
-            evaluations: ports.output("out/evaluations", 0, "expression evaluations so far"),
+            evaluations: ports.output("out/evaluations", 0, "expression evaluations so far (a statistic: written at most every 100 ms, and when the manager stops)"),
             changes: ports.queue_out("out/changes", 256, "context activations and deactivations"),
             engine: None,
             watched: Vec::new(),
@@ -208,7 +212,9 @@ impl Module for ContextManager {
             spare: None,
             originals_shown: Default::default(),
             active_spare: None,
+            active_shown: None,
             actions: Vec::new(),
+            evaluations_at: None,
             reload_seen: 0,
             started: None,
             self_undoing: Vec::new(),
@@ -299,10 +305,26 @@ impl Module for ContextManager {
         }
         actions.clear();
         self.actions = actions;
-        self.evaluations.set(evaluations);
+        // A statistic, like a module's stats: a write per step (a lock, a wake-up check, a
+        // value) cost as much as a context switch's own bookkeeping.
+        let at = ctx.now();
+        if (self.evaluations_at).is_none_or(|t| at.duration_since(t) >= STATS_EVERY) {
+            self.evaluations_at = Some(at);
+            self.evaluations.set(evaluations);
+        }
+        Ok(())
+    }
+
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        if let Some(engine) = &self.engine {
+            self.evaluations.set(engine.evaluations() as i64);
+        }
         Ok(())
     }
 }
+
+/// `out/evaluations` is written at most this often.
+const STATS_EVERY: Duration = Duration::from_millis(100);
 
 impl ContextManager {
     /// Reads the rules file and builds an engine, looking up what it mentions.
@@ -389,10 +411,17 @@ impl ContextManager {
             }
             active.push_str(name);
         }
-        if *next == *self.active.get() {
+        // Compared with what this manager wrote last, unless someone wrote since.
+        let unchanged = match &self.active_shown {
+            Some((shown, version)) if *version == self.active.version() => *shown == next,
+            _ => *self.active.get() == *next,
+        };
+        if unchanged {
             self.active_spare = Some(next);
             return;
         }
-        self.active_spare = Some(self.active.swap(next));
+        let replaced = self.active.swap(next.clone());
+        self.active_shown = Some((next, self.active.version()));
+        self.active_spare = Some(replaced);
     }
 }

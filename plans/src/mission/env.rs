@@ -13,6 +13,8 @@ use crate::remote::Dispatch;
 
 /// One step's view of the world; expression values were brought up to date before the step.
 pub(crate) struct MissionEnv<'a> {
+    /// The top plan, whose names `bound.at` has by position.
+    pub plan: &'a crate::model::Plan,
     pub bound: &'a mut Bound,
     pub flags: &'a Flags,
     /// The mission clock now, as an instant and in seconds.
@@ -90,6 +92,11 @@ fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue, stamp: Instan
 }
 
 impl MissionEnv<'_> {
+    /// Whether `plan` is the top plan (a sub-plan's names are looked up by name).
+    fn top(&self, plan: &crate::model::Plan) -> bool {
+        std::ptr::eq(plan, self.plan)
+    }
+
     fn expr(&self, id: Option<petrel_actors::expr::ExprId>) -> bool {
         id.and_then(|id| self.bound.exprs.bool(id)).unwrap_or(false)
     }
@@ -141,6 +148,32 @@ impl Environment for MissionEnv<'_> {
                 Some(self.dispatch.condition(name).unwrap_or(false))
             }
             None => Some(self.flags.0.get(name).copied().unwrap_or(false)),
+        }
+    }
+
+    fn condition_at(&mut self, plan: &crate::model::Plan, c: usize) -> Option<bool> {
+        match self
+            .top(plan)
+            .then(|| self.bound.at.conditions[c])
+            .flatten()
+        {
+            Some(id) => Some(self.bound.exprs.bool(id).unwrap_or(false)),
+            None => self.condition(&plan.conditions()[c]),
+        }
+    }
+
+    fn action_finished_at(&mut self, plan: &crate::model::Plan, e: usize) -> bool {
+        match self.top(plan).then(|| self.bound.at.actions[e]).flatten() {
+            Some(a) if a.unbound => true,
+            Some(a) => self.expr(a.finished),
+            None => self.action_finished(&plan.executables()[e].name),
+        }
+    }
+
+    fn action_failed_at(&mut self, plan: &crate::model::Plan, e: usize) -> bool {
+        match self.top(plan).then(|| self.bound.at.actions[e]).flatten() {
+            Some(a) => self.expr(a.failed),
+            None => self.action_failed(&plan.executables()[e].name),
         }
     }
 

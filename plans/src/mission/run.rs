@@ -108,6 +108,7 @@ impl Run {
         }
         self.evaluate(t.now);
         let mut env = MissionEnv {
+            plan: &self.plan,
             bound: &mut self.bound,
             // From the cell only when it changed: an action's `set` may write the mission's
             // own flags (which raises its signal, so the next round is fresh).
@@ -334,6 +335,7 @@ impl Run {
         }
         let full = |local: &str| format!("{agent}#{local}");
         let mut env = MissionEnv {
+            plan: &self.plan,
             bound: &mut self.bound,
             flags: self.flags.current(flags, true),
             now,
@@ -408,6 +410,7 @@ impl Run {
         self.refresh(t.now);
         let agent = self.team.agent.clone();
         let mut env = MissionEnv {
+            plan: &self.plan,
             bound: &mut self.bound,
             flags: self.flags.current(flags, true),
             now: t.now,
