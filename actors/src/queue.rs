@@ -78,6 +78,9 @@ pub(crate) struct QueueCore {
     /// value (an expression: `min(robot/out/laserScan.ranges) < 0.6`); until then a push
     /// costs nothing more.
     latest: std::sync::OnceLock<Arc<crate::cell::Endpoint>>,
+    /// Whether the queue has a reader, readable without the lock (`push_with`); set and
+    /// cleared under it.
+    read: AtomicBool,
 }
 
 impl QueueCore {
@@ -92,6 +95,7 @@ impl QueueCore {
                 readers: Vec::new(),
             }),
             latest: std::sync::OnceLock::new(),
+            read: AtomicBool::new(false),
         })
     }
 
@@ -128,12 +132,11 @@ impl QueueCore {
     /// no reader (and no expression reading its latest item) drops what is pushed, so a
     /// writer whose items cost something to build need not build them.
     pub fn push_with(&self, make: impl FnOnce() -> AnyValue, stamp: Instant) {
-        if self.latest.get().is_none() {
-            let mut inner = self.inner.lock();
-            if inner.readers.is_empty() {
-                inner.next_seq += 1;
-                return;
-            }
+        // No lock: a reader attaching meanwhile starts after this push, which it would not
+        // have seen anyway (a push with no reader keeps nothing; its sequence number is not
+        // taken, which no one can tell).
+        if self.latest.get().is_none() && !self.read.load(Ordering::Acquire) {
+            return;
         }
         self.push(make(), stamp)
     }
@@ -179,6 +182,7 @@ impl QueueCore {
     fn attach(&self, id: u64, signal: Option<Arc<Signal>>, dropped: Arc<Endpoint>) {
         let mut inner = self.inner.lock();
         let cursor = inner.next_seq;
+        self.read.store(true, Ordering::Release);
         inner.readers.push(ReaderEntry {
             id,
             cursor,
@@ -191,6 +195,8 @@ impl QueueCore {
     fn detach(&self, id: u64) {
         let mut inner = self.inner.lock();
         inner.readers.retain(|r| r.id != id);
+        self.read
+            .store(!inner.readers.is_empty(), Ordering::Release);
         inner.trim();
     }
 

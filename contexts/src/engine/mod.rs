@@ -242,9 +242,10 @@ impl Engine {
             if !wants_switch {
                 continue;
             }
-            if rule
-                .since
-                .is_some_and(|t| now.duration_since(t) < rule.min_dwell)
+            if !rule.min_dwell.is_zero()
+                && rule
+                    .since
+                    .is_some_and(|t| now.duration_since(t) < rule.min_dwell)
             {
                 self.waiting.push(i);
                 continue;

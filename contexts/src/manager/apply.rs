@@ -47,7 +47,9 @@ impl ContextManager {
                 value,
                 context,
             } => {
-                let handle = self.handle(target)?.clone();
+                // Borrowed from its field, so the originals below can be written meanwhile.
+                let handle = (self.handles.get(target))
+                    .with_context(|| format!("`{target}` is not in the blackboard"))?;
                 let info = handle.type_info();
                 let old = handle.value();
                 let new = to_property(value, info).map_err(|e| anyhow!("{target}: {e}"))?;

@@ -49,7 +49,8 @@ impl ContextManager {
 
     fn fill(&self, memory: &mut ContextMemory) {
         let rules = self.rules.get();
-        if memory.rules != *rules {
+        // The same text is the same path (comparing paths walks their components).
+        if memory.rules.as_path().as_os_str() != rules.as_path().as_os_str() {
             memory.rules = (*rules).clone();
         }
         if let Some(engine) = &self.engine {

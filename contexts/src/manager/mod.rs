@@ -276,7 +276,8 @@ impl Module for ContextManager {
             return Ok(());
         };
         let first = ctx.cause().first();
-        let now = self.clock.now(ctx.now());
+        let stamp = ctx.now();
+        let now = self.clock.now(stamp);
         let wall = self.clock.is_wall();
         for w in &mut self.watched {
             if w.handle.version() != w.seen || first {
@@ -307,9 +308,8 @@ impl Module for ContextManager {
         self.actions = actions;
         // A statistic, like a module's stats: a write per step (a lock, a wake-up check, a
         // value) cost as much as a context switch's own bookkeeping.
-        let at = ctx.now();
-        if (self.evaluations_at).is_none_or(|t| at.duration_since(t) >= STATS_EVERY) {
-            self.evaluations_at = Some(at);
+        if (self.evaluations_at).is_none_or(|t| stamp.duration_since(t) >= STATS_EVERY) {
+            self.evaluations_at = Some(stamp);
             self.evaluations.set(evaluations);
         }
         Ok(())
