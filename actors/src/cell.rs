@@ -445,4 +445,40 @@ mod tests {
         assert_eq!(s.take(), cause::CHANGE);
         assert_eq!(read_f64(&input), 6.0);
     }
+
+    #[test]
+    fn relinks_back_and_forth_keep_reads_and_wakes_right_and_the_cells_few() {
+        let input = f64_endpoint("b/in/x", 0.0);
+        let (one, two) = (f64_endpoint("a/out/x", 1.0), f64_endpoint("c/out/x", 2.0));
+        let s = Arc::new(Signal::default());
+        input.subscribe(&s);
+        for _ in 0..10 {
+            input.retarget(one.own.clone());
+            assert_eq!(read_f64(&input), 1.0);
+            input.retarget(two.own.clone());
+            assert_eq!(read_f64(&input), 2.0);
+        }
+        s.take();
+        one.write(Arc::new(5.0));
+        assert_eq!(s.take(), 0, "no longer linked to `one`");
+        two.write(Arc::new(6.0));
+        assert_eq!(s.take(), cause::CHANGE);
+        assert_eq!(read_f64(&input), 6.0);
+        assert_eq!(input.version(), two.version());
+        // Its own cell and the two it was linked to, however many relinks.
+        assert_eq!(input.targets.lock().len(), 3);
+    }
+
+    #[test]
+    fn changes_pending_says_a_change_came_without_taking_it() {
+        let e = f64_endpoint("a/out/x", 1.0);
+        let s = Arc::new(Signal::default());
+        e.subscribe(&s);
+        assert!(!s.changes_pending());
+        e.write(Arc::new(2.0));
+        assert!(s.changes_pending());
+        assert!(s.changes_pending(), "still pending: not taken");
+        assert_eq!(s.take(), cause::CHANGE);
+        assert!(!s.changes_pending());
+    }
 }

@@ -432,4 +432,44 @@ mod tests {
         assert_eq!(s.take(), cause::ITEMS);
         assert_eq!(seqs(&r), vec![101]);
     }
+
+    #[test]
+    fn an_item_nobody_reads_is_not_made_and_one_read_is_delivered() {
+        let q = QueueCore::new("w/out/q", TypeInfo::of::<i64>(), 8);
+        let made = std::cell::Cell::new(0);
+        let make = |v: i64| {
+            made.set(made.get() + 1);
+            Arc::new(v) as AnyValue
+        };
+        q.push_with(|| make(1), Instant::now());
+        assert_eq!(made.get(), 0, "no reader: not made");
+        let r = reader(1, &q);
+        q.push_with(|| make(2), Instant::now());
+        assert_eq!(made.get(), 1);
+        assert_eq!(seqs(&r), [2]);
+        drop(r);
+        q.push_with(|| make(3), Instant::now());
+        assert_eq!(made.get(), 1, "the reader left: not made");
+    }
+
+    #[test]
+    fn an_acknowledgement_with_nothing_taken_changes_nothing() {
+        let q = QueueCore::new("w/out/q", TypeInfo::of::<i64>(), 8);
+        let r = reader(1, &q);
+        r.ack();
+        q.push(Arc::new(1_i64), Instant::now());
+        r.ack();
+        let mut out = Vec::new();
+        r.take(usize::MAX, &mut out);
+        assert_eq!(out.len(), 1, "acknowledging before taking skips nothing");
+        r.rewind();
+        out.clear();
+        r.take(usize::MAX, &mut out);
+        assert_eq!(out.len(), 1, "taken but not acknowledged: delivered again");
+        r.ack();
+        r.rewind();
+        out.clear();
+        r.take(usize::MAX, &mut out);
+        assert!(out.is_empty(), "acknowledged: not delivered again");
+    }
 }
