@@ -4,7 +4,7 @@
 //! move through these cells without any actor round trip. A write replaces the cell's value
 //! under a short lock and raises the [`Signal`] of every module watching the cell.
 
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicU8, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicPtr, AtomicU32, AtomicU64, AtomicU8, Ordering};
 use std::sync::Arc;
 use std::task::Poll;
 
@@ -144,6 +144,11 @@ impl Signal {
         self.causes.fetch_and(!cause::CHANGE, Ordering::AcqRel) & cause::CHANGE != 0
     }
 
+    /// Whether property changes were raised since the causes were last taken.
+    pub fn changes_pending(&self) -> bool {
+        self.causes.load(Ordering::Acquire) & cause::CHANGE != 0
+    }
+
     /// Whether step causes wait to be taken: the module will step again at once.
     pub fn pending(&self) -> bool {
         self.causes.load(Ordering::Acquire) & cause::STEPS != 0
@@ -261,7 +266,14 @@ pub(crate) struct Endpoint {
     /// `module/path`, for traces and errors.
     pub key: Arc<str>,
     pub own: Arc<Cell>,
-    resolved: ArcSwap<Cell>,
+    /// The cell reads and writes go to: one of `targets`, so it lives as long as the endpoint.
+    /// Every read and write of a property loads it, so it is a plain atomic pointer: an
+    /// `ArcSwap` load (a hazard slot taken and given back, two locked instructions) cost as
+    /// much as the cell's lock.
+    resolved: AtomicPtr<Cell>,
+    /// Every cell this endpoint has resolved to, kept while it lives. Relinks are rare and
+    /// go back and forth between a few cells, so this stays as short as the cells linked.
+    targets: Mutex<Vec<Arc<Cell>>>,
     subscribers: Mutex<Vec<(Arc<Signal>, u8)>>,
 }
 
@@ -270,10 +282,20 @@ impl Endpoint {
         let own = Cell::new(type_info, default);
         Arc::new(Endpoint {
             key: key.into(),
-            resolved: ArcSwap::new(own.clone()),
+            resolved: AtomicPtr::new(Arc::as_ptr(&own).cast_mut()),
+            targets: Mutex::new(vec![own.clone()]),
             own,
             subscribers: Mutex::new(Vec::new()),
         })
+    }
+
+    /// The cell reads and writes go to now.
+    #[inline]
+    fn target(&self) -> &Cell {
+        // SAFETY: `resolved` only ever holds a pointer to a cell in `targets`, which holds a
+        // reference to every such cell until the endpoint is dropped, and `&self` outlives
+        // the borrow returned.
+        unsafe { &*self.resolved.load(Ordering::Acquire) }
     }
 
     pub fn type_info(&self) -> TypeInfo {
@@ -282,18 +304,18 @@ impl Endpoint {
 
     #[inline]
     pub fn read(&self) -> Slot {
-        self.resolved.load().read()
+        self.target().read()
     }
 
     #[inline]
     pub fn value(&self) -> AnyValue {
-        self.resolved.load().value()
+        self.target().value()
     }
 
     /// See [`Cell::with_value`].
     #[inline]
     pub fn with_value<R>(&self, f: impl FnOnce(&AnyValue) -> R) -> R {
-        self.resolved.load().with_value(f)
+        self.target().with_value(f)
     }
 
     #[inline]
@@ -304,19 +326,19 @@ impl Endpoint {
     /// Writes a value stamped `written` (a module's step time).
     #[inline]
     pub fn write_at(&self, value: AnyValue, written: Instant) {
-        self.resolved.load().write(value, written)
+        self.target().write(value, written)
     }
 
     /// Writes a value stamped `written` and returns the value it replaced.
     #[inline]
     pub fn replace_at(&self, value: AnyValue, written: Instant) -> AnyValue {
-        self.resolved.load().replace(value, written)
+        self.target().replace(value, written)
     }
 
     /// The version of the value seen through this endpoint, without locking it.
     #[inline]
     pub fn version(&self) -> u64 {
-        self.resolved.load().version()
+        self.target().version()
     }
 
     /// Wakes `signal` whenever the value seen through this endpoint changes, including after a relink.
@@ -332,7 +354,7 @@ impl Endpoint {
             .any(|(s, c)| Arc::ptr_eq(s, signal) && *c == cause)
         {
             subs.push((signal.clone(), cause));
-            self.resolved.load().add_watcher(signal, cause);
+            self.target().add_watcher(signal, cause);
         }
     }
 
@@ -344,17 +366,30 @@ impl Endpoint {
             .position(|(s, c)| Arc::ptr_eq(s, signal) && *c == cause)
         {
             subs.swap_remove(i);
-            self.resolved.load().remove_watcher(signal, cause);
+            self.target().remove_watcher(signal, cause);
         }
     }
 
     /// Points the endpoint at another cell; subscribers follow, and are woken if the value they see changed.
     pub fn retarget(&self, target: Arc<Cell>) {
         let subs = self.subscribers.lock();
-        let old = self.resolved.swap(target.clone());
-        if Arc::ptr_eq(&old, &target) {
+        let old = {
+            let mut targets = self.targets.lock();
+            if !targets.iter().any(|t| Arc::ptr_eq(t, &target)) {
+                targets.push(target.clone());
+            }
+            let old = self
+                .resolved
+                .swap(Arc::as_ptr(&target).cast_mut(), Ordering::AcqRel);
+            // Always found: every cell `resolved` pointed to is in `targets`.
+            targets
+                .iter()
+                .find(|t| std::ptr::eq(Arc::as_ptr(t), old))
+                .cloned()
+        };
+        let Some(old) = old.filter(|old| !Arc::ptr_eq(old, &target)) else {
             return;
-        }
+        };
         for (s, c) in subs.iter() {
             old.remove_watcher(s, *c);
             target.add_watcher(s, *c);
@@ -409,5 +444,41 @@ mod tests {
         source.write(Arc::new(6.0));
         assert_eq!(s.take(), cause::CHANGE);
         assert_eq!(read_f64(&input), 6.0);
+    }
+
+    #[test]
+    fn relinks_back_and_forth_keep_reads_and_wakes_right_and_the_cells_few() {
+        let input = f64_endpoint("b/in/x", 0.0);
+        let (one, two) = (f64_endpoint("a/out/x", 1.0), f64_endpoint("c/out/x", 2.0));
+        let s = Arc::new(Signal::default());
+        input.subscribe(&s);
+        for _ in 0..10 {
+            input.retarget(one.own.clone());
+            assert_eq!(read_f64(&input), 1.0);
+            input.retarget(two.own.clone());
+            assert_eq!(read_f64(&input), 2.0);
+        }
+        s.take();
+        one.write(Arc::new(5.0));
+        assert_eq!(s.take(), 0, "no longer linked to `one`");
+        two.write(Arc::new(6.0));
+        assert_eq!(s.take(), cause::CHANGE);
+        assert_eq!(read_f64(&input), 6.0);
+        assert_eq!(input.version(), two.version());
+        // Its own cell and the two it was linked to, however many relinks.
+        assert_eq!(input.targets.lock().len(), 3);
+    }
+
+    #[test]
+    fn changes_pending_says_a_change_came_without_taking_it() {
+        let e = f64_endpoint("a/out/x", 1.0);
+        let s = Arc::new(Signal::default());
+        e.subscribe(&s);
+        assert!(!s.changes_pending());
+        e.write(Arc::new(2.0));
+        assert!(s.changes_pending());
+        assert!(s.changes_pending(), "still pending: not taken");
+        assert_eq!(s.take(), cause::CHANGE);
+        assert!(!s.changes_pending());
     }
 }

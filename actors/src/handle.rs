@@ -71,6 +71,13 @@ macro_rules! read_methods {
             pub fn key(&self) -> &str {
                 &self.ep.key
             }
+
+            /// How many times the value seen through this handle was written, read without a
+            /// lock: a cheap "did it change?" check before reading it.
+            #[inline]
+            pub fn version(&self) -> u64 {
+                self.ep.version()
+            }
         }
 
         impl<T: PropertyType + Copy> $handle<T> {
@@ -300,6 +307,14 @@ impl<T: PropertyType> QueueWriter<T> {
     /// Appends an already shared item without copying it.
     pub fn push_shared(&self, value: Arc<T>) {
         self.core.push(value, self.clock.now())
+    }
+
+    /// Appends the item `make` builds, only if the queue has a reader (a module linked to it,
+    /// a recorder's or a console's tap, an expression): items nobody reads are dropped, so
+    /// they need not be built.
+    pub fn push_with(&self, make: impl FnOnce() -> T) {
+        self.core
+            .push_with(|| Arc::new(make()) as AnyValue, self.clock.now())
     }
 
     /// Items held for readers that have not consumed them yet.

@@ -12,6 +12,7 @@
 //! the items of the step that failed are delivered again (unless evicted by capacity).
 
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use arc_swap::ArcSwap;
@@ -77,6 +78,9 @@ pub(crate) struct QueueCore {
     /// value (an expression: `min(robot/out/laserScan.ranges) < 0.6`); until then a push
     /// costs nothing more.
     latest: std::sync::OnceLock<Arc<crate::cell::Endpoint>>,
+    /// Whether the queue has a reader, readable without the lock (`push_with`); set and
+    /// cleared under it.
+    read: AtomicBool,
 }
 
 impl QueueCore {
@@ -91,6 +95,7 @@ impl QueueCore {
                 readers: Vec::new(),
             }),
             latest: std::sync::OnceLock::new(),
+            read: AtomicBool::new(false),
         })
     }
 
@@ -121,6 +126,19 @@ impl QueueCore {
     /// Items currently held (not yet consumed by every reader).
     pub fn len(&self) -> usize {
         self.inner.lock().items.len()
+    }
+
+    /// Like [`push`](Self::push), making the item only if someone will see it: a queue with
+    /// no reader (and no expression reading its latest item) drops what is pushed, so a
+    /// writer whose items cost something to build need not build them.
+    pub fn push_with(&self, make: impl FnOnce() -> AnyValue, stamp: Instant) {
+        // No lock: a reader attaching meanwhile starts after this push, which it would not
+        // have seen anyway (a push with no reader keeps nothing; its sequence number is not
+        // taken, which no one can tell).
+        if self.latest.get().is_none() && !self.read.load(Ordering::Acquire) {
+            return;
+        }
+        self.push(make(), stamp)
     }
 
     pub fn push(&self, value: AnyValue, stamp: Instant) {
@@ -164,6 +182,7 @@ impl QueueCore {
     fn attach(&self, id: u64, signal: Option<Arc<Signal>>, dropped: Arc<Endpoint>) {
         let mut inner = self.inner.lock();
         let cursor = inner.next_seq;
+        self.read.store(true, Ordering::Release);
         inner.readers.push(ReaderEntry {
             id,
             cursor,
@@ -176,6 +195,8 @@ impl QueueCore {
     fn detach(&self, id: u64) {
         let mut inner = self.inner.lock();
         inner.readers.retain(|r| r.id != id);
+        self.read
+            .store(!inner.readers.is_empty(), Ordering::Release);
         inner.trim();
     }
 
@@ -252,6 +273,9 @@ pub(crate) struct ReaderEndpoint {
     source: ArcSwap<QueueCore>,
     signal: Mutex<Option<Arc<Signal>>>,
     pub dropped: Arc<Endpoint>,
+    /// Items were taken since the last acknowledgement: without, an acknowledgement (after
+    /// every step of the module) has nothing to do and takes no lock.
+    unacked: AtomicBool,
 }
 
 impl ReaderEndpoint {
@@ -271,6 +295,7 @@ impl ReaderEndpoint {
             source: ArcSwap::new(source),
             signal: Mutex::new(None),
             dropped,
+            unacked: AtomicBool::new(false),
         })
     }
 
@@ -296,7 +321,11 @@ impl ReaderEndpoint {
     }
 
     pub fn take(&self, max: usize, out: &mut Vec<QueueItem>) {
-        self.source.load().take(self.id, max, out)
+        let before = out.len();
+        self.source.load().take(self.id, max, out);
+        if out.len() > before {
+            self.unacked.store(true, Ordering::Release);
+        }
     }
 
     pub fn pending(&self) -> usize {
@@ -304,7 +333,11 @@ impl ReaderEndpoint {
     }
 
     pub fn ack(&self) {
-        self.source.load().ack(self.id)
+        // Only taking moves the delivery cursor past the acknowledged one (an eviction moves
+        // both), so with nothing taken there is nothing to acknowledge.
+        if self.unacked.swap(false, Ordering::AcqRel) {
+            self.source.load().ack(self.id)
+        }
     }
 
     pub fn rewind(&self) {
@@ -398,5 +431,45 @@ mod tests {
         q2.push(Arc::new(101_i64), Instant::now());
         assert_eq!(s.take(), cause::ITEMS);
         assert_eq!(seqs(&r), vec![101]);
+    }
+
+    #[test]
+    fn an_item_nobody_reads_is_not_made_and_one_read_is_delivered() {
+        let q = QueueCore::new("w/out/q", TypeInfo::of::<i64>(), 8);
+        let made = std::cell::Cell::new(0);
+        let make = |v: i64| {
+            made.set(made.get() + 1);
+            Arc::new(v) as AnyValue
+        };
+        q.push_with(|| make(1), Instant::now());
+        assert_eq!(made.get(), 0, "no reader: not made");
+        let r = reader(1, &q);
+        q.push_with(|| make(2), Instant::now());
+        assert_eq!(made.get(), 1);
+        assert_eq!(seqs(&r), [2]);
+        drop(r);
+        q.push_with(|| make(3), Instant::now());
+        assert_eq!(made.get(), 1, "the reader left: not made");
+    }
+
+    #[test]
+    fn an_acknowledgement_with_nothing_taken_changes_nothing() {
+        let q = QueueCore::new("w/out/q", TypeInfo::of::<i64>(), 8);
+        let r = reader(1, &q);
+        r.ack();
+        q.push(Arc::new(1_i64), Instant::now());
+        r.ack();
+        let mut out = Vec::new();
+        r.take(usize::MAX, &mut out);
+        assert_eq!(out.len(), 1, "acknowledging before taking skips nothing");
+        r.rewind();
+        out.clear();
+        r.take(usize::MAX, &mut out);
+        assert_eq!(out.len(), 1, "taken but not acknowledged: delivered again");
+        r.ack();
+        r.rewind();
+        out.clear();
+        r.take(usize::MAX, &mut out);
+        assert!(out.is_empty(), "acknowledged: not delivered again");
     }
 }

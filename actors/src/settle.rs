@@ -50,6 +50,18 @@ impl Context {
         }
         signal.take_changes()
     }
+
+    /// Whether a property this module watches was written since its step began (or since
+    /// [`settle`](Self::settle) last took such changes): such a write wakes the module again
+    /// after the step. A step that reads what it watches several times (a mission's plan
+    /// rounds) need not look at each property again while this is false. A single atomic
+    /// load; false outside a step's module.
+    pub fn changes_pending(&self) -> bool {
+        self.settle
+            .signal
+            .as_ref()
+            .is_some_and(|signal| signal.changes_pending())
+    }
 }
 
 /// Pending once, having woken its task: the task goes to the back of its runtime's queue, so

@@ -233,7 +233,7 @@ impl Builder<'_> {
         for t in &mut transitions {
             self.resolve_label(t, &places)?;
         }
-        let hot = Hot::new(&places, &transitions);
+        let hot = Hot::new(&places, &transitions, &self.executables);
         let goal = places
             .iter()
             .enumerate()

@@ -16,8 +16,9 @@
 //! net size, except the goal / fail check (proportional to the number of
 //! goal / fail places).
 
-use std::collections::{BTreeSet, HashSet};
+use std::collections::HashSet;
 use std::fmt;
+use std::sync::Arc;
 
 use crate::hot::Hot;
 use crate::label::CallKind;
@@ -41,6 +42,25 @@ pub trait Environment {
     /// from scratch (step count 0); after `End` / `Fail` it is done with;
     /// after `Interrupt` it is kept for a later `Resume` or `Start`.
     fn call(&mut self, name: &str, kind: CallKind);
+
+    /// [`condition`](Self::condition) `plan.conditions()[c]`. The step asks by position, so
+    /// an environment that resolved a plan's names once answers without looking a name up
+    /// at every guard; by default it asks by name.
+    fn condition_at(&mut self, plan: &Plan, c: usize) -> Option<bool> {
+        self.condition(&plan.conditions()[c])
+    }
+
+    /// [`action_finished`](Self::action_finished) of `plan.executables()[e]` (see
+    /// [`condition_at`](Self::condition_at)).
+    fn action_finished_at(&mut self, plan: &Plan, e: usize) -> bool {
+        self.action_finished(&plan.executables()[e].name)
+    }
+
+    /// [`action_failed`](Self::action_failed) of `plan.executables()[e]` (see
+    /// [`condition_at`](Self::condition_at)).
+    fn action_failed_at(&mut self, plan: &Plan, e: usize) -> bool {
+        self.action_failed(&plan.executables()[e].name)
+    }
 }
 
 /// Where a plan stands.
@@ -68,8 +88,8 @@ impl PlanStatus {
 /// A call made during a step (sub-plans included).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CallRecord {
-    /// Executable name.
-    pub executable: String,
+    /// Executable name (shared with the plan: recording a call does not copy it).
+    pub executable: Arc<str>,
     /// The call.
     pub kind: CallKind,
 }
@@ -99,7 +119,9 @@ pub struct StepReport {
 #[derive(Debug, Clone)]
 pub struct PlanState {
     tokens: Vec<u32>,
-    marked: BTreeSet<u32>,
+    /// The marked places, sorted: a few words a step walks several times, cheaper to walk,
+    /// insert into and remove from than a tree while few places are marked (the usual plan).
+    marked: Vec<u32>,
     subs: Vec<Option<Box<PlanState>>>,
     /// The executables that are sub-plans (the `Some`s of `subs`), so that walking the
     /// sub-plan states does not cost the number of executables.
@@ -119,6 +141,15 @@ struct Scratch {
     running: Vec<usize>,
     candidates: Vec<u32>,
     enabled: Vec<usize>,
+}
+
+impl Scratch {
+    /// Gives back the buffers a step took (its own, emptied: nothing to free).
+    fn put_back(&mut self, running: Vec<usize>, candidates: Vec<u32>, enabled: Vec<usize>) {
+        self.running = running;
+        self.candidates = candidates;
+        self.enabled = enabled;
+    }
 }
 
 impl PlanState {
@@ -204,13 +235,17 @@ impl PlanState {
 
     fn add(&mut self, place: usize, n: u32) {
         self.tokens[place] = self.tokens[place].saturating_add(n);
-        self.marked.insert(place as u32);
+        if let Err(at) = self.marked.binary_search(&(place as u32)) {
+            self.marked.insert(at, place as u32);
+        }
     }
 
     fn take(&mut self, place: usize, n: u32) {
         self.tokens[place] -= n;
         if self.tokens[place] == 0 {
-            self.marked.remove(&(place as u32));
+            if let Ok(at) = self.marked.binary_search(&(place as u32)) {
+                self.marked.remove(at);
+            }
         }
     }
 
@@ -225,15 +260,16 @@ impl PlanState {
     fn running_into(&self, plan: &Plan, ex: &mut Vec<usize>) {
         let pe = &plan.hot().place_exec;
         ex.clear();
-        ex.extend(
-            self.marked
-                .iter()
-                .map(|&p| pe[p as usize])
-                .filter(|&e| e != Hot::NO_EXEC)
-                .map(|e| e as usize),
-        );
-        ex.sort_unstable();
-        ex.dedup();
+        for &p in &self.marked {
+            let e = pe[p as usize];
+            if e != Hot::NO_EXEC {
+                ex.push(e as usize);
+            }
+        }
+        if ex.len() > 1 {
+            ex.sort_unstable();
+            ex.dedup();
+        }
     }
 }
 
@@ -320,7 +356,12 @@ impl PlanState {
         let n = (key[0] & !FAILED_BIT) as usize;
         for pair in key[1..1 + 2 * n].chunks_exact(2) {
             self.tokens[pair[0] as usize] = pair[1];
-            self.marked.insert(pair[0]);
+            self.marked.push(pair[0]);
+        }
+        // Keys list places in order (`encode`); one from elsewhere may not.
+        if !self.marked.is_sorted() {
+            self.marked.sort_unstable();
+            self.marked.dedup();
         }
         let mut rest = &key[1 + 2 * n..];
         for &e in &self.sub_execs {
@@ -344,7 +385,7 @@ impl PlanState {
     fn empty() -> PlanState {
         PlanState {
             tokens: Vec::new(),
-            marked: BTreeSet::new(),
+            marked: Vec::new(),
             subs: Vec::new(),
             sub_execs: Vec::new(),
             failed: None,
@@ -388,6 +429,21 @@ pub fn step(plan: &Plan, state: &mut PlanState, env: &mut dyn Environment) -> St
     report
 }
 
+/// Like [`step`], into `report` (cleared first): a caller stepping often (a mission's rounds)
+/// reuses one report's buffers instead of allocating them at every step.
+pub fn step_with(
+    plan: &Plan,
+    state: &mut PlanState,
+    env: &mut dyn Environment,
+    report: &mut StepReport,
+) {
+    report.fired.clear();
+    report.calls.clear();
+    report.unknown_conditions.clear();
+    report.unhandled_failure = None;
+    step_into(plan, state, env, report, true);
+}
+
 fn step_into(
     plan: &Plan,
     state: &mut PlanState,
@@ -399,11 +455,10 @@ fn step_into(
         return;
     }
     // The step's buffers, taken out of the state while it is borrowed, and put back after.
-    let Scratch {
-        mut running,
-        mut candidates,
-        mut enabled,
-    } = std::mem::take(&mut state.scratch);
+    // Taken field by field: moving the whole struct out and back cost a stall on the copy.
+    let mut running = std::mem::take(&mut state.scratch.running);
+    let mut candidates = std::mem::take(&mut state.scratch.candidates);
+    let mut enabled = std::mem::take(&mut state.scratch.enabled);
     state.running_into(plan, &mut running);
     for &e in &running {
         let exe = &plan.executables()[e];
@@ -424,22 +479,17 @@ fn step_into(
         if report.unhandled_failure.is_none() {
             report.unhandled_failure = state.unhandled_failure(plan);
         }
-        state.scratch = Scratch {
-            running,
-            candidates,
-            enabled,
-        };
+        state.scratch.put_back(running, candidates, enabled);
         return;
     }
     candidates.clear();
-    candidates.extend(
-        state
-            .marked
-            .iter()
-            .flat_map(|&p| plan.output_transitions(p as usize).iter().copied()),
-    );
-    candidates.sort_unstable();
-    candidates.dedup();
+    for &p in &state.marked {
+        candidates.extend_from_slice(plan.output_transitions(p as usize));
+    }
+    if candidates.len() > 1 {
+        candidates.sort_unstable();
+        candidates.dedup();
+    }
     enabled.clear();
     for &ti in &candidates {
         let h = hot.trans[ti as usize];
@@ -469,11 +519,7 @@ fn step_into(
             }
         }
     }
-    state.scratch = Scratch {
-        running,
-        candidates,
-        enabled,
-    };
+    state.scratch.put_back(running, candidates, enabled);
 }
 
 /// The first running executable (in place order) that failed where no transition handles it.
@@ -492,7 +538,7 @@ fn unhandled_failure(
             let exe = &plan.executables()[e];
             match (&exe.subplan, state.subs[e].as_deref()) {
                 (Some(sp), Some(sub)) => sub.status(sp) == PlanStatus::Fail,
-                _ => env.action_failed(&exe.name),
+                _ => env.action_failed_at(plan, e),
             }
         })
 }
@@ -518,19 +564,17 @@ fn guard(
             };
             match (&exe.subplan, state.subs[e].as_deref()) {
                 (Some(sp), Some(sub)) => sub.status(sp) == want,
-                _ if want == PlanStatus::Goal => env.action_finished(&exe.name),
-                _ => env.action_failed(&exe.name),
+                _ if want == PlanStatus::Goal => env.action_finished_at(plan, e),
+                _ => env.action_failed_at(plan, e),
             }
         }
-        Atom::External(c) => {
+        Atom::External(c) => env.condition_at(plan, c).unwrap_or_else(|| {
             let name = &plan.conditions()[c];
-            env.condition(name).unwrap_or_else(|| {
-                if state.reported.insert(name.clone()) {
-                    report.unknown_conditions.push(name.clone());
-                }
-                false
-            })
-        }
+            if state.reported.insert(name.clone()) {
+                report.unknown_conditions.push(name.clone());
+            }
+            false
+        }),
     })
 }
 
@@ -544,7 +588,7 @@ fn make_call(
 ) {
     let exe = &plan.executables()[e];
     report.calls.push(CallRecord {
-        executable: exe.name.clone(),
+        executable: plan.hot().exec_names[e].clone(),
         kind,
     });
     let (Some(sp), Some(sub)) = (&exe.subplan, state.subs[e].as_deref_mut()) else {

@@ -1,7 +1,9 @@
 //! The step's working set: flat arrays built once per plan.
 
+use std::sync::Arc;
+
 use crate::condition::Cond;
-use crate::model::{Atom, Edge, Place, Transition};
+use crate::model::{Atom, Edge, Executable, Place, Transition};
 
 /// The step's working set, laid out flat so that a step touches a few
 /// small arrays per marked place, whatever the net size.
@@ -19,6 +21,8 @@ pub(crate) struct Hot {
     pub trans: Vec<HotTransition>,
     /// Input arcs then output arcs of each transition, back to back.
     pub arcs: Vec<Edge>,
+    /// Per executable, its name, shared by every [`crate::CallRecord`] of it.
+    pub exec_names: Vec<Arc<str>>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -43,7 +47,7 @@ impl HotTransition {
 impl Hot {
     pub const NO_EXEC: u32 = u32::MAX;
 
-    pub(crate) fn new(places: &[Place], transitions: &[Transition]) -> Hot {
+    pub(crate) fn new(places: &[Place], transitions: &[Transition], execs: &[Executable]) -> Hot {
         let place_exec = places
             .iter()
             .map(|p| p.exec.map_or(Hot::NO_EXEC, |e| e as u32))
@@ -95,6 +99,7 @@ impl Hot {
             out_list,
             trans,
             arcs,
+            exec_names: execs.iter().map(|e| Arc::from(e.name.as_str())).collect(),
         }
     }
 }

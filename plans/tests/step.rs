@@ -432,3 +432,32 @@ fn plan_and_state_can_move_between_threads() {
     assert::<PlanState>();
     let _: &dyn petrel_plans::Environment = &TestEnv::default();
 }
+
+#[test]
+fn a_reused_report_says_what_a_fresh_one_says_step_after_step() {
+    // What a mission does at every round (`step_with` into one report) against a fresh report
+    // per step: the same firings, calls and markings, to the goal. `stop` is unknown, so the
+    // first report that asks it names it once, and a reused report must not keep that.
+    let p = petrel_plans::compile_text("a; < go ? b : stop ? c >; d\n", "t.plan", "t", None)
+        .expect("the plan compiles");
+    let env = || {
+        let mut env = TestEnv::default().cond("go", true);
+        env.finished.extend(["a", "b", "c", "d"].map(String::from));
+        env
+    };
+    let (mut fresh_env, mut reused_env) = (env(), env());
+    let (mut fresh, mut reused) = (PlanState::new(&p), PlanState::new(&p));
+    let mut report = petrel_plans::StepReport::default();
+    let mut unknown = 0;
+    for _ in 0..16 {
+        let want = step(&p, &mut fresh, &mut fresh_env);
+        petrel_plans::step_with(&p, &mut reused, &mut reused_env, &mut report);
+        assert_eq!(report, want);
+        assert_eq!(marking(&p, &reused), marking(&p, &fresh));
+        unknown += report.unknown_conditions.len();
+    }
+    assert_eq!(unknown, 1, "`stop` is reported once");
+    assert_eq!(status(&p, &reused), PlanStatus::Goal);
+    assert_eq!(reused_env.calls, fresh_env.calls);
+    assert!(reused_env.calls.contains(&"b.start".to_string()));
+}

@@ -263,3 +263,28 @@ async fn a_linked_clock_drives_held_in_context_rules() {
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn out_evaluations_is_a_statistic_written_now_and_then_and_when_the_manager_stops() {
+    let r = rig(LOST).await;
+    let bb = &r.bb;
+    let evaluations = bb.handle::<i64>("contexts/out/evaluations").await.unwrap();
+    let steps = bb.handle::<i64>("contexts/stats/steps").await.unwrap();
+    quality(bb, 0.9).await;
+    let (writes, first) = (evaluations.read().version, *evaluations.get());
+    // Ten switches 30 ms apart (300 ms): the manager steps at each, the statistic is written
+    // at most every 100 ms.
+    for k in 0..10 {
+        quality(bb, if k % 2 == 0 { 0.1 } else { 0.9 }).await;
+    }
+    let written = evaluations.read().version - writes;
+    assert!(
+        (1..=4).contains(&written),
+        "written {written} times in 300 ms"
+    );
+    assert!(*evaluations.get() > first, "it follows the evaluations");
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    // At the stop, the count of every evaluation: one per switch at least.
+    assert!(*evaluations.get() >= first + 10, "{}", evaluations.get());
+    assert!(*steps.get() >= 10, "the manager stepped at each switch");
+}

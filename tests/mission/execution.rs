@@ -91,17 +91,17 @@ async fn each_step_pushes_what_it_fired_in_order_with_the_marking_it_left() {
         .collect();
     let all: Vec<&str> = steps
         .iter()
-        .flat_map(|s| s.transitions.iter().map(String::as_str))
+        .flat_map(|s| s.transitions.iter().map(|t| &**t))
         .collect();
     assert_eq!(all.len() as i64, fired, "every firing, once: {steps:?}");
     assert_eq!(&all[..2], ["a.start", "a.end"], "{all:?}");
     assert_eq!(all[2], "b.start", "{all:?}");
     assert!(all.contains(&"b.end"), "{all:?}");
     assert_eq!(
-        steps[0].marking, "a.exec",
+        &*steps[0].marking, "a.exec",
         "the first step leaves a running"
     );
-    assert_eq!(steps.last().unwrap().marking, "goal");
+    assert_eq!(&*steps.last().unwrap().marking, "goal");
     assert!(
         steps.windows(2).all(|w| w[0].time_s <= w[1].time_s),
         "in time order: {steps:?}"

@@ -235,6 +235,9 @@ impl ExprSet {
     /// evaluates often can reuse one buffer.
     pub fn evaluate_into(&mut self, now: Instant, changed: &mut Vec<ExprId>) {
         changed.clear();
+        if self.due.is_empty() {
+            return;
+        }
         let mut due = std::mem::take(&mut self.due);
         // Evaluate in insertion order, as a full scan would.
         due.sort_unstable();

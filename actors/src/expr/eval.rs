@@ -122,8 +122,44 @@ impl Eval<'_> {
         })
     }
 
+    /// The number a leaf (a property or a constant) holds, read in place; `None` for any other
+    /// node or value, which the general path evaluates.
+    #[inline]
+    fn leaf_num(&self, n: &Node) -> Option<f64> {
+        match n {
+            Node::Prop(i) => match &self.props[*i].value {
+                Ok(Value::Num(x)) => Some(*x),
+                _ => None,
+            },
+            Node::Const(Value::Num(x)) => Some(*x),
+            _ => None,
+        }
+    }
+
     fn binary(&mut self, op: BinOp, a: &Node, b: &Node) -> Result<Value, String> {
         use BinOp::*;
+        // The usual condition (`a/out/x > 0.5`, `p >= q`) compares two numbers read from
+        // leaves: computed without cloning values or recursing. Leaves have no `age` deadline,
+        // and the result is what the general path below gives.
+        let leaves = match op {
+            And | Or => None,
+            _ => self.leaf_num(a).zip(self.leaf_num(b)),
+        };
+        if let Some((x, y)) = leaves {
+            return Ok(match op {
+                Add => Value::Num(x + y),
+                Sub => Value::Num(x - y),
+                Mul => Value::Num(x * y),
+                Div => Value::Num(x / y),
+                Lt => Value::Bool(x < y),
+                Le => Value::Bool(x <= y),
+                Gt => Value::Bool(x > y),
+                Ge => Value::Bool(x >= y),
+                Eq => Value::Bool(x == y),
+                // `Ne` (`And` and `Or` took the general path).
+                _ => Value::Bool(x != y),
+            });
+        }
         let (x, y) = (self.eval(a)?, self.eval(b)?);
         if matches!(op, Lt | Le | Gt | Ge) {
             self.age_deadline(a, &y);

@@ -93,6 +93,9 @@ pub(crate) struct Running<M> {
     /// Who to ask for a move, and who is asking.
     supervisor: ActorRef<crate::supervisor::SupervisorMsg>,
     me: ractor::ActorId,
+    /// The status this instance wrote last, with the version of `stats/status` it left.
+    status_shown: Option<(&'static str, u64)>,
+    status_values: publish::StatusValues,
 }
 
 /// Why module code failed, if it did: its error, or the panic the hook reported.
@@ -190,6 +193,8 @@ impl<M: Module> Actor for ModuleActor<M> {
             hold: args.hold,
             supervisor,
             me: me.get_id(),
+            status_shown: None,
+            status_values: Default::default(),
         })
     }
 

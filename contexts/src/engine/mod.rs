@@ -212,6 +212,16 @@ impl Engine {
 
     /// Evaluates what changed at `now`, switches contexts, and returns the actions to apply.
     pub fn step(&mut self, now: Instant) -> Vec<Action> {
+        let mut actions = Vec::new();
+        self.step_into(now, &mut actions);
+        actions
+    }
+
+    /// Like [`step`](Engine::step), into `actions` (cleared first): a caller stepping at every
+    /// change reuses one buffer.
+    pub fn step_into(&mut self, now: Instant, actions: &mut Vec<Action>) {
+        actions.clear();
+        actions.append(&mut self.pending);
         let mut changed = std::mem::take(&mut self.changed);
         self.exprs.evaluate_into(now, &mut changed);
         let mut candidates = std::mem::take(&mut self.candidates);
@@ -220,7 +230,6 @@ impl Engine {
         candidates.extend(changed.iter().filter_map(|&id| self.condition(id)));
         candidates.sort_unstable();
         candidates.dedup();
-        let mut actions = std::mem::take(&mut self.pending);
         let mut switched = false;
         for &i in &candidates {
             let rule = &mut self.rules[i];
@@ -233,9 +242,10 @@ impl Engine {
             if !wants_switch {
                 continue;
             }
-            if rule
-                .since
-                .is_some_and(|t| now.duration_since(t) < rule.min_dwell)
+            if !rule.min_dwell.is_zero()
+                && rule
+                    .since
+                    .is_some_and(|t| now.duration_since(t) < rule.min_dwell)
             {
                 self.waiting.push(i);
                 continue;
@@ -259,11 +269,10 @@ impl Engine {
         // that is not a condition) changed; otherwise there is nothing to resolve.
         let values_changed = changed.iter().any(|&id| self.condition(id).is_none());
         if switched || values_changed || std::mem::take(&mut self.resolve) {
-            self.resolve_effects(&mut actions);
+            self.resolve_effects(actions);
         }
         self.changed = changed;
         self.candidates = candidates;
-        actions
     }
 
     /// Offers the active contexts' effects, highest priority first, and pushes the actions

@@ -34,12 +34,11 @@ impl ContextManager {
                     };
                     tracing::info!(%context, active = now_active, %trigger, "context {what}");
                 }
-                let time_s = self
-                    .started
-                    .map_or(0.0, |t| ctx.now().duration_since(t).as_secs_f64());
-                self.changes.push(ContextChange {
-                    time_s,
-                    context: context.to_string(),
+                // Made only if someone reads `out/changes` (a linked module, a tap).
+                let started = self.started;
+                self.changes.push_with(|| ContextChange {
+                    time_s: started.map_or(0.0, |t| ctx.now().duration_since(t).as_secs_f64()),
+                    context: String::from(&**context),
                     active: now_active,
                 });
             }
@@ -48,7 +47,9 @@ impl ContextManager {
                 value,
                 context,
             } => {
-                let handle = self.handle(target)?.clone();
+                // Borrowed from its field, so the originals below can be written meanwhile.
+                let handle = (self.handles.get(target))
+                    .with_context(|| format!("`{target}` is not in the blackboard"))?;
                 let info = handle.type_info();
                 let old = handle.value();
                 let new = to_property(value, info).map_err(|e| anyhow!("{target}: {e}"))?;

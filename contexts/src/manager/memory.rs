@@ -34,23 +34,23 @@ impl PropertyType for ContextMemory {
 }
 
 impl ContextManager {
-    /// Saves what the engine switched and applied and the originals, if they changed. Two
-    /// buffers in turn, like the mission's memory: the one published two saves ago is filled
-    /// in place once no reader holds it.
+    /// Saves what the engine switched and applied and the originals. Called after a step
+    /// whose engine gave actions, each of which changes what is switched or applied, so the
+    /// memory changed: it is not compared with the one published. Two buffers in turn, like
+    /// the mission's memory: the one published two saves ago is filled in place once no
+    /// reader holds it.
     pub(super) fn save_memory(&mut self) {
         let mut next = self.spare.take().unwrap_or_default();
+        self.show_originals();
         // Copied first only if a reader (a tool, a recorder's tap) still holds it.
         self.fill(Arc::make_mut(&mut next));
-        if *next == *self.memory.get() {
-            self.spare = Some(next);
-            return;
-        }
         self.spare = Some(self.memory.swap(next));
     }
 
     fn fill(&self, memory: &mut ContextMemory) {
         let rules = self.rules.get();
-        if memory.rules != *rules {
+        // The same text is the same path (comparing paths walks their components).
+        if memory.rules.as_path().as_os_str() != rules.as_path().as_os_str() {
             memory.rules = (*rules).clone();
         }
         if let Some(engine) = &self.engine {
@@ -58,12 +58,15 @@ impl ContextManager {
         }
         memory.original_values.clear();
         for (target, value) in &self.original_values {
-            let dynamic = self
-                .handles
+            // Converted by `show_originals`; one that cannot be is left out.
+            if let Some((_, dynamic)) = self
+                .originals_shown
                 .get(target)
-                .and_then(|h| h.type_info().to_dynamic(value).ok());
-            if let Some(dynamic) = dynamic {
-                memory.original_values.push((target.clone(), dynamic));
+                .filter(|(shown, _)| Arc::ptr_eq(shown, value))
+            {
+                memory
+                    .original_values
+                    .push((target.clone(), dynamic.clone()));
             }
         }
         memory.original_links.clear();
@@ -74,6 +77,31 @@ impl ContextManager {
         memory
             .original_runs
             .extend((self.original_runs.iter()).map(|(module, ran)| (module.clone(), *ran)));
+    }
+
+    /// Brings the config form of each original up to date: converting a value (through RON
+    /// text) costs more than the rest of a save, and an original that a context puts back
+    /// and takes again is the same value.
+    fn show_originals(&mut self) {
+        for (target, value) in &self.original_values {
+            let shown = self.originals_shown.get(target);
+            if shown.is_some_and(|(shown, _)| Arc::ptr_eq(shown, value)) {
+                continue;
+            }
+            let dynamic = self
+                .handles
+                .get(target)
+                .and_then(|h| h.type_info().to_dynamic(value).ok());
+            match dynamic {
+                Some(dynamic) => {
+                    self.originals_shown
+                        .insert(target.clone(), (value.clone(), dynamic));
+                }
+                None => {
+                    self.originals_shown.remove(target);
+                }
+            }
+        }
     }
 
     /// Goes on from `state/memory` if it is about the same rules file: the engine takes over

@@ -43,8 +43,12 @@ impl PropertyType for ContextChange {
     const TYPE_NAME: &'static str = "ContextChange";
 }
 
+/// The handles looked up for a rules file, by address: looked up at every effect applied, so
+/// hashed with a fast hasher.
+type Handles = foldhash::HashMap<Arc<str>, AnyHandle>;
+
 /// The handles looked up for a rules file, as the engine's schema.
-impl Schema for HashMap<Arc<str>, AnyHandle> {
+impl<S: std::hash::BuildHasher> Schema for HashMap<Arc<str>, AnyHandle, S> {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
         self.get(path).map(|h| (h.type_info(), h.value()))
     }
@@ -125,7 +129,7 @@ pub struct ContextManager {
     /// Properties the rules read.
     watched: Vec<Watched>,
     /// Every property the rules mention, by address.
-    handles: HashMap<Arc<str>, AnyHandle>,
+    handles: Handles,
     /// What the rules changed, as it was before: values, links, running states.
     /// In address order, so `state/memory` lists them the same way at every save.
     original_values: BTreeMap<Arc<str>, AnyValue>,
@@ -133,6 +137,17 @@ pub struct ContextManager {
     original_runs: BTreeMap<Arc<str>, bool>,
     /// `state/memory`: what a restarted manager goes on from.
     memory: Output<ContextMemory>,
+    /// The originals' config form, kept by target with the value it was made from: an
+    /// original put back and taken again is the same value, converted once.
+    originals_shown: foldhash::HashMap<Arc<str>, (AnyValue, ron::Value)>,
+    /// The `out/active` text published two switches ago, to fill in place.
+    active_spare: Option<Arc<String>>,
+    /// The `out/active` text published last, with the version of the output it left.
+    active_shown: Option<(Arc<String>, u64)>,
+    /// The engine's actions, a buffer reused from step to step.
+    actions: Vec<Action>,
+    /// When `out/evaluations` was last written.
+    evaluations_at: Option<Instant>,
     /// The memory published two saves ago, to fill in place (see `save_memory`).
     spare: Option<Arc<ContextMemory>>,
     reload_seen: u64,
@@ -181,11 +196,11 @@ impl Module for ContextManager {
                 String::new(),
                 "problems of the last (re)load, one per line",
             ),
-            evaluations: ports.output("out/evaluations", 0, "expression evaluations so far"),
+            evaluations: ports.output("out/evaluations", 0, "expression evaluations so far (a statistic: written at most every 100 ms, and when the manager stops)"),
             changes: ports.queue_out("out/changes", 256, "context activations and deactivations"),
             engine: None,
             watched: Vec::new(),
-            handles: HashMap::new(),
+            handles: Handles::default(),
             original_values: BTreeMap::new(),
             original_links: BTreeMap::new(),
             original_runs: BTreeMap::new(),
@@ -195,6 +210,11 @@ impl Module for ContextManager {
                 "the active contexts, what they changed and what was there before: a restarted manager goes on from here",
             ),
             spare: None,
+            originals_shown: Default::default(),
+            active_spare: None,
+            active_shown: None,
+            actions: Vec::new(),
+            evaluations_at: None,
             reload_seen: 0,
             started: None,
             self_undoing: Vec::new(),
@@ -246,16 +266,18 @@ impl Module for ContextManager {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        let reload = self.reload.read();
-        if reload.version != self.reload_seen {
-            self.reload_seen = reload.version;
+        // The version alone, read without a lock: a reload is rare.
+        let reload = self.reload.version();
+        if reload != self.reload_seen {
+            self.reload_seen = reload;
             self.reload_rules(ctx).await;
         }
         let Some(engine) = self.engine.as_mut() else {
             return Ok(());
         };
         let first = ctx.cause().first();
-        let now = self.clock.now(ctx.now());
+        let stamp = ctx.now();
+        let now = self.clock.now(stamp);
         let wall = self.clock.is_wall();
         for w in &mut self.watched {
             if w.handle.version() != w.seen || first {
@@ -266,7 +288,9 @@ impl Module for ContextManager {
                 engine.update_prop(w.prop, w.handle.type_info(), &sample.value, written);
             }
         }
-        let actions = engine.step(now);
+        // The actions buffer is reused from step to step (taken while `apply` borrows self).
+        let mut actions = std::mem::take(&mut self.actions);
+        engine.step_into(now, &mut actions);
         let evaluations = engine.evaluations() as i64;
         let mut switched = false;
         for action in &actions {
@@ -280,10 +304,27 @@ impl Module for ContextManager {
         if !actions.is_empty() {
             self.save_memory();
         }
-        self.evaluations.set(evaluations);
+        actions.clear();
+        self.actions = actions;
+        // A statistic, like a module's stats: a write per step (a lock, a wake-up check, a
+        // value) cost as much as a context switch's own bookkeeping.
+        if (self.evaluations_at).is_none_or(|t| stamp.duration_since(t) >= STATS_EVERY) {
+            self.evaluations_at = Some(stamp);
+            self.evaluations.set(evaluations);
+        }
+        Ok(())
+    }
+
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        if let Some(engine) = &self.engine {
+            self.evaluations.set(engine.evaluations() as i64);
+        }
         Ok(())
     }
 }
+
+/// `out/evaluations` is written at most this often.
+const STATS_EVERY: Duration = Duration::from_millis(100);
 
 impl ContextManager {
     /// Reads the rules file and builds an engine, looking up what it mentions.
@@ -300,7 +341,7 @@ impl ContextManager {
             return Err("params/rules is empty; expected the path of a context rules file".into());
         }
         let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
-        let mut handles = HashMap::new();
+        let mut handles = Handles::default();
         for address in mentioned(&loaded) {
             // A queue's latest item too, for expressions such as `min(scan/out/ranges) < 0.6`.
             if let Ok(handle) = ctx.blackboard().expr_handle(&address).await {
@@ -357,15 +398,30 @@ impl ContextManager {
         }
     }
 
-    /// Publishes the active contexts in `out/active`.
+    /// Publishes the active contexts in `out/active`, if they changed. Two buffers in turn,
+    /// like `state/memory`: the text published two switches ago is written in place once no
+    /// reader holds it, so a context switching on and off allocates nothing.
     fn publish_active(&mut self) {
-        let mut active = String::new();
+        let mut next = self.active_spare.take().unwrap_or_default();
+        let active = Arc::make_mut(&mut next);
+        active.clear();
         for (k, name) in self.engine.iter().flat_map(Engine::active).enumerate() {
             if k > 0 {
                 active.push_str(", ");
             }
             active.push_str(name);
         }
-        self.active.set(active);
+        // Compared with what this manager wrote last, unless someone wrote since.
+        let unchanged = match &self.active_shown {
+            Some((shown, version)) if *version == self.active.version() => *shown == next,
+            _ => *self.active.get() == *next,
+        };
+        if unchanged {
+            self.active_spare = Some(next);
+            return;
+        }
+        let replaced = self.active.swap(next.clone());
+        self.active_shown = Some((next, self.active.version()));
+        self.active_spare = Some(replaced);
     }
 }

@@ -59,6 +59,53 @@ pub(crate) struct Bound {
     /// Relinks that actions' calls asked for, in order, carried out after the plan step
     /// (linking is a blackboard request, which a plan step cannot wait for).
     pub relinks: Vec<Relink>,
+    /// The top plan's conditions and actions by position, as bound here.
+    pub at: Positions,
+}
+
+/// What a guard asks of the top plan, by position ([`crate::Environment::condition_at`]):
+/// resolved once, so a plan round looks no name up.
+#[derive(Default)]
+pub(crate) struct Positions {
+    /// Per condition of the plan: its expression, if bound to one here.
+    pub conditions: Vec<Option<ExprId>>,
+    /// Per executable of the plan: the action bound here, if any (sub-plans and other
+    /// robots' actions have none).
+    pub actions: Vec<Option<ActionExprs>>,
+}
+
+/// An action's `finished` and `failed` expressions.
+#[derive(Clone, Copy)]
+pub(crate) struct ActionExprs {
+    pub finished: Option<ExprId>,
+    pub failed: Option<ExprId>,
+    /// No binding and `params/allow_unbound`: finished as soon as asked.
+    pub unbound: bool,
+}
+
+impl Positions {
+    /// The positions of `plan`'s names among `conditions` and `actions`.
+    pub fn of(
+        plan: &Plan,
+        conditions: &foldhash::HashMap<String, ExprId>,
+        actions: &foldhash::HashMap<String, BoundAction>,
+    ) -> Positions {
+        Positions {
+            conditions: (plan.conditions().iter())
+                .map(|c| conditions.get(c).copied())
+                .collect(),
+            actions: (plan.executables().iter())
+                .map(|e| match e.subplan {
+                    Some(_) => None,
+                    None => actions.get(&e.name).map(|a| ActionExprs {
+                        finished: a.finished,
+                        failed: a.failed,
+                        unbound: a.unbound,
+                    }),
+                })
+                .collect(),
+        }
+    }
 }
 
 /// One relink an action call asked for: `input` to `source`, or unlinked.
@@ -447,6 +494,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
             )
         })
         .collect();
+    let at = Positions::of(plan, &conditions, &actions);
     Binding {
         bound: Ok(Bound {
             exprs: b.exprs,
@@ -455,6 +503,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
             defaults,
             actions,
             relinks: Vec::new(),
+            at,
         }),
         warnings,
     }

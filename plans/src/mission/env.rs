@@ -13,6 +13,8 @@ use crate::remote::Dispatch;
 
 /// One step's view of the world; expression values were brought up to date before the step.
 pub(crate) struct MissionEnv<'a> {
+    /// The top plan, whose names `bound.at` has by position.
+    pub plan: &'a crate::model::Plan,
     pub bound: &'a mut Bound,
     pub flags: &'a Flags,
     /// The mission clock now, as an instant and in seconds.
@@ -25,6 +27,8 @@ pub(crate) struct MissionEnv<'a> {
     pub memory: &'a mut MissionMemory,
     /// Other robots' actions and conditions (`robot#...`): carried out over the team.
     pub dispatch: &'a mut Dispatch,
+    /// Names of ended actions' entries in `memory.running`, kept for the next start's entry.
+    pub keys: &'a mut Vec<String>,
 }
 
 impl BoundAction {
@@ -38,7 +42,7 @@ impl BoundAction {
             write(h, v.clone(), stamp);
         }
         for e in &self.enable {
-            write(e, std::sync::Arc::new(true), stamp);
+            write(e, shared_bool(true), stamp);
         }
         relinks.extend(self.links.iter().map(|(input, source, _)| Relink {
             input: input.clone(),
@@ -50,7 +54,7 @@ impl BoundAction {
     /// (into `relinks`) the links `link` changed. Writes are stamped `stamp`.
     pub fn deactivate(&mut self, relinks: &mut Vec<Relink>, stamp: Instant) {
         for e in &self.enable {
-            write(e, std::sync::Arc::new(false), stamp);
+            write(e, shared_bool(false), stamp);
         }
         if self.restore && self.saved.is_some() {
             relinks.extend(self.links.iter().map(|(input, _, original)| Relink {
@@ -73,6 +77,13 @@ impl BoundAction {
     }
 }
 
+/// `false` and `true` as values made once: switching a module on or off allocates nothing.
+fn shared_bool(b: bool) -> petrel_actors::AnyValue {
+    static VALUES: std::sync::OnceLock<[petrel_actors::AnyValue; 2]> = std::sync::OnceLock::new();
+    let values = VALUES.get_or_init(|| [std::sync::Arc::new(false), std::sync::Arc::new(true)]);
+    values[usize::from(b)].clone()
+}
+
 fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue, stamp: Instant) {
     // Types were checked at init (`from_ron` into the property's own type, `enabled` is bool).
     if let Err(e) = h.set_at(v, stamp) {
@@ -81,38 +92,50 @@ fn write(h: &petrel_actors::AnyHandle, v: petrel_actors::AnyValue, stamp: Instan
 }
 
 impl MissionEnv<'_> {
+    /// Whether `plan` is the top plan (a sub-plan's names are looked up by name).
+    fn top(&self, plan: &crate::model::Plan) -> bool {
+        std::ptr::eq(plan, self.plan)
+    }
+
     fn expr(&self, id: Option<petrel_actors::expr::ExprId>) -> bool {
         id.and_then(|id| self.bound.exprs.bool(id)).unwrap_or(false)
     }
 
     /// Counts a call in the action's record and keeps its start time while it runs.
     fn remember(&mut self, name: &str, kind: CallKind) {
-        if !self.memory.actions.contains_key(name) {
-            self.memory
-                .actions
-                .insert(name.to_string(), Default::default());
+        let memory = &mut *self.memory;
+        if !memory.actions.contains_key(name) {
+            memory.actions.insert(name.to_string(), Default::default());
         }
-        let Some(stats) = self.memory.actions.get_mut(name) else {
+        let Some(stats) = memory.actions.get_mut(name) else {
             return;
         };
         match kind {
             CallKind::Start | CallKind::Resume => {
                 stats.starts += 1;
-                self.memory.running.insert(
-                    name.to_string(),
-                    RunningAction {
-                        started_s: self.secs,
-                        ..Default::default()
-                    },
-                );
+                let running = RunningAction {
+                    started_s: self.secs,
+                    ..Default::default()
+                };
+                match memory.running.get_mut(name) {
+                    Some(r) => *r = running,
+                    None => {
+                        // A key an ended action gave back: a start allocates no name.
+                        let mut key = self.keys.pop().unwrap_or_default();
+                        key.clear();
+                        key.push_str(name);
+                        memory.running.insert(key, running);
+                    }
+                }
                 return;
             }
             CallKind::End => stats.ends += 1,
             CallKind::Fail => stats.failures += 1,
             CallKind::Interrupt => stats.interrupts += 1,
         }
-        if let Some(run) = self.memory.running.remove(name) {
+        if let Some((key, run)) = memory.running.remove_entry(name) {
             stats.time_s += (self.secs - run.started_s).max(0.0);
+            self.keys.push(key);
         }
     }
 }
@@ -125,6 +148,32 @@ impl Environment for MissionEnv<'_> {
                 Some(self.dispatch.condition(name).unwrap_or(false))
             }
             None => Some(self.flags.0.get(name).copied().unwrap_or(false)),
+        }
+    }
+
+    fn condition_at(&mut self, plan: &crate::model::Plan, c: usize) -> Option<bool> {
+        match self
+            .top(plan)
+            .then(|| self.bound.at.conditions[c])
+            .flatten()
+        {
+            Some(id) => Some(self.bound.exprs.bool(id).unwrap_or(false)),
+            None => self.condition(&plan.conditions()[c]),
+        }
+    }
+
+    fn action_finished_at(&mut self, plan: &crate::model::Plan, e: usize) -> bool {
+        match self.top(plan).then(|| self.bound.at.actions[e]).flatten() {
+            Some(a) if a.unbound => true,
+            Some(a) => self.expr(a.finished),
+            None => self.action_finished(&plan.executables()[e].name),
+        }
+    }
+
+    fn action_failed_at(&mut self, plan: &crate::model::Plan, e: usize) -> bool {
+        match self.top(plan).then(|| self.bound.at.actions[e]).flatten() {
+            Some(a) => self.expr(a.failed),
+            None => self.action_failed(&plan.executables()[e].name),
         }
     }
 
@@ -155,7 +204,13 @@ impl Environment for MissionEnv<'_> {
             self.dispatch.call(name, kind);
             return;
         }
-        let Some(a) = self.bound.actions.get_mut(name) else {
+        let Bound {
+            actions,
+            exprs,
+            relinks,
+            ..
+        } = &mut *self.bound;
+        let Some(a) = actions.get_mut(name) else {
             return;
         };
         if a.unbound {
@@ -171,21 +226,15 @@ impl Environment for MissionEnv<'_> {
             CallKind::Start | CallKind::Resume => {
                 // Time in the action's conditions counts from here: a `held` window opened
                 // before it ran does not count, and `elapsed()` starts at 0.
-                let ids: Vec<_> = a.exprs().collect();
-                for id in ids {
-                    self.bound.exprs.set_origin(id, Some(now));
+                for id in a.exprs() {
+                    exprs.set_origin(id, Some(now));
                 }
-                let Some(a) = self.bound.actions.get_mut(name) else {
-                    return;
-                };
                 if let Some(text) = &a.log {
                     tracing::info!(action = name, "{text}");
                 }
-                a.activate(&mut self.bound.relinks, stamp);
+                a.activate(relinks, stamp);
             }
-            CallKind::End | CallKind::Interrupt | CallKind::Fail => {
-                a.deactivate(&mut self.bound.relinks, stamp)
-            }
+            CallKind::End | CallKind::Interrupt | CallKind::Fail => a.deactivate(relinks, stamp),
         }
     }
 }

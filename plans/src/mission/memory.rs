@@ -4,6 +4,7 @@
 //! seen open, and what each action did so far (for the summary).
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use petrel_actors::PropertyType;
 use serde::{Deserialize, Serialize};
@@ -88,10 +89,11 @@ fn clone_map_from<V: Clone>(dst: &mut BTreeMap<String, V>, src: &BTreeMap<String
 pub struct PlanFiring {
     /// The mission's clock (s) when they fired.
     pub time_s: f64,
-    /// The transitions fired, by label (by id for a jump without one), in order.
-    pub transitions: Vec<String>,
+    /// The transitions fired, by label (by id for a jump without one), in order (shared with
+    /// the mission: a firing copies no text).
+    pub transitions: Vec<Arc<str>>,
     /// The marking after them, as `out/marking` shows it.
-    pub marking: String,
+    pub marking: Arc<str>,
 }
 
 impl PropertyType for PlanFiring {

@@ -131,16 +131,20 @@ impl Module for Mission {
         let (now, secs) = (run.clock.now(stamp), run.clock.secs(stamp));
         let t = StepTime { now, secs, stamp };
         if run.team.serve_mode {
-            if run.serve_round(t, &self.flags.get(), &self.inbox) {
+            if run.serve_round(t, &self.flags, &self.inbox) {
                 run.save(&self.memory);
             }
             run.team.send(&self.outbox);
             if run.clock.is_wall() {
-                set_deadline(&run.timer, run.bound.exprs.next_deadline());
+                run.timer.set(run.bound.exprs.next_deadline());
             }
             return Ok(());
         }
-        let may_step = run.team.take_news(&self.inbox);
+        // Items wake the mission (ITEMS), and its first step reads what a predecessor left.
+        let cause = ctx.cause();
+        let may_step = run
+            .team
+            .take_news(&self.inbox, cause.items() || cause.first());
         if run.team.dispatch.has_conditions() {
             publish(
                 &self.robot_conditions,
@@ -149,32 +153,37 @@ impl Module for Mission {
         }
         if !may_step {
             // Waiting for robots' conditions: the watches must still go out (and be answered).
-            run.answer_watches(t, &self.flags.get());
+            run.answer_watches(t, &self.flags);
             run.team.send(&self.outbox);
             return Ok(());
         }
         // PNP needs repeated steps: transitions enabled by a step's firings wait for the next
         // one. Step again at once while something fires (bounded, so a cycle of plain
         // transitions cannot starve the agent: past the bound, `state/wake` asks for a new step).
-        let mut fired_labels = Vec::new();
+        run.fired.clear();
         // Whether a round called an action (which may have enabled a module or written its
         // input), and whether this step already let such modules answer.
         let (mut called, mut settled) = (false, false);
+        // Whether the watched properties must be looked at again (see `Run::round`).
+        let mut fresh = true;
         for round in 1.. {
-            // Read at every round: an action's `set` may write the mission's own flags.
-            let (report, labels) = run.round(t, &self.flags.get());
-            relink(ctx, &mut run.bound.relinks).await;
-            fired += report.fired.len();
-            fired_labels.extend(labels);
-            called |= !report.calls.is_empty();
+            let report = run.round(t, &self.flags, fresh || ctx.changes_pending());
+            fresh = !run.bound.relinks.is_empty();
+            if fresh {
+                relink(ctx, &mut run.bound.relinks).await;
+            }
+            fired += report.fired;
+            called |= report.called;
             let running = run.state.status(&run.plan) == PlanStatus::Running;
-            if report.fired.is_empty() || !running {
+            if report.fired == 0 || !running {
                 // Nothing more fires now. A module an action has just switched on may answer
                 // at once (a quick action): let it, once per step, and go on with its answer
                 // in this step rather than stepping again for it (see `settle`).
                 if called && running && !settled {
                     settled = true;
                     if settle(ctx, &self.wake, run).await {
+                        // The changes it took are this step's to read.
+                        fresh = true;
                         continue;
                     }
                 }
@@ -185,29 +194,31 @@ impl Module for Mission {
                 break;
             }
         }
-        run.answer_watches(t, &self.flags.get());
+        run.answer_watches(t, &self.flags);
         run.team.send(&self.outbox);
         if run.clock.is_wall() {
-            set_deadline(&run.timer, run.bound.exprs.next_deadline());
+            run.timer.set(run.bound.exprs.next_deadline());
         }
         if fired > 0 {
-            // Once per step, however many rounds fired: what the plan left.
-            run.save(&self.memory);
+            // Once per step, however many rounds fired: what the plan left (a call counted in
+            // the actions' records, so the memory changed).
+            run.save_changed(&self.memory, called);
             let news = run.shown.news(&run.plan, &run.state, &run.memory.marking);
             if news.running {
-                self.running.set(news.texts.running.clone());
+                self.running.set(news.texts.running.to_string());
             }
             // Before the marking: a reader following the marking reads the count with it.
             self.fired.set(self.fired.value() + fired as i64);
-            if !fired_labels.is_empty() {
-                self.firings.push(PlanFiring {
+            if !run.fired.is_empty() {
+                let (shown, fired) = (&run.shown, &run.fired);
+                self.firings.push_with(|| PlanFiring {
                     time_s: secs,
-                    transitions: fired_labels,
+                    transitions: shown.labels(fired),
                     marking: news.texts.marking.clone(),
                 });
             }
             if news.marking {
-                self.marking.set(news.texts.marking.clone());
+                self.marking.set(news.texts.marking.to_string());
             }
         }
         let status = run.state.status(&run.plan);
@@ -243,7 +254,7 @@ impl Module for Mission {
 
     async fn cleanup(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         if let Some(run) = self.run.as_mut() {
-            set_deadline(&run.timer, None);
+            run.timer.set(None);
             // At a restart or a move the plan goes on from `state/memory`: no summary yet.
             if self.is_mission.value() && !run.memory.actions.is_empty() && !ctx.restarting() {
                 // The run summary of a plan-driven mission: the plan's result and what each
@@ -290,6 +301,10 @@ impl Mission {
             .await?;
         let (timer, rx) = watch::channel(None);
         tokio::spawn(deadline_timer(rx, wake));
+        let timer = Timer {
+            tx: timer,
+            told: None,
+        };
         tracing::info!(
             plan = plan.name(),
             actions = bound.actions.len(),
@@ -325,6 +340,10 @@ impl Mission {
             loops: Default::default(),
             shown,
             spare: None,
+            report: Default::default(),
+            fired: Vec::new(),
+            flags: Default::default(),
+            keys: Vec::new(),
         };
         let memory = self.memory.get();
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {
@@ -352,7 +371,7 @@ async fn settle(ctx: &mut Context, wake: &State<i64>, run: &Run) -> bool {
     let outside = || {
         let clock = run.clock.handle().map(|h| h.version());
         let members = run.team.members.as_ref().map(|h| h.version());
-        (wake.read().version, clock, members)
+        (wake.version(), clock, members)
     };
     let before = outside();
     let changed = ctx.settle().await;
@@ -384,18 +403,32 @@ fn publish(out: &Output<String>, v: &str) {
     }
 }
 
-/// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
-/// Tells the timer task about a new deadline. Only a change wakes it: a wake-up per mission step
-/// would put a second task on the run queue at every reaction, and tokio then brings in another
-/// worker thread to steal it, which costs more than the reaction itself.
-fn set_deadline(timer: &watch::Sender<Option<Instant>>, deadline: Option<Instant>) {
-    timer.send_if_modified(|d| {
-        let changed = *d != deadline;
-        *d = deadline;
-        changed
-    });
+/// The sender to the task that bumps `state/wake` when the next deadline passes, with the
+/// deadline it was told last.
+pub(super) struct Timer {
+    tx: watch::Sender<Option<Instant>>,
+    told: Option<Instant>,
 }
 
+impl Timer {
+    /// Tells the timer task about a new deadline. Only a change wakes it: a wake-up per mission
+    /// step would put a second task on the run queue at every reaction, and tokio then brings
+    /// in another worker thread to steal it, which costs more than the reaction itself. The
+    /// deadline told last is kept here, so an unchanged one costs no lock of the channel.
+    pub fn set(&mut self, deadline: Option<Instant>) {
+        if deadline == self.told {
+            return;
+        }
+        self.told = deadline;
+        self.tx.send_if_modified(|d| {
+            let changed = *d != deadline;
+            *d = deadline;
+            changed
+        });
+    }
+}
+
+/// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
 async fn deadline_timer(mut rx: watch::Receiver<Option<Instant>>, wake: petrel_actors::AnyHandle) {
     loop {
         let deadline = *rx.borrow_and_update();

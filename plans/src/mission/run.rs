@@ -3,8 +3,7 @@
 use std::sync::Arc;
 
 use petrel_actors::expr::{Clock, ExprId};
-use petrel_actors::State;
-use tokio::sync::watch;
+use petrel_actors::{Input, State};
 use tokio::time::Instant;
 
 use super::bind::Bound;
@@ -13,7 +12,7 @@ use super::env::MissionEnv;
 use super::memory::MissionMemory;
 use super::shown::{marking, Shown};
 use super::team::TeamIo;
-use crate::exec::{step, PlanState};
+use crate::exec::{step_with, PlanState, StepReport};
 use crate::model::Plan;
 
 /// A mission step's times, read once when the step begins.
@@ -33,7 +32,7 @@ pub(super) struct Run {
     pub state: PlanState,
     pub bound: Bound,
     /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
-    pub timer: watch::Sender<Option<Instant>>,
+    pub timer: super::module::Timer,
     pub done: bool,
     /// Scratch for the expressions a round changed, kept to avoid allocating per round.
     pub changed: Vec<ExprId>,
@@ -49,58 +48,111 @@ pub(super) struct Run {
     /// The `state/memory` value published before the last one, given back by the cell: filled
     /// in place at the next save when no reader holds it any more (see [`Run::save`]).
     pub spare: Option<Arc<MissionMemory>>,
+    /// The last round's report, its buffers reused by the next round.
+    pub report: StepReport,
+    /// The transitions fired in this module step so far, for `out/firings`.
+    pub fired: Vec<usize>,
+    /// `in/conditions` as last read.
+    pub flags: FlagsSeen,
+    /// Spare keys for `memory.running` (see [`MissionEnv::keys`]).
+    pub keys: Vec<String>,
 }
 
 /// Plan steps run back to back in one module step at most (see [`Mission::step`]).
 pub(super) const MAX_ROUNDS: usize = 64;
 
+/// What one round did (the details stay in [`Run::report`]).
+#[derive(Clone, Copy)]
+pub(super) struct Round {
+    /// Transitions fired.
+    pub fired: usize,
+    /// Whether it called an action (which may have enabled a module or written its input).
+    pub called: bool,
+}
+
+/// The mission's `in/conditions` as last read, read again only when its version moved.
+#[derive(Default)]
+pub(super) struct FlagsSeen {
+    seen: Option<u64>,
+    flags: Arc<Flags>,
+}
+
+impl FlagsSeen {
+    /// The current flags of `input`; unless `fresh`, the flags read last (see [`Run::round`]).
+    pub fn current(&mut self, input: &Input<Flags>, fresh: bool) -> &Flags {
+        if !fresh && self.seen.is_some() {
+            return &self.flags;
+        }
+        let version = input.version();
+        if self.seen != Some(version) {
+            // Read after the version: a write in between is read now and again next time.
+            self.seen = Some(version);
+            self.flags = input.get();
+        }
+        &self.flags
+    }
+}
+
 impl Run {
     /// One plan step at time `t`: bring expressions up to date with changed properties, then
-    /// step. Returns the step's report and the labels of what it fired (none while the plan
-    /// fires in a circle: the loop report names it).
-    pub fn round(&mut self, t: StepTime, flags: &Flags) -> (crate::exec::StepReport, Vec<String>) {
-        self.refresh(t.now);
+    /// step. What it did is left in `self.report`; the transitions it fired are added to
+    /// `self.fired` unless the plan fires in a circle (the loop report names those).
+    ///
+    /// `fresh`: a watched property may have changed since the last round (the first round of
+    /// a module step, one after the modules it woke ran, or one after a write that raised the
+    /// mission's signal). Otherwise the properties are not looked at again: nothing the mission
+    /// watches was written, and a write landing meanwhile wakes it again after this step.
+    pub fn round(&mut self, t: StepTime, flags: &Input<Flags>, fresh: bool) -> Round {
+        if fresh {
+            self.refresh_props(t.now);
+        }
+        self.evaluate(t.now);
         let mut env = MissionEnv {
+            plan: &self.plan,
             bound: &mut self.bound,
-            flags,
+            // From the cell only when it changed: an action's `set` may write the mission's
+            // own flags (which raises its signal, so the next round is fresh).
+            flags: self.flags.current(flags, fresh),
             now: t.now,
             secs: t.secs,
             stamp: t.stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
+            keys: &mut self.keys,
         };
         // Every condition is known here (unbound atoms read `in/conditions`), so the report's
         // `unknown_conditions` stays empty.
-        let report = step(&self.plan, &mut self.state, &mut env);
+        step_with(&self.plan, &mut self.state, &mut env, &mut self.report);
+        let report = &self.report;
         if report.fired.is_empty() {
             self.loops.waited();
         } else {
-            self.note_loop(&report);
+            self.note_loop();
         }
+        let fired = self.report.fired.len();
         // A looping plan's firings were reported as one cycle: a line each would flood the log.
-        let fired = match report.fired.is_empty() || self.loops.looping() {
-            true => Vec::new(),
-            false => self.labels(&report),
-        };
-        if !fired.is_empty() && tracing::enabled!(tracing::Level::INFO) {
-            let calls: Vec<String> = report.calls.iter().map(|c| c.to_string()).collect();
-            tracing::info!(?fired, ?calls, "plan step");
+        if fired > 0 && !self.loops.looping() {
+            self.fired.extend_from_slice(&self.report.fired);
+            if tracing::enabled!(tracing::Level::INFO) {
+                let labels = self.labels(&self.report.fired);
+                let calls: Vec<String> = self.report.calls.iter().map(|c| c.to_string()).collect();
+                tracing::info!(fired = ?labels, ?calls, "plan step");
+            }
         }
-        (report, fired)
+        Round {
+            fired,
+            called: !self.report.calls.is_empty(),
+        }
     }
 
-    /// The transitions `report` fired, as the log and `out/firings` show them.
-    fn labels(&self, report: &crate::exec::StepReport) -> Vec<String> {
-        report
-            .fired
-            .iter()
-            .map(|&t| self.shown.label(t).to_string())
-            .collect()
+    /// Transitions `fired` as the log and `out/firings` show them (shared, not copied).
+    pub fn labels(&self, fired: &[usize]) -> Vec<Arc<str>> {
+        self.shown.labels(fired)
     }
 
     /// Reports the plan when its rounds fire in a circle without ever waiting.
-    fn note_loop(&mut self, report: &crate::exec::StepReport) {
-        let (shown, state) = (&self.shown, &self.state);
+    fn note_loop(&mut self) {
+        let (shown, state, report) = (&self.shown, &self.state, &self.report);
         let found = self.loops.fired(std::time::Instant::now, || {
             let labels = report.fired.iter();
             let labels = labels.map(|&t| shown.label(t).to_string());
@@ -122,6 +174,12 @@ impl Run {
 
     /// Brings the expressions up to date with the properties they read, at `now`.
     fn refresh(&mut self, now: Instant) {
+        self.refresh_props(now);
+        self.evaluate(now);
+    }
+
+    /// Feeds the expressions the watched properties that changed since they were last read.
+    fn refresh_props(&mut self, now: Instant) {
         let wall = self.clock.is_wall();
         for (id, h, seen) in &mut self.bound.watched {
             // A lock-free version check first: most rounds change few properties.
@@ -136,6 +194,10 @@ impl Run {
                 .exprs
                 .update(*id, h.type_info(), &s.value, written);
         }
+    }
+
+    /// Evaluates the expressions whose properties changed, and the time-dependent ones.
+    fn evaluate(&mut self, now: Instant) {
         self.bound.exprs.evaluate_into(now, &mut self.changed);
         for &id in &self.changed {
             if let Some(Err(e)) = self.bound.exprs.value(id) {
@@ -153,6 +215,12 @@ impl Run {
     /// and, once no reader holds it, is filled in place at the save after (reusing its
     /// strings, vectors and map entries) instead of a fresh clone of the whole memory.
     pub fn save(&mut self, out: &State<MissionMemory>) {
+        self.save_changed(out, false)
+    }
+
+    /// Like [`save`](Self::save); `changed` says the memory surely differs from the one
+    /// published (a call was counted), which spares comparing them.
+    pub fn save_changed(&mut self, out: &State<MissionMemory>, changed: bool) {
         if self.memory.plan != self.plan.name() {
             self.memory.plan = self.plan.name().to_string();
         }
@@ -178,7 +246,7 @@ impl Run {
         }
         self.memory.serve.clone_from(&self.team.serve);
         self.memory.dispatch = self.team.dispatch.memory();
-        if *out.get() == self.memory {
+        if !changed && *out.get() == self.memory {
             return;
         }
         let mut next = match self.spare.take() {
@@ -242,7 +310,7 @@ impl Run {
     pub fn serve_round(
         &mut self,
         t: StepTime,
-        flags: &Flags,
+        flags: &Input<Flags>,
         inbox: &petrel_actors::QueueReader<petrel_actors::team::Message>,
     ) -> bool {
         let StepTime { now, secs, stamp } = t;
@@ -267,13 +335,15 @@ impl Run {
         }
         let full = |local: &str| format!("{agent}#{local}");
         let mut env = MissionEnv {
+            plan: &self.plan,
             bound: &mut self.bound,
-            flags,
+            flags: self.flags.current(flags, true),
             now,
             secs,
             stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
+            keys: &mut self.keys,
         };
         use crate::exec::Environment;
         use crate::label::CallKind;
@@ -333,20 +403,22 @@ impl Run {
 
     /// Run mode: sends other agents the conditions of this one they watch, when they changed
     /// (calls, which only serve mode carries out, are answered as failed).
-    pub fn answer_watches(&mut self, t: StepTime, flags: &Flags) {
+    pub fn answer_watches(&mut self, t: StepTime, flags: &Input<Flags>) {
         if !self.team.serve.has_watchers() {
             return;
         }
         self.refresh(t.now);
         let agent = self.team.agent.clone();
         let mut env = MissionEnv {
+            plan: &self.plan,
             bound: &mut self.bound,
-            flags,
+            flags: self.flags.current(flags, true),
             now: t.now,
             secs: t.secs,
             stamp: t.stamp,
             memory: &mut self.memory,
             dispatch: &mut self.team.dispatch,
+            keys: &mut self.keys,
         };
         self.team.serve.poll(
             |_| (false, true),

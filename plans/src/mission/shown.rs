@@ -6,6 +6,8 @@
 //! then joined) cost as much as the plan step. Plans come back to the same markings (a loop,
 //! a waiting place), so the texts are kept by marking.
 
+use std::sync::Arc;
+
 use crate::exec::PlanState;
 use crate::model::{Plan, Transition};
 
@@ -13,28 +15,28 @@ use crate::model::{Plan, Transition};
 /// markings pays what it paid before, no memory grows without bound).
 const MAX_TEXTS: usize = 256;
 
-/// The texts of one marking.
+/// The texts of one marking, shared: `out/firings` items hold them without a copy.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub(super) struct Texts {
     /// Marked places, `label` or `label*n`, comma-separated (`out/marking`).
-    pub marking: String,
+    pub marking: Arc<str>,
     /// Running actions, comma-separated (`out/running`).
-    pub running: String,
+    pub running: Arc<str>,
 }
 
 /// Transition labels and the texts of the markings seen, for one plan.
 #[derive(Debug, Default)]
 pub(super) struct Shown {
-    labels: Vec<String>,
+    labels: Vec<Arc<str>>,
     texts: foldhash::HashMap<Vec<u32>, Texts>,
     /// The marking key whose texts were published last (its buffer reused).
     published: Option<Vec<u32>>,
 }
 
 /// What a step has to publish (see [`Shown::news`]).
-pub(super) struct News<'a> {
-    /// The texts of the marking the step left.
-    pub texts: &'a Texts,
+pub(super) struct News {
+    /// The texts of the marking the step left (shared with the memo).
+    pub texts: Texts,
     /// The marking text differs from the one published last (or none was).
     pub marking: bool,
     /// So does the running text.
@@ -45,21 +47,26 @@ impl Shown {
     /// The labels of `plan`'s transitions, computed once.
     pub fn new(plan: &Plan) -> Shown {
         Shown {
-            labels: plan.transitions().iter().map(shown).collect(),
+            labels: plan.transitions().iter().map(|t| shown(t).into()).collect(),
             texts: foldhash::HashMap::default(),
             published: None,
         }
     }
 
     /// Transition `t` as the log and `out/firings` show it.
-    pub fn label(&self, t: usize) -> &str {
+    pub fn label(&self, t: usize) -> &Arc<str> {
         &self.labels[t]
+    }
+
+    /// Transitions `fired` as the log and `out/firings` show them (shared, not copied).
+    pub fn labels(&self, fired: &[usize]) -> Vec<Arc<str>> {
+        fired.iter().map(|&t| self.labels[t].clone()).collect()
     }
 
     /// The texts of `state` (marking key `key`), and which of them changed since the last
     /// call: the mission writes only those, without reading back what it wrote (a write wakes
     /// every reader; a read and compare per output cost as much as the write).
-    pub fn news(&mut self, plan: &Plan, state: &PlanState, key: &[u32]) -> News<'_> {
+    pub fn news(&mut self, plan: &Plan, state: &PlanState, key: &[u32]) -> News {
         self.texts(plan, state, key);
         let mut published = self.published.take().unwrap_or_default();
         let texts = &self.texts[key];
@@ -73,7 +80,7 @@ impl Shown {
         published.extend_from_slice(key);
         self.published = Some(published);
         News {
-            texts,
+            texts: texts.clone(),
             marking,
             running,
         }
@@ -86,8 +93,8 @@ impl Shown {
                 self.texts.clear();
             }
             let texts = Texts {
-                marking: marking(plan, state),
-                running: state.running_actions(plan).join(", "),
+                marking: marking(plan, state).into(),
+                running: state.running_actions(plan).join(", ").into(),
             };
             self.texts.insert(key.to_vec(), texts);
         }
@@ -139,8 +146,8 @@ mod tests {
         let state = PlanState::new(&plan);
         let key = state.save();
         let first = shown.texts(&plan, &state, &key).clone();
-        assert_eq!(first.marking, marking(&plan, &state));
-        assert_eq!(first.running, state.running_actions(&plan).join(", "));
+        assert_eq!(*first.marking, marking(&plan, &state));
+        assert_eq!(*first.running, state.running_actions(&plan).join(", "));
         // A second state of another marking gets its own texts.
         let mut other = state.clone();
         let last = plan.places().len() as u32 - 1;
@@ -167,7 +174,7 @@ mod tests {
         other.restore(&plan, &[1, last, 1]).unwrap();
         let next = shown.news(&plan, &other, &other.save());
         assert!(next.marking && !next.running, "{:?}", next.texts);
-        assert_eq!(next.texts.marking, marking(&plan, &other));
+        assert_eq!(*next.texts.marking, marking(&plan, &other));
     }
 
     #[test]

@@ -95,10 +95,15 @@ impl TeamIo {
         Some(members.0.iter().map(|m| m.agent.clone()).collect())
     }
 
-    /// Run mode, before the plan steps: answers and conditions from robots, robots that
-    /// joined or left. Returns whether the plan may step (it waits for robots' conditions).
-    pub fn take_news(&mut self, inbox: &QueueReader<Message>) -> bool {
-        for item in inbox.drain() {
+    /// Run mode, before the plan steps: answers and conditions from robots (when `items` says
+    /// the inbox may hold some), robots that joined or left. Returns whether the plan may step
+    /// (it waits for robots' conditions).
+    pub fn take_news(&mut self, inbox: &QueueReader<Message>, items: bool) -> bool {
+        let news = match items {
+            true => inbox.drain(),
+            false => Vec::new(),
+        };
+        for item in news {
             let result = match TeamMsg::decode(&item.body) {
                 // Another agent's plan watching this one's conditions (distributed plans).
                 Ok(TeamMsg::Watch { .. } | TeamMsg::Call { .. }) => {
