@@ -4,7 +4,7 @@
 
 use tokio::time::Instant;
 
-use super::bind::{Bound, BoundAction, Relink};
+use super::bound::{Bound, BoundAction, Relink};
 use super::config::Flags;
 use super::memory::{MissionMemory, RunningAction};
 use crate::exec::Environment;

@@ -54,6 +54,7 @@
 //! in parallel is disabled when the first of them ends.
 
 mod bind;
+mod bound;
 mod builtin;
 mod config;
 mod env;

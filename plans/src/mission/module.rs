@@ -12,7 +12,8 @@ use petrel_actors::{
 use tokio::sync::watch;
 use tokio::time::Instant;
 
-use super::bind::{plan_names, Relink};
+use super::bind::plan_names;
+use super::bound::Relink;
 use super::config::{ActionBindings, ConditionBindings, Flags, Places};
 use super::memory::{MissionMemory, PlanFiring};
 use super::prepare::{prepare, Problems, Setup};

@@ -6,7 +6,8 @@ use std::sync::Arc;
 use anyhow::Context as _;
 use petrel_actors::{Blackboard, BlackboardError, FilePath};
 
-use super::bind::{bind, BindingProblem, Bound, Params, Scope};
+use super::bind::{bind, BindingProblem, Params, Scope};
+use super::bound::Bound;
 use super::config::{ActionBindings, ConditionBindings, Places};
 use crate::load::load_plan;
 use crate::model::Plan;

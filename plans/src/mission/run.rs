@@ -6,7 +6,7 @@ use petrel_actors::expr::{Clock, ExprId};
 use petrel_actors::{Input, State};
 use tokio::time::Instant;
 
-use super::bind::Bound;
+use super::bound::Bound;
 use super::config::Flags;
 use super::env::MissionEnv;
 use super::memory::MissionMemory;
@@ -428,7 +428,7 @@ impl Run {
 }
 
 /// Another running action that switches a module `name` switches too, if any.
-fn sharing(bound: &super::bind::Bound, name: &str) -> Option<String> {
+fn sharing(bound: &Bound, name: &str) -> Option<String> {
     let modules: Vec<&str> = bound
         .actions
         .get(name)?
