@@ -64,6 +64,7 @@ mod memory;
 mod module;
 mod prepare;
 mod run;
+mod serve;
 mod shown;
 mod team;
 
