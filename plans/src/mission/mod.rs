@@ -67,6 +67,7 @@ mod run;
 mod serve;
 mod shown;
 mod team;
+mod timer;
 
 pub use bind::BindingProblem;
 pub use config::{

@@ -1,6 +1,5 @@
 //! The `mission.pnp` module: declare, bind at init, step the plan on events.
 
-use std::sync::Arc;
 use std::time::Duration;
 
 use petrel_actors::expr::Clock;
@@ -9,8 +8,6 @@ use petrel_actors::{
     Context, FilePath, Input, Module, Output, Param, Ports, QueueReader, QueueWriter, Range,
     Schedule, State,
 };
-use tokio::sync::watch;
-use tokio::time::Instant;
 
 use super::bind::plan_names;
 use super::bound::Relink;
@@ -20,6 +17,7 @@ use super::prepare::{prepare, Problems, Setup};
 use super::run::{Run, StepTime, MAX_ROUNDS};
 use super::shown::{marking, Shown};
 use super::team::{is_serve, TeamIo, RUN};
+use super::timer::Timer;
 use crate::exec::{PlanState, PlanStatus};
 use crate::remote::Dispatch;
 
@@ -300,12 +298,7 @@ impl Mission {
             .blackboard()
             .any_handle(&format!("{}/state/wake", ctx.module()))
             .await?;
-        let (timer, rx) = watch::channel(None);
-        tokio::spawn(deadline_timer(rx, wake));
-        let timer = Timer {
-            tx: timer,
-            told: None,
-        };
+        let timer = Timer::start(wake);
         tracing::info!(
             plan = plan.name(),
             actions = bound.actions.len(),
@@ -401,52 +394,5 @@ async fn relink(ctx: &Context, relinks: &mut Vec<Relink>) {
 fn publish(out: &Output<String>, v: &str) {
     if *out.get() != v {
         out.set(v.to_string());
-    }
-}
-
-/// The sender to the task that bumps `state/wake` when the next deadline passes, with the
-/// deadline it was told last.
-pub(super) struct Timer {
-    tx: watch::Sender<Option<Instant>>,
-    told: Option<Instant>,
-}
-
-impl Timer {
-    /// Tells the timer task about a new deadline. Only a change wakes it: a wake-up per mission
-    /// step would put a second task on the run queue at every reaction, and tokio then brings
-    /// in another worker thread to steal it, which costs more than the reaction itself. The
-    /// deadline told last is kept here, so an unchanged one costs no lock of the channel.
-    pub fn set(&mut self, deadline: Option<Instant>) {
-        if deadline == self.told {
-            return;
-        }
-        self.told = deadline;
-        self.tx.send_if_modified(|d| {
-            let changed = *d != deadline;
-            *d = deadline;
-            changed
-        });
-    }
-}
-
-/// Bumps `state/wake` when the latest deadline passes; ends when the mission drops its sender.
-async fn deadline_timer(mut rx: watch::Receiver<Option<Instant>>, wake: petrel_actors::AnyHandle) {
-    loop {
-        let deadline = *rx.borrow_and_update();
-        let sleep = async {
-            match deadline {
-                Some(t) => tokio::time::sleep_until(t).await,
-                None => std::future::pending().await,
-            }
-        };
-        tokio::select! {
-            changed = rx.changed() => if changed.is_err() { return },
-            _ = sleep => {
-                let n = wake.get::<i64>().map_or(0, |v| *v);
-                let _ = wake.set(Arc::new(n + 1));
-                // Wait for the next deadline the mission computes.
-                if rx.changed().await.is_err() { return }
-            }
-        }
     }
 }

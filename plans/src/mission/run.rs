@@ -32,7 +32,7 @@ pub(super) struct Run {
     pub state: PlanState,
     pub bound: Bound,
     /// The next `held`/`age` deadline, for the timer task that bumps `state/wake`.
-    pub timer: super::module::Timer,
+    pub timer: super::timer::Timer,
     pub done: bool,
     /// Scratch for the expressions a round changed, kept to avoid allocating per round.
     pub changed: Vec<ExprId>,
