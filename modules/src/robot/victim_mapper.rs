@@ -22,6 +22,7 @@ pub struct VictimMapper {
     confirm_hits: Input<i64>,
     min_confidence: Input<f64>,
     max_range: Input<f64>,
+    confirm_range: Input<f64>,
     standoff: Input<f64>,
     view_frames: Input<i64>,
     victims: Output<Path2>,
@@ -71,6 +72,7 @@ impl Module for VictimMapper {
             confirm_hits: ports.param_in("params/confirm_hits", 3, Range::new(1.0, 1000.0), "sightings that make a seen victim"),
             min_confidence: ports.param_in("params/min_confidence", 0.1, Range::new(0.0, 1.0), "weaker detections are ignored, 0..1"),
             max_range: ports.param_in("params/max_range", 5.0, Range::new(0.1, 100.0), "farther detections are ignored, m"),
+            confirm_range: ports.param_in("params/confirm_range", 5.0, Range::new(0.1, 100.0), "a victim is seen only once one of its sightings was this close (a far victim's range can be metres short), m"),
             standoff: ports.param_in("params/standoff", 1.0, Range::new(0.01, 20.0), "distance of the approach pose from the target, m"),
             view_frames: ports.param_in("params/view_frames", 3, Range::new(1.0, 1000.0), "the target is in view while one of the last this many frames saw it"),
             victims: ports.output("out/victims", Path2::default(), "reported victims (the found list), map frame, in report order"),
@@ -105,6 +107,7 @@ impl Module for VictimMapper {
             confirm_hits: count("confirm_hits", self.confirm_hits.value())? as u32,
             min_confidence: self.min_confidence.value(),
             max_range: self.max_range.value(),
+            confirm_range: self.confirm_range.value(),
             standoff: self.standoff.value(),
             view_frames: count("view_frames", self.view_frames.value())? as u32,
         };

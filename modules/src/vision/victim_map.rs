@@ -3,7 +3,10 @@
 //!
 //! Each detection is placed in the map (pose ⊕ bearing and range) and merged into the nearest
 //! candidate within `merge_radius`, or starts a new one. A candidate is *seen* after
-//! `confirm_hits` sightings: one noisy frame is not a victim. A seen candidate keeps absorbing
+//! `confirm_hits` sightings, one of them from within `confirm_range`: one noisy frame is not a
+//! victim, and a far victim's range, read a few rows below the horizon, can be metres short
+//! frame after frame (its sightings still place and refine a candidate, which is seen once a
+//! robot came near enough to read its range well). A seen candidate keeps absorbing
 //! sightings, so its position keeps improving, and a second sighting of it never makes a
 //! second victim.
 //!
@@ -41,6 +44,9 @@ pub struct VictimMapParams {
     /// Detections further than this are ignored: range estimates degrade with distance,
     /// metres (default 5.0).
     pub max_range: f64,
+    /// A candidate is seen only once one of its sightings was this close, metres (default
+    /// 5.0: any sighting within `max_range`).
+    pub confirm_range: f64,
     /// Distance from the target victim to its approach pose, metres (default 1.0).
     pub standoff: f64,
     /// The target is in view while one of the last this many frames saw it (default 3).
@@ -54,6 +60,7 @@ impl Default for VictimMapParams {
             confirm_hits: 3,
             min_confidence: 0.1,
             max_range: 5.0,
+            confirm_range: 5.0,
             standoff: 1.0,
             view_frames: 3,
         }
@@ -66,6 +73,7 @@ impl VictimMapParams {
         for (name, v) in [
             ("merge_radius", self.merge_radius),
             ("max_range", self.max_range),
+            ("confirm_range", self.confirm_range),
             ("standoff", self.standoff),
         ] {
             if !(v.is_finite() && v > 0.0) {
@@ -125,6 +133,10 @@ struct Candidate {
     /// Their weights, summed.
     weight: f64,
     hits: u32,
+    /// One of its sightings was within `confirm_range` (true in memories saved before there
+    /// was one, so what they had seen stays seen).
+    #[serde(default = "yes")]
+    near: bool,
     handling: Handling,
     /// The frame that last saw it.
     last_frame: u64,
@@ -132,16 +144,26 @@ struct Candidate {
     told: Option<Point2>,
 }
 
+fn yes() -> bool {
+    true
+}
+
 impl Candidate {
     fn position(&self) -> Point2 {
         Point2::new(self.sum.0 / self.weight, self.sum.1 / self.weight)
     }
 
-    fn absorb(&mut self, (x, y): (f64, f64), weight: f64, frame: u64) {
+    fn absorb(&mut self, (x, y): (f64, f64), weight: f64, frame: u64, near: bool) {
         self.sum = (self.sum.0 + weight * x, self.sum.1 + weight * y);
         self.weight += weight;
         self.hits += 1;
+        self.near |= near;
         self.last_frame = frame;
+    }
+
+    /// Seen often enough, once from near enough (dismissed or not).
+    fn confirmed(&self, p: &VictimMapParams) -> bool {
+        self.hits >= p.confirm_hits && self.near
     }
 }
 
@@ -230,10 +252,12 @@ impl VictimMap {
             .filter(|(dist, _)| *dist <= p.merge_radius)
             .min_by(|a, b| a.0.total_cmp(&b.0));
         let weight = sighting_weight(d.range);
+        let near = d.range <= p.confirm_range;
         match nearest {
             Some((_, c)) => {
-                c.absorb((x, y), weight, frame);
-                (c.hits == p.confirm_hits && c.handling != Handling::Dismissed)
+                let before = c.confirmed(p);
+                c.absorb((x, y), weight, frame, near);
+                (!before && c.confirmed(p) && c.handling != Handling::Dismissed)
                     .then(|| c.position())
             }
             None => {
@@ -241,13 +265,15 @@ impl VictimMap {
                     sum: (0.0, 0.0),
                     weight: 0.0,
                     hits: 0,
+                    near: false,
                     handling: Handling::Open,
                     last_frame: frame,
                     told: None,
                 };
-                c.absorb((x, y), weight, frame);
+                c.absorb((x, y), weight, frame, near);
+                let seen = c.confirmed(p);
                 self.candidates.push(c);
-                (p.confirm_hits == 1).then(|| Point2::new(x, y))
+                seen.then(|| Point2::new(x, y))
             }
         }
     }
@@ -256,10 +282,10 @@ impl VictimMap {
     /// told yet, and each whose position moved more than `min_move` metres from where it was
     /// last told; as `(id, position)`, the id the victim's for as long as this map lives.
     pub fn news(&mut self, min_move: f64) -> Vec<(usize, Point2)> {
-        let confirm = self.params.confirm_hits;
+        let p = &self.params;
         let mut news = Vec::new();
         for (id, c) in self.candidates.iter_mut().enumerate() {
-            if c.hits < confirm || c.handling == Handling::Dismissed {
+            if !c.confirmed(p) || c.handling == Handling::Dismissed {
                 continue;
             }
             let now = c.position();
@@ -272,7 +298,7 @@ impl VictimMap {
     }
 
     fn is_seen(&self, c: &Candidate) -> bool {
-        c.hits >= self.params.confirm_hits && c.handling != Handling::Dismissed
+        c.confirmed(&self.params) && c.handling != Handling::Dismissed
     }
 
     /// Seen victims (reported or pending), in the order they were first seen.
@@ -303,9 +329,8 @@ impl VictimMap {
     /// The target for a robot at `robot`: the one picked before while it is pending, or else
     /// the nearest pending victim (None when nothing is pending).
     pub fn target(&mut self, robot: Point2) -> Option<Target> {
-        let open = |c: &Candidate, p: &VictimMapParams| {
-            c.hits >= p.confirm_hits && c.handling == Handling::Open
-        };
+        let open =
+            |c: &Candidate, p: &VictimMapParams| c.confirmed(p) && c.handling == Handling::Open;
         if !self
             .target
             .is_some_and(|i| open(&self.candidates[i], &self.params))

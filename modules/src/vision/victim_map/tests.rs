@@ -124,6 +124,44 @@ fn near_sightings_outweigh_far_ones() {
     );
 }
 
+/// A far victim's range, read a few rows below the horizon, can be metres short frame after
+/// frame (the rescue team's false victims were far ones placed 2 m short, twice in a row).
+/// With `confirm_range`, such sightings make a candidate but not a victim; nearer sightings,
+/// which read the range well, confirm the real one, and the short candidate is never seen.
+#[test]
+fn far_sightings_alone_do_not_make_a_victim_under_a_confirm_range() {
+    let mut m = VictimMap::new(VictimMapParams {
+        confirm_hits: 2,
+        confirm_range: 3.5,
+        ..VictimMapParams::default()
+    });
+    // A victim at (6.5, 0) seen from the origin, placed 2 m short, again and again.
+    for _ in 0..5 {
+        assert_eq!(m.add(Pose2::default(), &seen(0.0, 4.5)), None);
+    }
+    assert!(m.seen().is_empty() && m.news(0.3).is_empty() && m.pending() == 0);
+    assert_eq!(m.target(Point2::new(0.0, 0.0)), None);
+    // The robot drives up: from 3 m the range is right, and the real victim is seen there
+    // (the short candidate, 2 m away, is another one, and stays unseen).
+    let robot = Pose2::new(3.5, 0.0, 0.0);
+    assert_eq!(m.add(robot, &seen(0.0, 3.0)), None);
+    let found = m.add(robot, &seen(0.0, 3.0)).unwrap();
+    assert!((found.0.x - 6.5).abs() < 1e-9, "{found:?}");
+    assert_eq!(m.seen(), vec![found]);
+    // Without a confirm range (the default: max_range), the short sightings were a victim.
+    let mut plain = VictimMap::new(VictimMapParams {
+        confirm_hits: 2,
+        ..VictimMapParams::default()
+    });
+    plain.add(Pose2::default(), &seen(0.0, 4.5));
+    assert!(plain.add(Pose2::default(), &seen(0.0, 4.5)).is_some());
+    let bad = VictimMapParams {
+        confirm_range: f64::NAN,
+        ..VictimMapParams::default()
+    };
+    assert!(bad.validate().unwrap_err().contains("confirm_range"));
+}
+
 #[test]
 fn news_tells_each_seen_victim_once_and_again_when_it_moved() {
     let mut m = VictimMap::new(VictimMapParams::default());
