@@ -6,8 +6,8 @@
 //! distance, so far victims are small and faint.
 //!
 //! Sensor: the light on what a column sees (1 in the open, [`DARK_LIGHT`] where the ray ends
-//! in a dark area) times
-//! the exposure makes photons; shot noise is their square root plus a read-noise floor, and
+//! in a dark area, a wall lit by the space in front of its face) times the exposure makes
+//! photons; shot noise is their square root plus a read-noise floor, and
 //! `gain` scales signal and noise alike before 8-bit quantization. So a dark scene is dim and
 //! noisy, a longer exposure cleans it up, and gain brightens it. Motion blurs over the
 //! exposure: turning and driving smear columns (a box blur of `turn rate x focal length +
