@@ -6,8 +6,8 @@
 //! distance, so far victims are small and faint.
 //!
 //! Sensor: the light on what a column sees (1 in the open, [`DARK_LIGHT`] where the ray ends
-//! in a dark area) times
-//! the exposure makes photons; shot noise is their square root plus a read-noise floor, and
+//! in a dark area, a wall lit by the space in front of its face) times the exposure makes
+//! photons; shot noise is their square root plus a read-noise floor, and
 //! `gain` scales signal and noise alike before 8-bit quantization. So a dark scene is dim and
 //! noisy, a longer exposure cleans it up, and gain brightens it. Motion blurs over the
 //! exposure: turning and driving smear columns (a box blur of `turn rate x focal length +
@@ -44,6 +44,10 @@ const WALL_HEIGHT: f64 = 1.0;
 const PHOTONS_PER_MS: f64 = 60.0;
 /// Photons that fill the 8-bit range at gain 1.
 const FULL_SCALE: f64 = 600.0;
+/// How far in front of a wall's face its light is taken, metres: the face the camera sees is
+/// lit by the space in front of it, and a dark area's edge often lies on the face itself (a
+/// room's `dark:` rectangle drawn to its walls), where rounding would light columns at random.
+const LIGHT_PROBE: f64 = 0.01;
 /// Read noise, photons (std).
 const READ_NOISE: f64 = 3.0;
 /// Sideways smear per metre per second of forward speed, pixels per second of exposure.
@@ -243,7 +247,7 @@ pub fn render_among(
             });
             let lit = match (value, body) {
                 (Some(_), Some((d, _))) => light_at(d),
-                _ => light_at(wall),
+                _ => light_at((wall - LIGHT_PROBE).max(0.0)),
             };
             radiance[row * w + col] = lit
                 * value.unwrap_or_else(|| {

@@ -211,3 +211,51 @@ fn another_robot_in_view_is_a_plain_grey_body_hiding_what_is_behind_it() {
     // Out of view (behind the camera) it changes nothing.
     assert_eq!(shot(&[(0.5, 2.5, 0.2)]), alone);
 }
+
+/// A dark room's edge drawn along its walls' inner faces (as `configs/rescue/rescue.txt` does:
+/// the storeroom's `dark:` rectangle ends where its walls begin). The light on a wall is the
+/// light in front of the face the camera sees, so every column of the wall is as dark as the
+/// room: taking it at the face itself, which lies on the rectangle's edge, lit columns at
+/// random (rounding put the hit in or out), and with a dark room's gain they were white
+/// stripes beside black ones, which sharpening turned into texture and the detector into a
+/// victim beside the wall.
+#[test]
+fn a_wall_on_the_edge_of_a_dark_room_is_as_dark_as_the_room() {
+    let (grid, _) = scene(false);
+    // The inner faces of the hall's walls: x = 0.1 and 9.9, y = 0.1 and 4.9.
+    let features = WorldFeatures {
+        dark: vec![Rect::from_corners([0.1, 0.1, 9.9, 4.9]).unwrap()],
+        ..WorldFeatures::default()
+    };
+    let cfg = CameraConfig {
+        exposure_ms: 30.0,
+        gain: 4.0,
+        ..CameraConfig::default()
+    };
+    let w = cfg.width as usize;
+    // Looking at the walls from several places and headings, some at a slant.
+    for (x, y, heading) in [
+        (5.0, 2.5, -90.0f64),
+        (5.0, 2.5, 90.0),
+        (2.0, 1.5, -60.0),
+        (8.0, 3.0, 20.0),
+        (6.0, 1.0, -120.0),
+    ] {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let img = render(
+            &grid,
+            &features,
+            Pose2::new(x, y, heading.to_radians()),
+            CameraMotion::default(),
+            &cfg,
+            &mut rng,
+        );
+        // The row just above the horizon is wall in every column; a lit column saturates.
+        let row = cfg.height as usize / 2 - 2;
+        let lit: Vec<usize> = (0..w).filter(|&c| img[row * w + c] == 255).collect();
+        assert!(
+            lit.is_empty(),
+            "from ({x}, {y}) at {heading}°: wall columns lit as if outside the room: {lit:?}"
+        );
+    }
+}
