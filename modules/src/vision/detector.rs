@@ -20,9 +20,12 @@ use crate::sim::camera::{CAMERA_HEIGHT, CHECKER, VICTIM_RADIUS};
 
 /// Fewest adjacent textured columns that make a detection.
 pub const MIN_COLUMNS: usize = 3;
-/// A column's noise texture, in multiples of its median row-to-row difference (pure noise
-/// averages about 1.7 of it over a window; the most textured window a little more).
-const NOISE_FACTOR: f64 = 2.0;
+/// A column's noise texture, in multiples of its lower-quartile row-to-row difference (pure
+/// noise averages about 2.5 of it over a window; the most textured window more). The lower
+/// quartile, not the median: a near victim fills most of its columns' rows, and the shot
+/// noise of its bright squares, amplified in the dark, would raise a median to its own
+/// texture.
+const NOISE_FACTOR: f64 = 4.2;
 /// Rows over which a column's texture is averaged (a victim 3.5 m away is 12 rows high).
 const WINDOW: usize = 10;
 /// Textured runs this close (columns) are one victim: checker squares leave gaps.
@@ -166,7 +169,7 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         .map(|c| {
             let mut d: Vec<f64> = (r0..r1).map(|r| diff(r, c)).collect();
             d.sort_by(f64::total_cmp);
-            NOISE_FACTOR * d.get(d.len() / 2).copied().unwrap_or(0.0)
+            NOISE_FACTOR * d.get(d.len() / 4).copied().unwrap_or(0.0)
         })
         .collect();
     let floor_of: Vec<f64> = (0..texture.len())
@@ -204,10 +207,26 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         let cols = (start + c0)..(c + c0);
         let floor = floor_of[start..c].iter().sum::<f64>() / (c - start) as f64;
         let excess = texture[start..c].iter().map(|t| t - floor).sum::<f64>() / (c - start) as f64;
-        let textured = |r: usize| {
-            cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64 > floor + threshold
-        };
-        let Some(bottom) = foot_row(textured, (h / 2).max(r0), r1, h / 2, cols.len()) else {
+        // Row by row across the run: checker edges stand out, rows inside a square hold only
+        // noise. The foot is the last row standing out from the columns' floor (a lower
+        // reference takes noisy rows of floor for feet). The band is measured against the
+        // noise a row holds, the median row, where that is below the floor: the floor is the
+        // most textured window, and a near victim's tall squares leave so few edges in its
+        // band that their mean would not stand out from it in a dark, amplified image.
+        let row_lo = (h / 2).max(r0);
+        let row_texture: Vec<f64> = (row_lo..r1)
+            .map(|r| cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64)
+            .collect();
+        let mut sorted_rows = row_texture.clone();
+        sorted_rows.sort_by(f64::total_cmp);
+        let row_noise = floor.min(
+            sorted_rows
+                .get(sorted_rows.len() / 2)
+                .copied()
+                .unwrap_or(floor),
+        );
+        let textured = |r: usize| row_texture[r - row_lo] > floor + threshold;
+        let Some(bottom) = foot_row(textured, row_lo, r1, h / 2, cols.len()) else {
             continue;
         };
         let below_horizon = bottom as f64 + 1.0 - h as f64 / 2.0;
@@ -216,13 +235,9 @@ pub fn detect(pixels: &[u8], w: usize, h: usize, p: &DetectorParams) -> Option<D
         }
         // A victim is textured all the way from the horizon (the camera's height, its top)
         // down to its foot; an edge or a corner is textured in a row or two.
-        let band = (h / 2)..bottom;
-        let band_texture = band
-            .clone()
-            .map(|r| cols.clone().map(|cc| diff(r, cc)).sum::<f64>() / cols.len() as f64)
-            .sum::<f64>()
-            / band.len().max(1) as f64;
-        if band_texture - floor <= threshold {
+        let band = &row_texture[(h / 2).saturating_sub(row_lo)..bottom - row_lo];
+        let band_texture = band.iter().sum::<f64>() / band.len().max(1) as f64;
+        if band_texture - row_noise <= threshold {
             continue;
         }
         let centre = (cols.start + cols.end) as f64 / 2.0;
