@@ -31,7 +31,8 @@ pub struct AvoidanceParams {
     pub lookahead_time: f64,
     /// Bearing to the target beyond which the robot turns in place first, radians (default 0.8).
     pub turn_in_place_bearing: f64,
-    /// Distance to the target under which the robot stops, metres (default 0.05).
+    /// Distance to the target under which the robot stops, metres (default 0.05); there it
+    /// turns in place to the target's own heading, if that is not zero.
     pub stop_distance: f64,
     /// Weight of free space along an arc (capped at 1 m) in the score (default 0.3).
     pub clearance_weight: f64,
@@ -71,6 +72,9 @@ impl AvoidanceParams {
     }
 }
 
+/// A target's heading below this, radians, is no turn to make (the planner's "stay" is the
+/// identity; a heading it asks for is beyond its tolerance, at least 0.01 rad).
+const HEADING_DEADBAND: f64 = 1e-3;
 const SPEED_SAMPLES: usize = 6;
 const TURN_SAMPLES: usize = 21;
 /// Arcs are followed for at most half a turn: beyond that the robot would come back into the
@@ -107,8 +111,19 @@ impl Avoidance {
         self.collect_points(scan);
         let p = self.params.clone();
         let (tx, ty) = (target.x(), target.y());
-        if tx.hypot(ty) < p.stop_distance || !(tx.is_finite() && ty.is_finite()) {
+        if !(tx.is_finite() && ty.is_finite()) {
             return Twist2::default();
+        }
+        let turn_toward =
+            |angle: f64| Twist2::new(0.0, (2.0 * angle).clamp(-p.max_turn, p.max_turn));
+        if tx.hypot(ty) < p.stop_distance {
+            // There: turn in place to the target's heading (a planner that was asked to face
+            // its goal), or stay.
+            let heading = target.theta();
+            return match heading.is_finite() && heading.abs() > HEADING_DEADBAND {
+                true => turn_toward(heading),
+                false => Twist2::default(),
+            };
         }
         let fov = self.field_of_view(scan);
         let goal = if self.blocked_toward((tx, ty), fov) {
@@ -117,8 +132,6 @@ impl Avoidance {
             (tx, ty)
         };
         let bearing = goal.1.atan2(goal.0);
-        let turn_toward =
-            |angle: f64| Twist2::new(0.0, (2.0 * angle).clamp(-p.max_turn, p.max_turn));
         if bearing.abs() > p.turn_in_place_bearing {
             return turn_toward(bearing);
         }

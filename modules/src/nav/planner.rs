@@ -20,6 +20,10 @@ pub struct PlannerParams {
     pub lookahead: f64,
     /// Distance from the path that triggers a replan, metres (default 0.6).
     pub max_deviation: f64,
+    /// When set, the goal is reached only once the robot also faces the goal's heading within
+    /// this many radians: at the goal's position it turns in place (a robot sent to look at
+    /// something). `None` (default): the goal's heading is ignored.
+    pub heading_tolerance: Option<f64>,
 }
 
 impl Default for PlannerParams {
@@ -29,6 +33,7 @@ impl Default for PlannerParams {
             goal_tolerance: 0.25,
             lookahead: 0.8,
             max_deviation: 0.6,
+            heading_tolerance: None,
         }
     }
 }
@@ -39,7 +44,16 @@ impl PlannerParams {
         self.cost.validate()?;
         positive("goal_tolerance", self.goal_tolerance)?;
         positive("lookahead", self.lookahead)?;
-        positive("max_deviation", self.max_deviation)
+        positive("max_deviation", self.max_deviation)?;
+        if let Some(tolerance) = self.heading_tolerance {
+            if !(tolerance > 0.0 && tolerance <= std::f64::consts::PI) {
+                return Err(ParamError {
+                    param: "heading_tolerance".into(),
+                    message: format!("expected an angle in (0, π] rad, got {tolerance}"),
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -49,8 +63,10 @@ pub struct PlannerOutput {
     /// The current global path in world coordinates (empty when arrived or failed).
     pub path: Arc<[Point2]>,
     /// Where to head next, in the robot frame; the identity when arrived or failed (stay).
+    /// At the goal's position, facing it (`heading_tolerance`): the origin turned by the
+    /// heading still to turn.
     pub local_target: Pose2,
-    /// The robot is within `goal_tolerance` of the goal.
+    /// The robot is within `goal_tolerance` of the goal (and faces its heading, if asked to).
     pub arrived: bool,
     /// No path to the goal exists on the current map.
     pub failed: bool,
@@ -92,6 +108,18 @@ impl Planner {
         self.replans
     }
 
+    /// Changes [`PlannerParams::heading_tolerance`] (a mission asks to face one goal and not
+    /// the next). Out of range is refused, as by [`PlannerParams::validate`].
+    pub fn set_heading_tolerance(&mut self, tolerance: Option<f64>) -> Result<(), ParamError> {
+        let params = PlannerParams {
+            heading_tolerance: tolerance,
+            ..self.params.clone()
+        };
+        params.validate()?;
+        self.params = params;
+        Ok(())
+    }
+
     /// Plans (or keeps following) a path from `robot` to `goal` on `map`.
     ///
     /// Replans when the goal moved, the map changed so that an obstacle now lies on the
@@ -118,7 +146,14 @@ impl Planner {
         if to_goal <= self.params.goal_tolerance {
             self.path = Arc::from(Vec::new());
             self.failed = false;
-            return self.output(Pose2::default(), true, false, false);
+            let error = goal.theta() - robot.theta();
+            let turn = error.sin().atan2(error.cos());
+            return match self.params.heading_tolerance {
+                Some(tolerance) if turn.abs() > tolerance => {
+                    self.output(Pose2::new(0.0, 0.0, turn), false, false, false)
+                }
+                _ => self.output(Pose2::default(), true, false, false),
+            };
         }
         let mut replan = goal_changed || self.path.is_empty() && !self.failed;
         if self.failed {

@@ -24,6 +24,8 @@ pub struct PathPlanner {
     goal_tolerance: Input<f64>,
     lookahead: Input<f64>,
     max_deviation: Input<f64>,
+    face_goal: Input<bool>,
+    heading_tolerance: Input<f64>,
     path: Output<Path2>,
     local_target: Output<Pose2>,
     arrived: Output<bool>,
@@ -47,7 +49,15 @@ impl PathPlanner {
             goal_tolerance: self.goal_tolerance.value(),
             lookahead: self.lookahead.value(),
             max_deviation: self.max_deviation.value(),
+            heading_tolerance: self.heading_tolerance(),
         }
+    }
+
+    /// What `params/face_goal` and `params/heading_tolerance` ask of the core.
+    fn heading_tolerance(&self) -> Option<f64> {
+        self.face_goal
+            .value()
+            .then(|| self.heading_tolerance.value())
     }
 }
 
@@ -126,6 +136,17 @@ impl Module for PathPlanner {
                 Range::new(0.05, 100.0),
                 "distance from the path that triggers a replan, m",
             ),
+            face_goal: ports.param(
+                "params/face_goal",
+                false,
+                "at the target's position, also turn to its heading before arriving (a robot sent to look at something); read every step",
+            ),
+            heading_tolerance: ports.param_in(
+                "params/heading_tolerance",
+                0.15,
+                Range::new(0.01, std::f64::consts::PI),
+                "with params/face_goal: how closely the robot faces the target's heading, rad",
+            ),
             path: ports.output(
                 "out/path",
                 Path2::default(),
@@ -169,7 +190,10 @@ impl Module for PathPlanner {
     }
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        let heading_tolerance = self.heading_tolerance();
         let core = super::initialized(&mut self.core);
+        core.set_heading_tolerance(heading_tolerance)
+            .map_err(|e| param_error(e, &[]))?;
         let target = self.target.read();
         if target.version == 0 {
             return Ok(()); // no target yet: the outputs already say "stay"

@@ -292,3 +292,18 @@ fn the_way_out_is_the_visible_heading_that_gains_most_and_none_when_nothing_gain
         "{open:?}"
     );
 }
+
+/// At the target's position, a target with a heading turns the robot in place toward it (a
+/// planner asking to face its goal); the identity stays put.
+#[test]
+fn at_the_target_it_turns_in_place_to_the_targets_heading() {
+    let mut a = Avoidance::new(AvoidanceParams::default()).unwrap();
+    let scan = open_scan();
+    assert_eq!(a.step(&scan, Pose2::default()), Twist2::default());
+    let left = a.step(&scan, Pose2::new(0.0, 0.0, 0.6));
+    assert_eq!(left.v, 0.0);
+    assert!(left.omega > 0.0, "{left:?}");
+    let right = a.step(&scan, Pose2::new(0.0, 0.0, -2.5));
+    assert_eq!(right.v, 0.0);
+    assert!(right.omega < 0.0, "{right:?}");
+}

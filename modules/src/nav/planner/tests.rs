@@ -151,3 +151,43 @@ fn a_goal_close_to_a_wall_is_approached_within_tolerance() {
             .arrived
     );
 }
+
+/// A robot sent to look at something (a victim to confirm) is there only once it faces the
+/// goal's heading: at the goal's position the planner asks to turn in place, by the shorter
+/// way round, and says arrived when the heading is within tolerance. Without the tolerance
+/// the heading is ignored, as for a frontier.
+#[test]
+fn a_goal_to_face_is_reached_only_facing_its_heading() {
+    let map = grid(40, 40, &[], 0);
+    let goal = Pose2::new(2.0, 2.0, 170f64.to_radians());
+    let at = |heading: f64| Pose2::new(2.05, 2.0, heading.to_radians());
+    let mut ignoring = Planner::new(PlannerParams::default()).unwrap();
+    let out = ignoring.step(&map, at(-150.0), goal);
+    assert!(
+        out.arrived && out.local_target == Pose2::default(),
+        "{out:?}"
+    );
+
+    let mut facing = Planner::new(PlannerParams {
+        heading_tolerance: Some(0.15),
+        ..PlannerParams::default()
+    })
+    .unwrap();
+    // 40° to turn, the short way (clockwise, through 180°), in place.
+    let out = facing.step(&map, at(-150.0), goal);
+    assert!(!out.arrived && !out.failed, "{out:?}");
+    let t = out.local_target;
+    assert_eq!((t.x(), t.y()), (0.0, 0.0));
+    assert!((t.theta() + 40f64.to_radians()).abs() < 1e-9, "{t:?}");
+    // Within 0.15 rad (8.6°): arrived, and the local target says stay.
+    let out = facing.step(&map, at(175.0), goal);
+    assert!(
+        out.arrived && out.local_target == Pose2::default(),
+        "{out:?}"
+    );
+    // Switched off at run time (the mission's next goal is a frontier): heading ignored.
+    facing.set_heading_tolerance(None).unwrap();
+    assert!(facing.step(&map, at(0.0), goal).arrived);
+    let err = facing.set_heading_tolerance(Some(f64::NAN)).unwrap_err();
+    assert_eq!(err.param, "heading_tolerance");
+}
