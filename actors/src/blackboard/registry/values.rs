@@ -65,7 +65,7 @@ impl Registry {
                 });
             }
         }
-        self.set_runtime(&key, type_info, value)
+        self.write_key(key, type_info, value)
     }
 
     /// Sets any value property, including runtime-owned `stats/...`.
@@ -75,7 +75,16 @@ impl Registry {
         type_info: TypeInfo,
         value: AnyValue,
     ) -> Result<(), BlackboardError> {
-        let key = self.key_of(address)?;
+        self.write_key(self.key_of(address)?, type_info, value)
+    }
+
+    /// [`set_runtime`](Registry::set_runtime) for a key already resolved (an entry's key).
+    fn write_key(
+        &self,
+        key: String,
+        type_info: TypeInfo,
+        value: AnyValue,
+    ) -> Result<(), BlackboardError> {
         let entry = &self.entries[&key];
         if entry.decl.type_info != type_info {
             return Err(BlackboardError::BadValue {
