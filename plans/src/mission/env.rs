@@ -31,6 +31,28 @@ pub(crate) struct MissionEnv<'a> {
     pub keys: &'a mut Vec<String>,
 }
 
+/// A [`MissionEnv`] over a [`Run`](super::run::Run)'s fields at step time `$t` (a
+/// `StepTime`), `in/conditions` read from `$input` (`$fresh`: from the cell only when it
+/// changed). A macro rather than a method: the env borrows some of the run's fields while the
+/// caller goes on using others (`state` and `report` to step, `team.serve` and
+/// `team.pending` to serve), and a `&mut self` method would borrow them all.
+macro_rules! mission_env {
+    ($run:expr, $t:expr, $input:expr, $fresh:expr) => {
+        $crate::mission::env::MissionEnv {
+            plan: &$run.plan,
+            bound: &mut $run.bound,
+            flags: $run.flags.current($input, $fresh),
+            now: $t.now,
+            secs: $t.secs,
+            stamp: $t.stamp,
+            memory: &mut $run.memory,
+            dispatch: &mut $run.team.dispatch,
+            keys: &mut $run.keys,
+        }
+    };
+}
+pub(super) use mission_env;
+
 impl BoundAction {
     /// `start` / `resume`: remember what `set` replaces (once), write it, enable the modules,
     /// ask for the action's links (into `relinks`). Writes are stamped `stamp`.

@@ -8,7 +8,7 @@ use tokio::time::Instant;
 
 use super::bound::Bound;
 use super::config::Flags;
-use super::env::MissionEnv;
+use super::env::mission_env;
 use super::memory::MissionMemory;
 use super::shown::{marking, Shown};
 use super::team::TeamIo;
@@ -54,7 +54,7 @@ pub(super) struct Run {
     pub fired: Vec<usize>,
     /// `in/conditions` as last read.
     pub flags: FlagsSeen,
-    /// Spare keys for `memory.running` (see [`MissionEnv::keys`]).
+    /// Spare keys for `memory.running` (see [`MissionEnv::keys`](super::env::MissionEnv::keys)).
     pub keys: Vec<String>,
 }
 
@@ -107,19 +107,9 @@ impl Run {
             self.refresh_props(t.now);
         }
         self.evaluate(t.now);
-        let mut env = MissionEnv {
-            plan: &self.plan,
-            bound: &mut self.bound,
-            // From the cell only when it changed: an action's `set` may write the mission's
-            // own flags (which raises its signal, so the next round is fresh).
-            flags: self.flags.current(flags, fresh),
-            now: t.now,
-            secs: t.secs,
-            stamp: t.stamp,
-            memory: &mut self.memory,
-            dispatch: &mut self.team.dispatch,
-            keys: &mut self.keys,
-        };
+        // Flags from the cell only when it changed: an action's `set` may write the mission's
+        // own flags (which raises its signal, so the next round is fresh).
+        let mut env = mission_env!(self, t, flags, fresh);
         // Every condition is known here (unbound atoms read `in/conditions`), so the report's
         // `unknown_conditions` stays empty.
         step_with(&self.plan, &mut self.state, &mut env, &mut self.report);

@@ -5,7 +5,7 @@ use petrel_actors::Input;
 
 use super::bound::Bound;
 use super::config::Flags;
-use super::env::MissionEnv;
+use super::env::{mission_env, MissionEnv};
 use super::run::{Run, StepTime};
 
 impl Run {
@@ -19,7 +19,7 @@ impl Run {
         flags: &Input<Flags>,
         inbox: &petrel_actors::QueueReader<petrel_actors::team::Message>,
     ) -> bool {
-        let StepTime { now, secs, stamp } = t;
+        let now = t.now;
         self.refresh(now);
         let present = self.team.members_changed();
         let agent = self.team.agent.clone();
@@ -40,17 +40,7 @@ impl Run {
             }
         }
         let full = |local: &str| format!("{agent}#{local}");
-        let mut env = MissionEnv {
-            plan: &self.plan,
-            bound: &mut self.bound,
-            flags: self.flags.current(flags, true),
-            now,
-            secs,
-            stamp,
-            memory: &mut self.memory,
-            dispatch: &mut self.team.dispatch,
-            keys: &mut self.keys,
-        };
+        let mut env = mission_env!(self, t, flags, true);
         use crate::exec::Environment;
         use crate::label::CallKind;
         let pending = &mut self.team.pending;
@@ -115,17 +105,7 @@ impl Run {
         }
         self.refresh(t.now);
         let agent = self.team.agent.clone();
-        let mut env = MissionEnv {
-            plan: &self.plan,
-            bound: &mut self.bound,
-            flags: self.flags.current(flags, true),
-            now: t.now,
-            secs: t.secs,
-            stamp: t.stamp,
-            memory: &mut self.memory,
-            dispatch: &mut self.team.dispatch,
-            keys: &mut self.keys,
-        };
+        let mut env = mission_env!(self, t, flags, true);
         self.team.serve.poll(
             |_| (false, true),
             |local| condition_of(&mut env, &format!("{agent}#{local}"), local),
