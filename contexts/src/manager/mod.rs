@@ -7,15 +7,14 @@
 //! deactivation is traced and pushed to `out/changes`; `out/active` lists the active contexts.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::anyhow;
-use petrel_actors::expr::{parse, properties, Clock, PropId};
+use petrel_actors::expr::{Clock, PropId};
 use petrel_actors::{
     AnyHandle, AnyValue, Context, FilePath, Input, Module, Output, Param, Ports, PropertyType,
-    QueueWriter, Range, Registry, Schedule, TypeInfo,
+    QueueWriter, Range, Schedule, TypeInfo,
 };
 use serde::{Deserialize, Serialize};
 use tokio::time::Instant;
@@ -24,8 +23,10 @@ use crate::engine::{Action, Engine, Schema};
 use crate::rules::{LoadedRules, RuleError};
 
 mod apply;
+mod check;
 mod memory;
 
+pub use check::check_rules;
 pub use memory::ContextMemory;
 
 /// One context activation or deactivation, as pushed to `out/changes`.
@@ -52,61 +53,6 @@ impl<S: std::hash::BuildHasher> Schema for HashMap<Arc<str>, AnyHandle, S> {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
         self.get(path).map(|h| (h.type_info(), h.value()))
     }
-}
-
-impl Schema for Registry {
-    fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
-        self.get_or_latest(path).ok()
-    }
-}
-
-/// Every property address a rules file mentions (expressions, targets, links, modules).
-fn mentioned(loaded: &LoadedRules) -> Vec<String> {
-    let mut paths = Vec::new();
-    for r in &loaded.rules.contexts {
-        let sources = std::iter::once(&r.when)
-            .chain(&r.until)
-            .chain(r.set.values());
-        for src in sources {
-            if let Ok(ast) = parse(src) {
-                paths.extend(properties(&ast));
-            }
-        }
-        paths.extend(r.set.keys().cloned());
-        paths.extend(r.relink.iter().flat_map(|(a, b)| [a.clone(), b.clone()]));
-        let modules = r
-            .enable
-            .iter()
-            .chain(&r.disable)
-            .chain(&r.start)
-            .chain(&r.stop);
-        paths.extend(modules.map(|m| format!("{m}/enabled")));
-    }
-    paths.sort();
-    paths.dedup();
-    paths
-}
-
-/// Checks a rules file against an agent's registry for the context manager `manager` (what
-/// `petrel check` does): the errors `run` would refuse it for, or the warnings (contexts whose
-/// changes reach their own condition), each at its place in the file.
-pub fn check_rules(
-    path: &Path,
-    registry: &Registry,
-    manager: &str,
-) -> Result<Vec<RuleError>, Vec<RuleError>> {
-    let loaded = LoadedRules::load(path)?;
-    let mut errors = crate::lint::stops_its_manager(&loaded, manager);
-    if let Err(more) = Engine::build(&loaded, registry) {
-        errors.extend(more);
-    }
-    if !errors.is_empty() {
-        return Err(errors);
-    }
-    Ok(crate::lint::self_undoing(&loaded.rules.contexts)
-        .into_iter()
-        .map(|s| loaded.error(&s.context, Some(&s.target), None, s.message()))
-        .collect())
 }
 
 /// A property the rules read: its id in the engine, its handle, and the last version fed.
@@ -342,7 +288,7 @@ impl ContextManager {
         }
         let loaded = LoadedRules::load(path.as_path()).map_err(show)?;
         let mut handles = Handles::default();
-        for address in mentioned(&loaded) {
+        for address in check::mentioned(&loaded) {
             // A queue's latest item too, for expressions such as `min(scan/out/ranges) < 0.6`.
             if let Ok(handle) = ctx.blackboard().expr_handle(&address).await {
                 handles.insert(Arc::from(address), handle);
