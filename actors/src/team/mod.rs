@@ -9,6 +9,7 @@
 mod config;
 mod ready;
 mod remote;
+mod types;
 
 pub use config::{
     check, pattern_error, pattern_matches, LinkTarget, Mode, Qos, Reliability, SessionMode,
@@ -16,7 +17,10 @@ pub use config::{
 };
 pub use ready::TapReady;
 pub use remote::{
-    link_state, LinkStatus, Message, Outbox, OutboxStatus, OutboxWriter, QueueTap, RemoteFeed,
-    RemoteLink, RemoteLinks, RemoteQueue, RemoteValue, RemoteWriter, StatWriter, StatusWriter, Tap,
-    TeamEvent, TeamMember, TeamMembers, ValueTap, INBOX, OUTBOX, TEAM_MODULE,
+    Outbox, OutboxWriter, QueueTap, RemoteFeed, RemoteLink, RemoteLinks, RemoteQueue, RemoteValue,
+    RemoteWriter, StatWriter, StatusWriter, Tap, ValueTap, TEAM_MODULE,
+};
+pub use types::{
+    link_state, LinkStatus, Message, OutboxStatus, TeamEvent, TeamMember, TeamMembers, INBOX,
+    OUTBOX,
 };
