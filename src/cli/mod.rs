@@ -11,6 +11,7 @@ mod exits;
 mod follow;
 mod foxglove;
 mod graph;
+mod hangup;
 mod listing;
 mod load;
 pub(crate) use load::{bad_input, load};

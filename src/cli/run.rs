@@ -12,6 +12,7 @@ use petrel_team::Team;
 
 use super::check::{check_all, check_team};
 use super::exits::{die, first_exit};
+use super::hangup::{reload_on_hangup, Hangups};
 use super::stop_guard::StopGuard;
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
@@ -136,13 +137,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
     let registration = match started {
         Ok(registration) => registration,
         Err(code) => {
-            stop_all(&agents, teams, args, &guard).await;
-            for agent in agents {
-                agent.shutdown().await;
-            }
-            if let Some(recorder) = recorder {
-                super::record::discard(recorder).await;
-            }
+            abandon(agents, teams, args, &guard, recorder).await;
             return code;
         }
     };
@@ -151,14 +146,7 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         Err(e) => {
             eprintln!("error: {e}");
             drop(registration);
-            stop_all(&agents, teams, args, &guard).await;
-            for agent in agents {
-                agent.shutdown().await;
-            }
-            // A run refused at its start leaves no recording behind.
-            if let Some(recorder) = recorder {
-                super::record::discard(recorder).await;
-            }
+            abandon(agents, teams, args, &guard, recorder).await;
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
@@ -207,21 +195,8 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         }
     }
     if let (Some(path), [agent]) = (&args.snapshot_out, agents.as_slice()) {
-        match agent
-            .snapshot()
-            .await
-            .map_err(|e| e.to_string())
-            // Written whole or not at all: a full disk never leaves half a snapshot.
-            .and_then(|s| files::write_atomically(path, s.as_bytes()).map_err(|e| e.to_string()))
-        {
-            Ok(()) => outln!("snapshot written to {}", path.display()),
-            Err(e) => {
-                eprintln!(
-                    "error: could not write the snapshot to {}: {e}",
-                    path.display()
-                );
-                code = code.max(EXIT_FAILED);
-            }
+        if !write_snapshot(agent, path).await {
+            code = code.max(EXIT_FAILED);
         }
     }
     for agent in agents {
@@ -244,6 +219,47 @@ async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<Config
         }
     }
     ExitCode::from(code)
+}
+
+/// A run refused at its start: its agents stopped and shut down, and no recording left
+/// behind.
+async fn abandon(
+    agents: Vec<Agent>,
+    teams: Vec<Team>,
+    args: &RunArgs,
+    guard: &StopGuard,
+    recorder: Option<Recorder>,
+) {
+    stop_all(&agents, teams, args, guard).await;
+    for agent in agents {
+        agent.shutdown().await;
+    }
+    if let Some(recorder) = recorder {
+        super::record::discard(recorder).await;
+    }
+}
+
+/// `--snapshot-out`: the stopped agent's snapshot, written whole or not at all (a full disk
+/// never leaves half a snapshot). Whether it was written; the error is printed.
+async fn write_snapshot(agent: &Agent, path: &std::path::Path) -> bool {
+    let written = agent
+        .snapshot()
+        .await
+        .map_err(|e| e.to_string())
+        .and_then(|s| files::write_atomically(path, s.as_bytes()).map_err(|e| e.to_string()));
+    match written {
+        Ok(()) => {
+            outln!("snapshot written to {}", path.display());
+            true
+        }
+        Err(e) => {
+            eprintln!(
+                "error: could not write the snapshot to {}: {e}",
+                path.display()
+            );
+            false
+        }
+    }
 }
 
 /// Missions (`mission.pnp` modules with `params/is_mission`) whose plan has not ended, as
@@ -353,67 +369,4 @@ async fn stop_all(
         team.leave().await;
     }
     summaries
-}
-
-/// SIGHUPs received (on Unix; elsewhere, none ever arrive).
-struct Hangups {
-    #[cfg(unix)]
-    signals: Option<tokio::signal::unix::Signal>,
-}
-
-impl Hangups {
-    fn listen() -> Self {
-        #[cfg(unix)]
-        {
-            use tokio::signal::unix::{signal, SignalKind};
-            let signals = signal(SignalKind::hangup())
-                .inspect_err(|e| tracing::warn!(error = %e, "cannot listen for SIGHUP; reload context rules through params/reload"))
-                .ok();
-            Hangups { signals }
-        }
-        #[cfg(not(unix))]
-        Hangups {}
-    }
-}
-
-/// On every SIGHUP, asks each `context.manager` of every agent to re-read its rules.
-async fn reload_on_hangup(hangups: Hangups, agents: &[Agent]) {
-    #[cfg(unix)]
-    {
-        if let Some(mut hangups) = hangups.signals {
-            while hangups.recv().await.is_some() {
-                for agent in agents {
-                    reload_contexts(agent).await;
-                }
-            }
-        }
-    }
-    #[cfg(not(unix))]
-    let _ = (hangups, agents);
-    std::future::pending::<()>().await
-}
-
-/// Bumps `params/reload` of each of `agent`'s context managers.
-async fn reload_contexts(agent: &Agent) {
-    let summary = agent.summary().await;
-    for m in summary
-        .modules
-        .iter()
-        .filter(|m| m.module_type == "context.manager")
-    {
-        let key = format!("{}/params/reload", m.name);
-        let next = agent
-            .blackboard()
-            .get::<i64>(&key)
-            .await
-            .map_or(1, |n| *n + 1);
-        match agent.blackboard().set(&key, next).await {
-            Ok(()) => {
-                tracing::info!(agent = agent.name(), module = %m.name, "SIGHUP: reloading context rules")
-            }
-            Err(e) => {
-                tracing::error!(agent = agent.name(), module = %m.name, error = %e, "SIGHUP: cannot ask for a reload")
-            }
-        }
-    }
 }
