@@ -45,15 +45,18 @@ impl PlannerParams {
         positive("goal_tolerance", self.goal_tolerance)?;
         positive("lookahead", self.lookahead)?;
         positive("max_deviation", self.max_deviation)?;
-        if let Some(tolerance) = self.heading_tolerance {
-            if !(tolerance > 0.0 && tolerance <= std::f64::consts::PI) {
-                return Err(ParamError {
-                    param: "heading_tolerance".into(),
-                    message: format!("expected an angle in (0, π] rad, got {tolerance}"),
-                });
-            }
-        }
-        Ok(())
+        check_heading_tolerance(self.heading_tolerance)
+    }
+}
+
+/// [`PlannerParams::heading_tolerance`]: none, or an angle in (0, π].
+fn check_heading_tolerance(tolerance: Option<f64>) -> Result<(), ParamError> {
+    match tolerance {
+        Some(t) if !(t > 0.0 && t <= std::f64::consts::PI) => Err(ParamError {
+            param: "heading_tolerance".into(),
+            message: format!("expected an angle in (0, π] rad, got {t}"),
+        }),
+        _ => Ok(()),
     }
 }
 
@@ -111,12 +114,8 @@ impl Planner {
     /// Changes [`PlannerParams::heading_tolerance`] (a mission asks to face one goal and not
     /// the next). Out of range is refused, as by [`PlannerParams::validate`].
     pub fn set_heading_tolerance(&mut self, tolerance: Option<f64>) -> Result<(), ParamError> {
-        let params = PlannerParams {
-            heading_tolerance: tolerance,
-            ..self.params.clone()
-        };
-        params.validate()?;
-        self.params = params;
+        check_heading_tolerance(tolerance)?;
+        self.params.heading_tolerance = tolerance;
         Ok(())
     }
 
@@ -146,13 +145,14 @@ impl Planner {
         if to_goal <= self.params.goal_tolerance {
             self.path = Arc::from(Vec::new());
             self.failed = false;
-            let error = goal.theta() - robot.theta();
-            let turn = error.sin().atan2(error.cos());
-            return match self.params.heading_tolerance {
-                Some(tolerance) if turn.abs() > tolerance => {
-                    self.output(Pose2::new(0.0, 0.0, turn), false, false, false)
-                }
-                _ => self.output(Pose2::default(), true, false, false),
+            // Facing the goal, if asked to: the heading still to turn, the short way round.
+            let turn = self.params.heading_tolerance.and_then(|tolerance| {
+                let error = goal.theta() - robot.theta();
+                Some(error.sin().atan2(error.cos())).filter(|turn| turn.abs() > tolerance)
+            });
+            return match turn {
+                Some(turn) => self.output(Pose2::new(0.0, 0.0, turn), false, false, false),
+                None => self.output(Pose2::default(), true, false, false),
             };
         }
         let mut replan = goal_changed || self.path.is_empty() && !self.failed;
