@@ -203,6 +203,17 @@ read_methods!(PropertyHandle);
 #[derive(Clone)]
 pub struct AnyHandle {
     pub(crate) ep: Arc<Endpoint>,
+    pub(crate) rule: Arc<WriteRule>,
+}
+
+/// What a write through an [`AnyHandle`] must respect, from the property's declaration: the
+/// same checks as a config value or `petrel set` (see [`Registry::set`](crate::Registry)), so
+/// that a plan binding or a context rule cannot write what a person could not.
+pub(crate) struct WriteRule {
+    pub kind: crate::PropertyKind,
+    pub range: Option<crate::range::RangeCheck>,
+    /// The property's one-line description, for the out-of-range message.
+    pub doc: String,
 }
 
 impl AnyHandle {
@@ -246,14 +257,40 @@ impl AnyHandle {
     /// for a module that writes through untyped handles during a step, so that those writes
     /// carry the step's time ([`Context::now`](crate::Context::now)) like its typed outputs'.
     pub fn set_at(&self, value: AnyValue, written: Instant) -> Result<(), crate::BlackboardError> {
+        self.check(&value)?;
+        self.ep.write_at(value, written);
+        Ok(())
+    }
+
+    /// Whether [`set`](Self::set) would take `value`: its type, the property's kind
+    /// (`stats/...` and queues are written only by the runtime and their module) and a
+    /// parameter's range (a finite number at least, for every `f64` parameter).
+    pub fn check(&self, value: &AnyValue) -> Result<(), crate::BlackboardError> {
+        let key = || self.ep.key.to_string();
         if !self.ep.type_info().is_type_of(value.as_ref()) {
             return Err(crate::BlackboardError::BadValue {
-                key: self.ep.key.to_string(),
+                key: key(),
                 expected: self.ep.type_info().name(),
                 reason: "got a value of another type".into(),
             });
         }
-        self.ep.write_at(value, written);
+        let rule = &*self.rule;
+        if !rule.kind.settable() {
+            return Err(crate::BlackboardError::NotSettable {
+                key: key(),
+                kind: rule.kind,
+            });
+        }
+        if let Some(check) = rule.range {
+            if let Some(refused) = check.refuses(value) {
+                return Err(crate::BlackboardError::OutOfRange {
+                    key: key(),
+                    value: crate::range::short_number(refused),
+                    range: check.range.expected(),
+                    doc: rule.doc.clone(),
+                });
+            }
+        }
         Ok(())
     }
 

@@ -39,6 +39,10 @@ impl Schema for Props {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
         self.0.get(path).cloned()
     }
+
+    fn refuses(&self, _path: &str, _value: &AnyValue) -> Option<String> {
+        None
+    }
 }
 
 fn engine(rules: &str) -> Engine {

@@ -47,7 +47,8 @@ pub(crate) enum BlackboardMsg {
     SetRon(String, ron::Value, Reply<()>),
     Get(String, Reply<(TypeInfo, AnyValue)>),
     Endpoint(String, Reply<Arc<crate::cell::Endpoint>>),
-    Latest(String, Reply<Arc<crate::cell::Endpoint>>),
+    Latest(String, Reply<AnyHandle>),
+    AnyHandle(String, Reply<AnyHandle>),
     Snapshot(Reply<String>),
     LinkOf(String, Reply<Option<String>>),
     FeedbackCycle(String, Reply<Option<Vec<String>>>),
@@ -139,7 +140,10 @@ impl Actor for BlackboardActor {
                 let _ = reply.send(reg.endpoint(&key));
             }
             BlackboardMsg::Latest(key, reply) => {
-                let _ = reply.send(reg.endpoint_or_latest(&key));
+                let _ = reply.send(reg.any_handle(&key, true));
+            }
+            BlackboardMsg::AnyHandle(key, reply) => {
+                let _ = reply.send(reg.any_handle(&key, false));
             }
             BlackboardMsg::AddModule(config, module_type, reply) => {
                 let result = reg.add_module(&config, &module_type);
@@ -346,18 +350,14 @@ impl Blackboard {
     /// time): what expressions read, so `min(robot/out/laserScan.ranges)` works. A queue
     /// whose item type has no known default and that has no item yet is refused.
     pub async fn expr_handle(&self, address: &str) -> Result<AnyHandle, BlackboardError> {
-        let ep = self
-            .call(|r| BlackboardMsg::Latest(address.to_string(), r))
-            .await?;
-        Ok(AnyHandle { ep })
+        self.call(|r| BlackboardMsg::Latest(address.to_string(), r))
+            .await
     }
 
     /// An untyped direct handle to a value property (see [`AnyHandle`]).
     pub async fn any_handle(&self, address: &str) -> Result<AnyHandle, BlackboardError> {
-        let ep = self
-            .call(|r| BlackboardMsg::Endpoint(address.to_string(), r))
-            .await?;
-        Ok(AnyHandle { ep })
+        self.call(|r| BlackboardMsg::AnyHandle(address.to_string(), r))
+            .await
     }
 
     /// The shortest cycle of links through `module` (see [`Registry::feedback_cycle`]).

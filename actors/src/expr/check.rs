@@ -119,6 +119,10 @@ impl<R: Resolve> Checker<'_, R> {
             Add | Sub | Mul | Div | Lt | Le | Gt | Ge => {
                 self.want(a, &ta, &Ty::Num, &format!("the left operand of `{sym}`"))?;
                 self.want(b, &tb, &Ty::Num, &format!("the right operand of `{sym}`"))?;
+                // Evaluation refuses it every time (see `eval::arithmetic`): say so now.
+                if op == Div && matches!(nb, Node::Const(Value::Num(d)) if d == 0.0) {
+                    return Err(self.err(b.span, "division by zero: the divisor is the constant 0"));
+                }
                 if matches!(op, Add | Sub | Mul | Div) {
                     Ty::Num
                 } else {

@@ -7,6 +7,7 @@ use tokio::time::Instant;
 use super::check::Node;
 use super::parse::BinOp;
 use super::value::Value;
+use crate::range::short_number;
 
 /// The last value of a property as the evaluator sees it.
 #[derive(Debug, Clone)]
@@ -36,6 +37,32 @@ fn list_of(v: Value) -> Result<Vec<ron::Value>, String> {
         Value::Dyn(ron::Value::Seq(xs)) => Ok(xs),
         other => Err(format!("expected a list, found {other}")),
     }
+}
+
+/// `x op y` for the four operations. A result that is not a number (`0 / 0`, `inf - inf`) or
+/// that leaves the finite numbers from finite operands (`1 / 0`, an overflow) is an error, so
+/// the expression cannot be evaluated (a condition is then false, a value not written) rather
+/// than letting NaN or an infinity into comparisons and parameters. Infinities read from
+/// properties (a laser's "no return") still compute: `inf * 2` is `inf`.
+fn arithmetic(op: BinOp, x: f64, y: f64) -> Result<Value, String> {
+    let r = match op {
+        BinOp::Add => x + y,
+        BinOp::Sub => x - y,
+        BinOp::Mul => x * y,
+        _ => x / y,
+    };
+    if r.is_finite() || (!r.is_nan() && !(x.is_finite() && y.is_finite())) {
+        return Ok(Value::Num(r));
+    }
+    Err(match op {
+        BinOp::Div if y == 0.0 => format!("division by zero ({} / 0)", short_number(x)),
+        op => format!(
+            "{} {} {} is not a finite number",
+            short_number(x),
+            op.symbol(),
+            short_number(y)
+        ),
+    })
 }
 
 /// Slack added to `age` deadlines so that `age(p) > 2` is already true when re-evaluated.
@@ -147,10 +174,7 @@ impl Eval<'_> {
         };
         if let Some((x, y)) = leaves {
             return Ok(match op {
-                Add => Value::Num(x + y),
-                Sub => Value::Num(x - y),
-                Mul => Value::Num(x * y),
-                Div => Value::Num(x / y),
+                Add | Sub | Mul | Div => arithmetic(op, x, y)?,
                 Lt => Value::Bool(x < y),
                 Le => Value::Bool(x <= y),
                 Gt => Value::Bool(x > y),
@@ -171,10 +195,7 @@ impl Eval<'_> {
             (Eq, x, y) => Value::Bool(x == y),
             (Ne, x, y) => Value::Bool(x != y),
             (op, Value::Num(x), Value::Num(y)) => match op {
-                Add => Value::Num(x + y),
-                Sub => Value::Num(x - y),
-                Mul => Value::Num(x * y),
-                Div => Value::Num(x / y),
+                Add | Sub | Mul | Div => arithmetic(op, x, y)?,
                 Lt => Value::Bool(x < y),
                 Le => Value::Bool(x <= y),
                 Gt => Value::Bool(x > y),

@@ -428,3 +428,53 @@ fn durations_are_bounded_where_they_are_written() {
         Value::Bool(false)
     );
 }
+
+#[test]
+fn arithmetic_that_leaves_the_numbers_cannot_be_evaluated() {
+    // a/out/x = 3, a/out/y = -2; `z` is fed 0 and infinity below.
+    let mut env = env();
+    env.insert("z/out/v", Ty::Num);
+    let failing = [
+        ("a/out/x / z/out/v", 0.0, "division by zero (3 / 0)"),
+        (
+            "(a/out/x - 3) / z/out/v > 1",
+            0.0,
+            "division by zero (0 / 0)",
+        ),
+        (
+            "z/out/v * z/out/v",
+            1e300,
+            "1e300 * 1e300 is not a finite number",
+        ),
+        (
+            "z/out/v - z/out/v",
+            f64::INFINITY,
+            "inf - inf is not a finite number",
+        ),
+    ];
+    for (src, z, message) in failing {
+        let mut f = Fixture::new();
+        let id = f.set.add(src, &env, None).unwrap();
+        f.feed();
+        f.put("z/out/v", z, 0);
+        let now = f.at(0);
+        f.set.evaluate(now);
+        let result = f.set.value(id).unwrap();
+        assert!(
+            result.as_ref().is_err_and(|e| e.contains(message)),
+            "{src} with z = {z}: {result:?}"
+        );
+    }
+    // An infinity read from a property (a laser's "no return") still computes.
+    let mut f = Fixture::new();
+    let id = f.set.add("z/out/v * 2 > a/out/x", &env, None).unwrap();
+    f.feed();
+    f.put("z/out/v", f64::INFINITY, 0);
+    let now = f.at(0);
+    f.set.evaluate(now);
+    assert_eq!(f.set.value(id).unwrap(), &Ok(Value::Bool(true)));
+    // A constant divisor of 0 is refused before anything runs.
+    let e = err("a/out/x / 0 > 1");
+    assert!(e.message.contains("division by zero"), "{e}");
+    assert_eq!((e.line, e.column), (1, 11));
+}

@@ -68,7 +68,7 @@ impl Engine {
                 .iter()
                 .map(|(t, s)| (t.clone(), s.clone(), t.clone()));
             for (target, src, needle) in plain.chain(toggles) {
-                let Some((info, _)) = schema.property(&target) else {
+                let Some((info, sample)) = schema.property(&target) else {
                     errors.push(err(
                         Some(&needle),
                         None,
@@ -81,8 +81,21 @@ impl Engine {
                     errors.push(err(Some(&needle), None, message));
                     continue;
                 };
-                if let Some(id) = add(&src, &want, &mut errors) {
-                    sets.push(effect(&target, id));
+                // The kind, checked with the current value (always one the property takes).
+                if let Some(why) = schema.refuses(&target, &sample) {
+                    let message = format!("context `{}`: {why}", rule.name);
+                    errors.push(err(Some(&needle), None, message));
+                    continue;
+                }
+                let Some(id) = add(&src, &want, &mut errors) else {
+                    continue;
+                };
+                match constant_refused(&src, &want, info, &target, schema) {
+                    Some(why) => {
+                        let message = format!("context `{}`: {why}", rule.name);
+                        errors.push(err(Some(&needle), None, message));
+                    }
+                    None => sets.push(effect(&target, id)),
                 }
             }
             for (input, source) in &rule.relink {
@@ -236,6 +249,33 @@ fn effect<X>(target: &str, what: X) -> Effect<X> {
         target: target.into(),
         number: usize::MAX,
         what,
+    }
+}
+
+/// What `target` would refuse of `src` if `src` is a constant (it reads no property and no
+/// clock), so that `petrel check` refuses it rather than the run logging it at every switch:
+/// a value that cannot be evaluated (`1 / 0`), of another type (`2.5` for an `i64`) or out of
+/// the parameter's range. Values computed from properties are checked when written.
+fn constant_refused(
+    src: &str,
+    want: &Ty,
+    info: TypeInfo,
+    target: &str,
+    schema: &dyn Schema,
+) -> Option<String> {
+    let mut one = ExprSet::new();
+    let id = one.add(src, &TypeEnv::new(), Some(want)).ok()?;
+    if one.has_timed() || one.properties().next().is_some() {
+        return None;
+    }
+    one.evaluate(Instant::now());
+    let value = match one.value(id)? {
+        Ok(value) => value,
+        Err(e) => return Some(format!("`{target}`: `{src}` cannot be evaluated: {e}")),
+    };
+    match super::to_property(value, info) {
+        Ok(value) => schema.refuses(target, &value),
+        Err(e) => Some(format!("`{target}`: {e}")),
     }
 }
 

@@ -21,6 +21,10 @@ use effects::{Actions, Effects};
 pub trait Schema {
     /// The type and a sample value (default or current) of the property at `path`.
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)>;
+
+    /// Why the property at `path` would refuse `value` (of its type), if it would: a kind
+    /// nobody sets from outside (`stats/...`, queues) or a parameter out of its range.
+    fn refuses(&self, path: &str, value: &AnyValue) -> Option<String>;
 }
 
 /// One step of the engine's output, in the order to carry out. Fields are named by what they
@@ -306,10 +310,17 @@ pub fn to_property(value: &Value, info: TypeInfo) -> Result<AnyValue, String> {
     match value {
         Value::Bool(b) if info.is::<bool>() => Ok(Arc::new(*b)),
         Value::Num(n) if info.is::<f64>() => Ok(Arc::new(*n)),
-        Value::Num(n) if info.is::<i64>() && n.fract() == 0.0 => Ok(Arc::new(*n as i64)),
+        // Whole numbers an i64 holds exactly: `as` would saturate larger ones silently.
+        Value::Num(n) if info.is::<i64>() && n.fract() == 0.0 && n.abs() < 9.0e15 => {
+            Ok(Arc::new(*n as i64))
+        }
+        Value::Num(n) if info.is::<i64>() => Err(format!(
+            "cannot store {} in an i64 property: it takes whole numbers (up to 9e15)",
+            petrel_actors::short_number(*n)
+        )),
         Value::Str(s) if info.is::<String>() => Ok(Arc::new(s.to_string())),
         other => Err(format!(
-            "cannot store {other:?} in a {} property",
+            "cannot store {other} in a {} property",
             info.name()
         )),
     }

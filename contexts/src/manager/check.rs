@@ -13,6 +13,10 @@ impl Schema for Registry {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
         self.get_or_latest(path).ok()
     }
+
+    fn refuses(&self, path: &str, value: &AnyValue) -> Option<String> {
+        self.check_set(path, value).err().map(|e| e.to_string())
+    }
 }
 
 /// Every property address a rules file mentions (expressions, targets, links, modules).

@@ -53,6 +53,11 @@ impl<S: std::hash::BuildHasher> Schema for HashMap<Arc<str>, AnyHandle, S> {
     fn property(&self, path: &str) -> Option<(TypeInfo, AnyValue)> {
         self.get(path).map(|h| (h.type_info(), h.value()))
     }
+
+    fn refuses(&self, path: &str, value: &AnyValue) -> Option<String> {
+        let handle = self.get(path)?;
+        handle.check(value).err().map(|e| e.to_string())
+    }
 }
 
 /// A property the rules read: its id in the engine, its handle, and the last version fed.

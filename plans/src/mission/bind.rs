@@ -245,7 +245,18 @@ impl Binder<'_> {
             };
             let given = substitute_value(value, &params, p.places);
             match h.type_info().from_ron(given.clone()) {
-                Ok(v) => a.set.push((h, v)),
+                // What `petrel set` and a config would refuse: a parameter out of its range.
+                Ok(v) => match h.check(&v) {
+                    Ok(()) => a.set.push((h, v)),
+                    Err(e) => {
+                        let message = format!(
+                            "{what}.set[\"{path}\"] (action `{full}`{}): {e}{}",
+                            self.at(full),
+                            place_hint(value, &params, p.places),
+                        );
+                        self.problem(path, message);
+                    }
+                },
                 Err(_) => {
                     let expected = h.type_info().to_ron(&h.value()).map_or_else(
                         |_| "a value of its type".to_string(),

@@ -49,6 +49,14 @@ impl Registry {
         type_info: TypeInfo,
         value: AnyValue,
     ) -> Result<(), BlackboardError> {
+        let key = self.check_set(address, &value)?;
+        self.write_key(key, type_info, value)
+    }
+
+    /// Whether [`set`](Registry::set) would take `value` for the property at `address` (its
+    /// kind and range; the type is the caller's): for checks made before a run, such as a
+    /// context rule's constant `set`. Returns the property's key.
+    pub fn check_set(&self, address: &str, value: &AnyValue) -> Result<String, BlackboardError> {
         let key = self.key_of(address)?;
         let decl = &self.entries[&key].decl;
         let kind = decl.kind;
@@ -56,7 +64,7 @@ impl Registry {
             return Err(BlackboardError::NotSettable { key, kind });
         }
         if let Some(check) = decl.range {
-            if let Some(refused) = check.refuses(&value) {
+            if let Some(refused) = check.refuses(value) {
                 return Err(BlackboardError::OutOfRange {
                     value: crate::range::short_number(refused),
                     range: check.range.expected(),
@@ -65,7 +73,7 @@ impl Registry {
                 });
             }
         }
-        self.write_key(key, type_info, value)
+        Ok(key)
     }
 
     /// Sets any value property, including runtime-owned `stats/...`.
@@ -125,6 +133,30 @@ impl Registry {
     }
 
     /// The endpoint of a value property.
+    /// An untyped handle to the value property at `address` ([`endpoint`](Registry::endpoint)),
+    /// or with `latest`, to a queue's latest item ([`endpoint_or_latest`](Registry::endpoint_or_latest)),
+    /// carrying what a write through it must respect.
+    pub(crate) fn any_handle(
+        &self,
+        address: &str,
+        latest: bool,
+    ) -> Result<crate::AnyHandle, BlackboardError> {
+        let ep = match latest {
+            true => self.endpoint_or_latest(address)?,
+            false => self.endpoint(address)?,
+        };
+        let decl = &self.entries[&self.key_of(address)?].decl;
+        let rule = crate::handle::WriteRule {
+            kind: decl.kind,
+            range: decl.range,
+            doc: decl.doc.clone(),
+        };
+        Ok(crate::AnyHandle {
+            ep,
+            rule: Arc::new(rule),
+        })
+    }
+
     pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {
