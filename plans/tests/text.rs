@@ -350,4 +350,19 @@ fn a_block_repeats_n_times() {
     );
     assert!(error("{ a } * 0", None).contains("expected a number of times from 1 to 1000"));
     assert!(error("{ a } * x", None).contains("'x'"));
+    // Nested repeats multiply: refused at the '*' that goes over, before anything is built.
+    let huge = error("{ { { say_a } * 1000 } * 1000 } * 1000", None);
+    assert!(
+        huge.contains("t.plan:1:26")
+            && huge.contains("writes out 1000000 steps; a plan may have at most 100000"),
+        "{huge}"
+    );
+    assert_eq!(
+        structure(&compile("{ { a } * 100 } * 100", None))
+            .1
+            .iter()
+            .filter(|t| t.starts_with("a.start"))
+            .count(),
+        10_000
+    );
 }

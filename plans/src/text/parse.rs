@@ -159,7 +159,13 @@ impl<'a> Parser<'a> {
                     let item = if branches.len() == 1 {
                         let body = branches.pop().unwrap_or_default();
                         match self.repeat()? {
-                            Some(n) => Item::Block(repeated(body, n)),
+                            Some((n, n_at)) => {
+                                let steps = steps(&body).saturating_mul(n as usize);
+                                if steps > MAX_STEPS {
+                                    return self.err(n_at, format!("'{{ ... }} * {n}' writes out {steps} steps; a plan may have at most {MAX_STEPS} (repeat less, or loop with a label and a goto)"));
+                                }
+                                Item::Block(repeated(body, n))
+                            }
                             None => Item::Block(body),
                         }
                     } else {
@@ -286,7 +292,7 @@ impl<'a> Parser<'a> {
     }
 
     /// `* N` after a block: how many times to run it (the block is written out N times).
-    fn repeat(&mut self) -> Result<Option<u32>, PlanError> {
+    fn repeat(&mut self) -> Result<Option<(u32, usize)>, PlanError> {
         let (at, Tok::Word(w)) = self.peek()? else {
             return Ok(None);
         };
@@ -303,7 +309,7 @@ impl<'a> Parser<'a> {
             (at + 1, glued.to_string())
         };
         match n.parse::<u32>() {
-            Ok(k) if (1..=MAX_REPEAT).contains(&k) => Ok(Some(k)),
+            Ok(k) if (1..=MAX_REPEAT).contains(&k) => Ok(Some((k, n_at))),
             _ => self.err(
                 n_at,
                 format!("'{n}': expected a number of times from 1 to {MAX_REPEAT} after '*'"),
@@ -336,6 +342,23 @@ impl<'a> Parser<'a> {
 
 /// The most times `{ ... } * N` may repeat a block.
 pub(crate) const MAX_REPEAT: u32 = 1000;
+
+/// The most steps (actions, labels, gotos) a plan may have once its repeats are written out:
+/// nested repeats multiply, and `{ { a } * 1000 } * 1000` would be a million actions.
+pub(crate) const MAX_STEPS: usize = 100_000;
+
+/// The steps `items` holds, counted through blocks, branches and parallels.
+fn steps(items: &[Item]) -> usize {
+    items
+        .iter()
+        .map(|item| match item {
+            Item::Choice(branches) => branches.iter().map(|(_, b)| steps(b)).sum(),
+            Item::Block(body) => steps(body),
+            Item::Parallel(branches) => branches.iter().map(|b| steps(b)).sum(),
+            _ => 1,
+        })
+        .fold(0, usize::saturating_add)
+}
 
 /// `body` written out `n` times, one after the other.
 fn repeated(body: Vec<Item>, n: u32) -> Vec<Item> {
