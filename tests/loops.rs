@@ -204,3 +204,63 @@ fn a_plan_that_fires_in_a_circle_is_named_once_and_its_firings_are_not_logged_on
     assert!(firings <= 1_100, "{firings} firings logged");
     assert_eq!(lines_with(&log, "unbound action").len(), 1, "said once");
 }
+
+#[test]
+fn a_plan_that_says_something_in_a_circle_says_it_only_until_the_circle_is_named() {
+    let (_dir, config) = temp_files(&[
+        (
+            "chatty.ron",
+            r#"Agent(name: "r", step_budget: (mean_us: 0, steps: 20, held_ms: 0), modules: [
+    (name: "mission", type: "mission.pnp", values: {"params/plan": "chatty.plan", "params/is_mission": true,
+        "params/conditions": {"done": "c/out/value >= 3"}}),
+    (name: "c", type: "demo.counter", values: {"params/period_ms": 100}),
+])"#,
+        ),
+        // It circles until the counter reaches 3 (0.3 s), hundreds of thousands of times.
+        (
+            "chatty.plan",
+            "LABEL_top;\n< done ? log_bye : (not done) ? say_again; GOTO_LABEL_top >\n",
+        ),
+    ]);
+    let records = tempfile::tempdir().unwrap();
+    let args = ["run", config.to_str().unwrap(), "--no-remote"];
+    let (status, _summary, log) = running::Running::start(&args, records.path()).finish();
+    assert_eq!(status.code(), Some(0), "the plan reached its goal: {log}");
+    // Each circle said it once, a log line each (~2 million lines a second before): now only
+    // until the mission's loop finder sees the circle.
+    let said = lines_with(&log, " again ").len();
+    assert!((1..=1_100).contains(&said), "said {said} times");
+    assert_eq!(lines_with(&log, " bye ").len(), 1);
+}
+
+#[test]
+fn a_plan_that_makes_tokens_without_end_is_stopped_with_the_place_named() {
+    let (_dir, config) = temp_files(&[
+        (
+            "fork.ron",
+            r#"Agent(name: "r", modules: [
+    (name: "mission", type: "mission.pnp", values: {"params/plan": "fork.plan", "params/is_mission": true,
+        "params/actions": {"hold": (finished: "false")}}),
+])"#,
+        ),
+        // Each time round, a new `hold` starts beside the loop and never ends.
+        (
+            "fork.plan",
+            "LABEL_x; { log_again; GOTO_LABEL_x } || { hold }\n",
+        ),
+    ]);
+    let records = tempfile::tempdir().unwrap();
+    let args = ["run", config.to_str().unwrap(), "--no-remote"];
+    let (status, summary, log) = running::Running::start(&args, records.path()).finish();
+    assert_eq!(
+        status.code(),
+        Some(1),
+        "the mission failed: {summary}\n{log}"
+    );
+    assert!(
+        summary.contains("place 'hold.exec' holds 10")
+            && summary.contains("tokens (more than 1000)")
+            && summary.contains("plan `fork`: fail"),
+        "{summary}"
+    );
+}

@@ -230,6 +230,15 @@ fn execution_rules() {
             " : X22 -> goal",
         ]
     );
+    // A rule for an action the plan does not have (a typo) is refused where it names it.
+    let typo = error(
+        "goto_A; goto_B",
+        Some("*if* blocked *during* goto *do* skip_action\n*if* action_failed *during*  goot *do* fail_plan\n"),
+    );
+    assert_eq!(
+        typo,
+        "t.er:2:30: `*during* goot`: the plan has no action `goot` (nor `goot_...`); its actions: goto_A, goto_B"
+    );
 }
 
 #[test]

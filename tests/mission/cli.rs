@@ -155,6 +155,60 @@ fn check_warns_about_a_binding_no_action_uses_with_the_nearest_name() {
 }
 
 #[test]
+fn check_shows_what_plan_check_finds_and_refuses_its_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    // `work.end` also waits for a place nothing ever marks: the plan gets stuck.
+    let net = |arcs: &str| {
+        format!(
+            r#"<pnml><net id="n" type="PTNet">
+  <place id="p1"><name><value>init</value></name><initialMarking><value>1</value></initialMarking></place>
+  <place id="p2"><name><value>work.exec</value></name></place>
+  <place id="p3"><name><value>goal</value></name></place>
+  <place id="p4"><name><value>never</value></name></place>
+  <transition id="t1"><name><value>work.start</value></name></transition>
+  <transition id="t2"><name><value>work.end</value></name></transition>
+  <arc id="a1" source="p1" target="t1"/><arc id="a2" source="t1" target="p2"/>
+  <arc id="a4" source="t2" target="p3"/>{arcs}
+</net></pnml>"#
+        )
+    };
+    let stuck =
+        net(r#"<arc id="a3" source="p2" target="t2"/><arc id="a5" source="p4" target="t2"/>"#);
+    std::fs::write(dir.path().join("stuck.pnml"), stuck).unwrap();
+    // Without its input arcs `work.end` fires at every step: an error.
+    std::fs::write(dir.path().join("source.pnml"), net("")).unwrap();
+    let check = |plan: &str| {
+        let config = dir.path().join(format!("{plan}.ron"));
+        let text = format!(
+            r#"Agent(name: "r1", modules: [
+            (name: "m", type: "mission.pnp", values: {{"params/plan": "{plan}.pnml", "params/allow_unbound": true}}),
+        ])"#
+        );
+        std::fs::write(&config, text).unwrap();
+        crate::bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(["check", &config.display().to_string()]),
+        )
+    };
+    let out = check("stuck");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "warnings, not errors: {stderr}");
+    assert!(
+        stderr.contains("warning: m/params/plan: ")
+            && stderr.contains("stuck.pnml: warning[deadlock]: the plan can get stuck in a marking that is neither goal nor fail: {'work.exec': 1}"),
+        "{stderr}"
+    );
+    let out = check("source");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("error: m/params/plan: ")
+            && stderr.contains("source.pnml: error[source-transition]: transition 't2' ('work.end') has no input place"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn a_simulator_drives_mission_time_without_a_link() {
     // wait_5 is 5 simulated seconds: half a second of wall time at time_scale 10.
     let dir = tempfile::tempdir().unwrap();

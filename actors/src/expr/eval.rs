@@ -51,7 +51,8 @@ fn arithmetic(op: BinOp, x: f64, y: f64) -> Result<Value, String> {
         BinOp::Mul => x * y,
         _ => x / y,
     };
-    if r.is_finite() || (!r.is_nan() && !(x.is_finite() && y.is_finite())) {
+    let from_infinity = !(x.is_finite() && y.is_finite());
+    if r.is_finite() || (from_infinity && !r.is_nan()) {
         return Ok(Value::Num(r));
     }
     Err(match op {

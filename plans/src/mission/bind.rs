@@ -187,6 +187,7 @@ impl Binder<'_> {
             log: None,
             unbound: false,
             unbound_said: false,
+            said_in_loop: false,
         };
         let Some((key, params)) = match_action(p.actions.0.keys().map(|k| k.as_str()), &name.local)
         else {

@@ -28,6 +28,8 @@ pub(crate) struct BoundAction {
     pub unbound: bool,
     /// The warning about an unbound action is said once, not at every call.
     pub unbound_said: bool,
+    /// Its `log` text was said while the plan fires in a circle: not again until it waits.
+    pub said_in_loop: bool,
 }
 
 impl BoundAction {

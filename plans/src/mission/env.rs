@@ -29,6 +29,10 @@ pub(crate) struct MissionEnv<'a> {
     pub dispatch: &'a mut Dispatch,
     /// Names of ended actions' entries in `memory.running`, kept for the next start's entry.
     pub keys: &'a mut Vec<String>,
+    /// The plan fires in a circle without waiting (see `loops.rs`): its `say_...` lines would
+    /// flood the log (millions a second), so each is said once per circle, then at the debug
+    /// level.
+    pub looping: bool,
 }
 
 /// A [`MissionEnv`] over a [`Run`](super::run::Run)'s fields at step time `$t` (a
@@ -48,6 +52,7 @@ macro_rules! mission_env {
             memory: &mut $run.memory,
             dispatch: &mut $run.team.dispatch,
             keys: &mut $run.keys,
+            looping: $run.loops.looping(),
         }
     };
 }
@@ -252,7 +257,13 @@ impl Environment for MissionEnv<'_> {
                     exprs.set_origin(id, Some(now));
                 }
                 if let Some(text) = &a.log {
-                    tracing::info!(action = name, "{text}");
+                    // Once per circle: an action outside it (the way out) is still said.
+                    let again = self.looping && std::mem::replace(&mut a.said_in_loop, true);
+                    a.said_in_loop &= self.looping;
+                    match again {
+                        true => tracing::debug!(action = name, "{text}"),
+                        false => tracing::info!(action = name, "{text}"),
+                    }
                 }
                 a.activate(relinks, stamp);
             }

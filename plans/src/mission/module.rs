@@ -221,14 +221,19 @@ impl Module for Mission {
             }
         }
         let status = run.state.status(&run.plan);
-        if status != PlanStatus::Running {
+        let runaway = if fired > 0 { run.runaway() } else { None };
+        if status != PlanStatus::Running || runaway.is_some() {
             run.done = true;
             for a in run.bound.actions.values_mut().filter(|a| a.active()) {
                 a.deactivate(&mut run.bound.relinks, stamp);
             }
             relink(ctx, &mut run.bound.relinks).await;
             let mut reason = format!("mission `{}` ended: {}", run.plan.name(), status.as_str());
-            if let Some(action) = run.state.unhandled_failure(&run.plan) {
+            let failed = status == PlanStatus::Fail || runaway.is_some();
+            if let Some(why) = &runaway {
+                reason = format!("mission `{}` stopped: {why}", run.plan.name());
+                tracing::error!("{reason}");
+            } else if let Some(action) = run.state.unhandled_failure(&run.plan) {
                 let why = run
                     .bound
                     .actions
@@ -243,9 +248,10 @@ impl Module for Mission {
                 tracing::info!(result = status.as_str(), "{reason}");
             }
             run.save(&self.memory);
-            self.result.set(status.as_str().to_string());
+            let result = if failed { PlanStatus::Fail } else { status };
+            self.result.set(result.as_str().to_string());
             if self.is_mission.value() {
-                ctx.stop_agent(u8::from(status == PlanStatus::Fail), reason);
+                ctx.stop_agent(u8::from(failed), reason);
             }
         }
         Ok(())
@@ -261,7 +267,10 @@ impl Module for Mission {
                 petrel_actors::outln!(
                     "\n── plan `{}`: {} ─────────────────────\n{}",
                     run.plan.name(),
-                    run.state.status(&run.plan).as_str(),
+                    match run.runaway() {
+                        Some(_) => PlanStatus::Fail.as_str(),
+                        None => run.state.status(&run.plan).as_str(),
+                    },
                     run.memory.report()
                 );
             }

@@ -75,6 +75,28 @@ async fn prepare_all(
         );
         return (Err(plan_problem(message)), Vec::new());
     }
+    // What `petrel plan check` finds: its errors refuse the plan, its warnings are shown by
+    // `petrel check` and logged by the run. A robot serving a team plan leaves it to the
+    // coordinator.
+    let mut warnings = Vec::new();
+    if !setup.serve {
+        let report = crate::analysis::check(&loaded.plan);
+        let shown = |kind: &str, f: &crate::analysis::Finding| {
+            format!(
+                "{module}/params/plan: {}: {kind}[{}]: {}",
+                setup.plan, f.code, f.message
+            )
+        };
+        let problem = |kind, f| BindingProblem {
+            needle: "params/plan".into(),
+            message: shown(kind, f),
+        };
+        if !report.errors.is_empty() {
+            let errors = report.errors.iter().map(|f| problem("error", f)).collect();
+            return (Err(errors), Vec::new());
+        }
+        warnings.extend(report.warnings.iter().map(|f| problem("warning", f)));
+    }
     let params = Params {
         module,
         scope: Scope {
@@ -88,10 +110,8 @@ async fn prepare_all(
         allow_unbound: setup.allow_unbound,
     };
     let binding = bind(bb, &loaded.plan, params).await;
-    (
-        binding.bound.map(|bound| (loaded.plan, bound)),
-        binding.warnings,
-    )
+    warnings.extend(binding.warnings);
+    (binding.bound.map(|bound| (loaded.plan, bound)), warnings)
 }
 
 /// Problems of [`prepare`] as the module's init error.

@@ -336,7 +336,7 @@ pub fn compile_text(
             "empty plan; expected at least one action",
         ));
     }
-    let rules = match rules {
+    let parsed = match rules {
         Some((text, f)) => parse_rules(text, f)?,
         None => Vec::new(),
     };
@@ -378,11 +378,24 @@ pub fn compile_text(
         };
         net.arc(ArcEnd::Transition(t as u32), ArcEnd::Place(p as u32));
     }
-    for rule in &rules {
+    for rule in &parsed {
+        let mut applied = false;
         for occ in 0..net.occurrences.len() {
             if rule.matches(&net.occurrences[occ].name) {
                 net.apply_rule(occ, rule);
+                applied = true;
             }
+        }
+        // A misspelt action would leave its failure unhandled without a word.
+        if let (false, Some(action), Some((text, f))) = (applied, &rule.during, rules) {
+            let mut actions: Vec<&str> = net.occurrences.iter().map(|o| &*o.name).collect();
+            actions.sort_unstable();
+            actions.dedup();
+            let message = format!(
+                "`*during* {action}`: the plan has no action `{action}` (nor `{action}_...`); its actions: {}",
+                actions.join(", ")
+            );
+            return Err(syntax_error(text, f, rule.during_at, message));
         }
     }
     for (occ, rule) in std::mem::take(&mut net.inline) {

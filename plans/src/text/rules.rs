@@ -40,6 +40,8 @@ pub(crate) struct Rule {
     /// `None` for `action_failed`.
     pub cond: Option<Cond<String>>,
     pub during: Option<String>,
+    /// Where `during`'s action name is written (a byte offset into the rules file).
+    pub during_at: usize,
     pub recovery: Vec<String>,
     pub end: RuleEnd,
     /// Where it is written (`file:line`) and its text, for messages.
@@ -94,9 +96,12 @@ pub(crate) fn parse_rule(
     let during_at = text[cond_start..do_at]
         .find("*during*")
         .map(|i| i + cond_start);
+    let mut name_at = base;
     let (cond_end, during) = match during_at {
         Some(d) => {
-            let action = text[d + 8..do_at].trim();
+            let written = &text[d + 8..do_at];
+            let action = written.trim();
+            name_at = base + d + 8 + (written.len() - written.trim_start().len());
             if action.is_empty() || action.contains(char::is_whitespace) {
                 return Err(err(
                     d + 8,
@@ -171,6 +176,7 @@ pub(crate) fn parse_rule(
     Ok(Rule {
         cond,
         during,
+        during_at: name_at,
         recovery,
         end,
         origin: format!("{file}:{line} (`{}`)", text.trim()),
