@@ -55,10 +55,10 @@ pub struct ContextRule {
     #[serde(default)]
     pub priority: i64,
     /// Property → expression giving its value while active.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "petrel_actors::config::unique_keys")]
     pub set: BTreeMap<String, String>,
     /// Input → new source while active.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "petrel_actors::config::unique_keys")]
     pub relink: BTreeMap<String, String>,
     /// Modules whose `enabled` is set true while active.
     #[serde(default)]

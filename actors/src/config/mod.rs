@@ -30,11 +30,13 @@ mod overlay;
 mod record;
 mod scheduler;
 mod supervision;
+mod unique;
 mod written;
 
 pub use error::{parse_ron, read_text, ConfigError, ConfigErrors};
 pub use record::RecordSection;
 pub use scheduler::{Scheduler, StepBudget};
+pub use unique::unique_keys;
 
 /// One agent's configuration.
 #[derive(Debug, Clone, Default, Deserialize)]
@@ -86,14 +88,14 @@ pub struct ModuleConfig {
     #[serde(rename = "type")]
     pub type_name: String,
     /// Property values by path (`params/factor`, `enabled`, ...), checked against their types.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     pub values: BTreeMap<String, ron::Value>,
     /// Links: own input or parameter path → target property address, or another agent's
     /// property with transport settings (see [`LinkTarget`]).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     pub links: BTreeMap<String, LinkTarget>,
     /// Capacities of this module's output queues, by path.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "unique_keys")]
     pub capacities: BTreeMap<String, usize>,
     /// The supervision group the module belongs to (default: directly under the agent).
     #[serde(default)]
