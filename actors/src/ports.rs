@@ -191,11 +191,23 @@ impl Ports {
     }
 
     /// Declares a parameter `params/...` with its default value. An `f64` parameter accepts
-    /// finite values; use [`param_in`](Ports::param_in) to say which.
+    /// finite values (use [`param_in`](Ports::param_in) to say which); a structured one (a
+    /// pose, a point, a list) only finite numbers in every field.
     pub fn param<T: PropertyType>(&mut self, path: &str, default: T, doc: &str) -> Input<T> {
         let input = Input::new(self.value(PropertyKind::Param, path, default, doc));
-        if TypeInfo::of::<T>() == TypeInfo::of::<f64>() {
+        let ti = TypeInfo::of::<T>();
+        if ti == TypeInfo::of::<f64>() {
             self.limit_last(crate::Range::FINITE);
+        } else if ![
+            TypeInfo::of::<i64>(),
+            TypeInfo::of::<bool>(),
+            TypeInfo::of::<String>(),
+        ]
+        .contains(&ti)
+        {
+            // Structured values (poses, points, lists): every number in them finite.
+            let decl = self.decls.last_mut().expect("just declared");
+            decl.range = Some(crate::range::RangeCheck::finite_fields::<T>());
         }
         input
     }

@@ -97,6 +97,33 @@ impl RangeCheck {
     }
 }
 
+impl RangeCheck {
+    /// For a parameter of a structured type (a pose, a point, a list of numbers): every number
+    /// in it must be finite. NaN in a sensor's mount pose made a mapper's ray walk never end.
+    pub fn finite_fields<T: crate::PropertyType>() -> Self {
+        RangeCheck {
+            range: Range::FINITE,
+            value_of: non_finite_field::<T>,
+        }
+    }
+}
+
+/// The first number in `value` (a `T`) that is not finite, if any.
+fn non_finite_field<T: crate::PropertyType>(value: &AnyValue) -> Option<f64> {
+    let dynamic = crate::TypeInfo::of::<T>().to_dynamic(value).ok()?;
+    first_non_finite(&dynamic)
+}
+
+fn first_non_finite(value: &ron::Value) -> Option<f64> {
+    match value {
+        ron::Value::Number(n) => Some(n.into_f64()).filter(|x| !x.is_finite()),
+        ron::Value::Seq(items) => items.iter().find_map(first_non_finite),
+        ron::Value::Map(map) => map.iter().find_map(|(_, v)| first_non_finite(v)),
+        ron::Value::Option(Some(inner)) => first_non_finite(inner),
+        _ => None,
+    }
+}
+
 fn number(value: &AnyValue) -> Option<f64> {
     value
         .downcast_ref::<f64>()

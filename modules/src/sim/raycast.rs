@@ -23,6 +23,10 @@ pub fn traverse(
 ) -> Option<f64> {
     let gx = (x - origin.0) / resolution;
     let gy = (y - origin.1) / resolution;
+    // A NaN start or direction would never cross a cell boundary nor reach `max_t`.
+    if !(gx.is_finite() && gy.is_finite() && dx.is_finite() && dy.is_finite()) {
+        return None;
+    }
     let mut col = gx.floor() as i64;
     let mut row = gy.floor() as i64;
     let (step_c, t_delta_x, mut t_max_x) = axis(gx, dx, resolution);
@@ -41,7 +45,8 @@ pub fn traverse(
             t_max_y += t_delta_y;
             row += step_r;
         }
-        if t > max_t {
+        // Also ends a ray that goes nowhere (direction 0: `t` becomes infinite).
+        if !(t <= max_t && t.is_finite()) {
             return None;
         }
     }
@@ -122,6 +127,23 @@ mod tests {
         let mut g = g;
         g.set(2, 2, true);
         assert_eq!(cast_ray(&g, 2.5, 2.5, 1.0, 100.0), 0.0);
+    }
+
+    #[test]
+    fn a_ray_from_nowhere_or_in_no_direction_ends() {
+        // Each used to walk for ever: NaN never crosses a boundary nor reaches the limit.
+        let walk = |x: f64, dx: f64| {
+            let mut cells = 0;
+            let end = traverse((0.0, 0.0), 0.1, (x, 1.0), (dx, 0.0), 5.0, |_, _, _| {
+                cells += 1;
+                cells < 10_000
+            });
+            (end, cells)
+        };
+        assert_eq!(walk(f64::NAN, 1.0), (None, 0));
+        assert_eq!(walk(1.0, f64::NAN), (None, 0));
+        assert_eq!(walk(1.0, 0.0), (None, 1));
+        assert_eq!(walk(1.0, 1.0).1, 51);
     }
 
     #[test]
