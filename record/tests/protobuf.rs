@@ -251,3 +251,25 @@ fn a_damaged_message_is_an_error() {
     flipped[0] = 0x07;
     assert!(codec.decode(&ti, &flipped).is_err());
 }
+
+#[test]
+fn an_empty_grid_round_trips_in_every_format() {
+    // What a mapper publishes before its first scan: replaying a recording of it failed with
+    // "expected whole rows of 0 cells, got 0 cells" in both Foxglove encodings.
+    let ti = TypeInfo::of::<OccupancyGrid>();
+    let empty: AnyValue = Arc::new(OccupancyGrid::default());
+    for format in [Format::Foxglove, Format::FoxgloveJson, Format::Ros2] {
+        let codec = Codec::for_value(format, &ti, &empty);
+        let mut out = Vec::new();
+        codec
+            .encode(&ti, &empty, Stamp::from_ns(1), &mut out)
+            .unwrap();
+        let back = codec.decode(&ti, &out).unwrap();
+        let back = back.downcast_ref::<OccupancyGrid>().unwrap();
+        assert_eq!(
+            (back.width, back.height, back.data.len()),
+            (0, 0, 0),
+            "{format:?}"
+        );
+    }
+}

@@ -107,7 +107,8 @@ enum Command {
     Set {
         /// The property, `petrel://agent/module/path`.
         url: String,
-        /// The new value (RON).
+        /// The new value (RON); a negative number is taken as it is (`-0.5`).
+        #[arg(allow_negative_numbers = true)]
         value: String,
         #[command(flatten)]
         reach: remote::Reach,
@@ -229,7 +230,7 @@ pub(crate) struct RunArgs {
     #[arg(required = true)]
     configs: Vec<PathBuf>,
     /// Stop after this long (e.g. `10s`, `1m30s`); default: run until Ctrl-C.
-    #[arg(long = "for", value_parser = humantime::parse_duration)]
+    #[arg(long = "for", value_parser = bounded_duration)]
     duration: Option<Duration>,
     /// Configs or snapshots laid over CONFIG, in order.
     #[arg(long)]
@@ -240,7 +241,7 @@ pub(crate) struct RunArgs {
     /// How long each module gets to stop before it is killed (default: each module's
     /// `shutdown_timeout_ms`, else the agent's `supervision.shutdown_timeout_ms`, 5 s). If a
     /// step holds its thread for good, the process ends at the longest timeout + 0.5 s.
-    #[arg(long, value_parser = humantime::parse_duration)]
+    #[arg(long, value_parser = bounded_duration)]
     stop_timeout: Option<std::time::Duration>,
     /// Log format on standard error (filter with RUST_LOG, default `info`).
     #[arg(long, value_enum, default_value_t = LogFormat::Pretty)]
@@ -376,4 +377,19 @@ fn stop_quietly_on_a_closed_pipe() {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+}
+
+/// The longest `--for` or `--stop-timeout`: 10 years. Longer ones overflowed the clock
+/// (`--for 18446744073709551615s` panicked the stop guard, and the run then ignored SIGTERM).
+const MAX_DURATION: Duration = Duration::from_secs(10 * 365 * 24 * 3600);
+
+/// A duration such as `10s` or `1m30s`, at most [`MAX_DURATION`].
+fn bounded_duration(text: &str) -> Result<Duration, String> {
+    let d = humantime::parse_duration(text).map_err(|e| e.to_string())?;
+    if d > MAX_DURATION {
+        return Err(format!(
+            "{text} is longer than 10 years, the most a run can be given"
+        ));
+    }
+    Ok(d)
 }

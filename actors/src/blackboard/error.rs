@@ -97,6 +97,14 @@ pub enum BlackboardError {
         /// Its kind.
         kind: PropertyKind,
     },
+    /// A queue was asked for one value.
+    #[error("`{key}` is a {kind}: it carries items, not one value; `petrel echo` prints them as they come")]
+    NotAValue {
+        /// The property.
+        key: String,
+        /// Its kind.
+        kind: PropertyKind,
+    },
     /// Other properties link into the module being removed.
     #[error("module `{module}` cannot be removed: linked from {}", .links.join(", "))]
     InUse {

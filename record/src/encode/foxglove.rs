@@ -265,6 +265,19 @@ pub fn grid(out: &mut Vec<u8>, g: &OccupancyGrid, stamp: Stamp, frame: &str) {
     );
 }
 
+/// The rows of a grid of `columns` columns holding `cells` cells. An empty grid (a map not
+/// yet built: 0 x 0, what a mapper publishes first) has none.
+fn rows(columns: u32, cells: usize) -> Result<u32, String> {
+    match (columns, cells) {
+        (0, 0) => Ok(0),
+        (0, n) => Err(format!(
+            "expected a column count for {n} cells, got 0 columns"
+        )),
+        (c, n) if n % c as usize == 0 => Ok((n / c as usize) as u32),
+        (c, n) => Err(format!("expected whole rows of {c} cells, got {n} cells")),
+    }
+}
+
 /// Decodes a `foxglove.Grid` of one `INT8` field per cell.
 pub fn read_grid(data: &[u8]) -> Result<OccupancyGrid, String> {
     let g: Grid = read(data, "foxglove.Grid")?;
@@ -277,16 +290,10 @@ pub fn read_grid(data: &[u8]) -> Result<OccupancyGrid, String> {
     let cells = BASE64
         .decode(&g.data)
         .map_err(|e| format!("expected base64 cells in data: {e}"))?;
-    if g.column_count == 0 || cells.len() % g.column_count as usize != 0 {
-        return Err(format!(
-            "expected whole rows of {} cells, got {} cells",
-            g.column_count,
-            cells.len()
-        ));
-    }
+    let height = rows(g.column_count, cells.len())?;
     Ok(OccupancyGrid {
         width: g.column_count,
-        height: (cells.len() / g.column_count as usize) as u32,
+        height,
         resolution: g.cell_size.x,
         origin: g.pose.pose2(),
         data: cells.iter().map(|&c| c as i8).collect::<Vec<_>>().into(),

@@ -125,14 +125,13 @@ impl Registry {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {
             Handle::Value(ep) => Ok((ep.type_info(), ep.value())),
-            _ => Err(BlackboardError::NotSettable {
+            _ => Err(BlackboardError::NotAValue {
                 kind: self.entries[&key].decl.kind,
                 key,
             }),
         }
     }
 
-    /// The endpoint of a value property.
     /// An untyped handle to the value property at `address` ([`endpoint`](Registry::endpoint)),
     /// or with `latest`, to a queue's latest item ([`endpoint_or_latest`](Registry::endpoint_or_latest)),
     /// carrying what a write through it must respect.
@@ -157,6 +156,7 @@ impl Registry {
         })
     }
 
+    /// The endpoint of a value property.
     pub(crate) fn endpoint(&self, address: &str) -> Result<Arc<Endpoint>, BlackboardError> {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {

@@ -113,15 +113,10 @@ pub fn read_grid(data: &[u8]) -> Result<OccupancyGrid, String> {
             "expected a grid of one byte per cell (cell_stride 1, row_stride = column_count {columns}), got cell_stride {cell_stride} and row_stride {row_stride}"
         ));
     }
-    if columns == 0 || cells.len() % columns as usize != 0 {
-        return Err(format!(
-            "expected whole rows of {columns} cells, got {} cells",
-            cells.len()
-        ));
-    }
+    let height = super::rows(columns, cells.len())?;
     Ok(OccupancyGrid {
         width: columns,
-        height: (cells.len() / columns as usize) as u32,
+        height,
         resolution: cell_size[0],
         origin,
         data: cells.iter().map(|&c| c as i8).collect::<Vec<_>>().into(),
