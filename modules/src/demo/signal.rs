@@ -66,10 +66,22 @@ impl Module for Signal {
         Schedule::every(super::period(self.sample_ms.value()))
     }
 
+    /// An unknown waveform: `petrel check` says so, as `init` would.
+    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+        let waveform = self.waveform.get();
+        match wave(&waveform, 0.0) {
+            Some(_) => Vec::new(),
+            None => vec![petrel_actors::CheckProblem::new(
+                "params/waveform",
+                unknown_waveform(&waveform),
+            )],
+        }
+    }
+
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let waveform = self.waveform.get();
         if wave(&waveform, 0.0).is_none() {
-            bail!("params/waveform is `{waveform}`; expected sine, square, triangle or sawtooth");
+            bail!("{}", unknown_waveform(&waveform));
         }
         Ok(())
     }
@@ -82,6 +94,10 @@ impl Module for Signal {
             .set(self.offset.value() + self.amplitude.value() * w);
         Ok(())
     }
+}
+
+fn unknown_waveform(waveform: &str) -> String {
+    format!("params/waveform is `{waveform}`; expected sine, square, triangle or sawtooth")
 }
 
 #[cfg(test)]

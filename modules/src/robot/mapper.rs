@@ -85,33 +85,14 @@ impl Module for MapperModule {
         Schedule::new().on_items(&self.scans).on_change(&self.pose)
     }
 
+    /// Parameters valid alone but not together (an extent of no cells, or too many):
+    /// `petrel check` says so before anything runs.
+    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+        super::check_built(self.build_core())
+    }
+
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let (res, size, origin) = (
-            self.resolution.value(),
-            self.size.value(),
-            self.origin.value(),
-        );
-        check_params(positive, &[("resolution", res)])?;
-        let cells = |m: f64| (m / res).ceil();
-        let (w, h) = (cells(size.0.x), cells(size.0.y));
-        if !(w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
-            anyhow::bail!(
-                "invalid parameter `params/size`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
-                crate::sim::Grid::MAX_CELLS, petrel_actors::short_number(size.0.x), petrel_actors::short_number(size.0.y), petrel_actors::short_number(res)
-            );
-        }
-        let params = MapperParams {
-            width: w as u32,
-            height: h as u32,
-            resolution: res,
-            origin: (origin.0.x, origin.0.y),
-            laser_mount: self.laser_mount.value(),
-            fov: Some(self.fov_deg.value().to_radians()).filter(|&f| f != 0.0),
-            max_range: Some(self.max_range.value()).filter(|&r| r != 0.0),
-            ..MapperParams::default()
-        };
-        let mut core = Mapper::new(params)
-            .map_err(|e| param_error(e, &[("width", "size"), ("fov", "fov_deg")]))?;
+        let mut core = self.build_core()?;
         self.map.set(core.grid());
         self.core = Some(core);
         Ok(())
@@ -136,5 +117,36 @@ impl Module for MapperModule {
             self.map.set(core.grid());
         }
         Ok(())
+    }
+}
+
+impl MapperModule {
+    /// The mapping core the parameters describe (what `init` builds and `check` tries).
+    fn build_core(&self) -> anyhow::Result<Mapper> {
+        let (res, size, origin) = (
+            self.resolution.value(),
+            self.size.value(),
+            self.origin.value(),
+        );
+        check_params(positive, &[("resolution", res)])?;
+        let cells = |m: f64| (m / res).ceil();
+        let (w, h) = (cells(size.0.x), cells(size.0.y));
+        if !(w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
+            anyhow::bail!(
+                "invalid parameter `params/size`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
+                crate::sim::Grid::MAX_CELLS, petrel_actors::short_number(size.0.x), petrel_actors::short_number(size.0.y), petrel_actors::short_number(res)
+            );
+        }
+        let params = MapperParams {
+            width: w as u32,
+            height: h as u32,
+            resolution: res,
+            origin: (origin.0.x, origin.0.y),
+            laser_mount: self.laser_mount.value(),
+            fov: Some(self.fov_deg.value().to_radians()).filter(|&f| f != 0.0),
+            max_range: Some(self.max_range.value()).filter(|&r| r != 0.0),
+            ..MapperParams::default()
+        };
+        Mapper::new(params).map_err(|e| param_error(e, &[("width", "size"), ("fov", "fov_deg")]))
     }
 }

@@ -14,6 +14,9 @@ use crate::sim::error::positive;
 /// Exit code of `petrel run` when the mission fails (timeout, or no path for too long).
 pub const MISSION_FAILED: u8 = 1;
 
+const NO_GOALS: &str =
+    "params/goals is empty; expected at least one goal, `[(x: 1.0, y: 2.0), ...]`";
+
 /// `nav.goal_sequencer`: wraps [`GoalSequencer`].
 pub struct GoalSequencerModule {
     goals: Input<Path2>,
@@ -74,10 +77,18 @@ impl Module for GoalSequencerModule {
             .timeout(Duration::from_secs(1))
     }
 
+    /// No goal at all: `petrel check` says so, as `init` would.
+    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+        match self.goals.get().points().is_empty() {
+            true => vec![petrel_actors::CheckProblem::new("params/goals", NO_GOALS)],
+            false => Vec::new(),
+        }
+    }
+
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let goals = self.goals.get();
         if goals.points().is_empty() {
-            bail!("params/goals is empty; expected at least one goal, `[(x: 1.0, y: 2.0), ...]`");
+            bail!("{NO_GOALS}");
         }
         let durations = [
             ("tolerance", self.tolerance.value()),

@@ -189,10 +189,14 @@ impl Module for SimWorld {
         if let Some(problem) = start_problem(&start) {
             return vec![CheckProblem::new("params/start", problem)];
         }
-        // Other parameters are refused by their ranges, or here below at init.
-        let (true, Ok(config)) = (self.bodies.get().0.is_empty(), self.robot_config()) else {
-            return Vec::new();
+        // Other parameters are refused by their ranges, or here (the drive, the noise).
+        let config = match self.robot_config() {
+            Ok(config) => config,
+            Err(e) => return vec![super::check_problem(&e)],
         };
+        if !self.bodies.get().0.is_empty() {
+            return Vec::new();
+        }
         let file = self.world_file.get();
         let placed = start_pose(&start, &map.starts, 0, &file, None)
             .map_err(|e| CheckProblem::new("params/start", format!("{e:#}")))
