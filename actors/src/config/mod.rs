@@ -130,6 +130,9 @@ pub struct ConfigFile {
     written: std::collections::BTreeSet<String>,
 }
 
+/// What agent and module names may hold: they are segments of every property address.
+const NAME_RULE: &str = "expected letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)";
+
 impl ConfigFile {
     /// Reads and parses a config file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigErrors> {
@@ -178,8 +181,21 @@ impl ConfigFile {
         errors.extend(self.check_scheduler());
         errors.extend(self.check_step_budget());
         errors.extend(self.check_realtime_priority());
+        if !crate::url::valid_segment(&self.config.name) {
+            errors.push(self.locate(
+                &format!("\"{}\"", self.config.name),
+                format!("agent name `{}`: {NAME_RULE}", self.config.name),
+            ));
+        }
         let mut names = HashSet::new();
         for m in &self.config.modules {
+            if !crate::url::valid_segment(&m.name) {
+                errors.push(self.locate(
+                    &format!("\"{}\"", m.name),
+                    format!("module name `{}`: {NAME_RULE}", m.name),
+                ));
+                continue;
+            }
             if !names.insert(m.name.as_str()) {
                 let e = self.error_at(
                     &m.name,
