@@ -9,6 +9,18 @@ const MAX_RESTARTS_LIMIT: u32 = 100_000;
 /// Longest intensity window accepted, seconds.
 const MAX_WINDOW_S: f64 = 86_400.0;
 
+/// Longest stop timeout, watchdog or restart back-off accepted: one hour.
+const MAX_WAIT_MS: u64 = 3_600_000;
+/// Longest `reset_after_ms` accepted: one day.
+const MAX_RESET_MS: u64 = 86_400_000;
+
+fn hours(ms: u64) -> String {
+    match ms / 3_600_000 {
+        1 => "one hour".into(),
+        h => format!("{h} hours"),
+    }
+}
+
 impl ConfigFile {
     /// Checks the `supervision` section, groups, and the modules' supervision fields.
     pub(super) fn check_supervision(&self) -> Vec<ConfigError> {
@@ -53,6 +65,59 @@ impl ConfigFile {
                     b.jitter
                 ),
             ));
+        }
+        // Durations a stop or a restart waits: bounded, so that a stop always ends (u64::MAX
+        // milliseconds overflowed the clock and the process never stopped).
+        let mut bounded = |what: String, needle: &str, ms: u64, max: u64| {
+            if ms > max {
+                errors.push(at(
+                    needle,
+                    format!(
+                        "{what} is {ms} ms; expected at most {max} ms ({})",
+                        hours(max)
+                    ),
+                ));
+            }
+        };
+        bounded(
+            "supervision backoff: min_ms".into(),
+            "min_ms",
+            b.min_ms,
+            MAX_WAIT_MS,
+        );
+        bounded(
+            "supervision backoff: max_ms".into(),
+            "max_ms",
+            b.max_ms,
+            MAX_WAIT_MS,
+        );
+        let reset = b.reset_after_ms;
+        bounded(
+            "supervision backoff: reset_after_ms".into(),
+            "reset_after_ms",
+            reset,
+            MAX_RESET_MS,
+        );
+        let stop = s.shutdown_timeout_ms;
+        bounded(
+            "supervision: shutdown_timeout_ms".into(),
+            "shutdown_timeout_ms",
+            stop,
+            MAX_WAIT_MS,
+        );
+        for m in &self.config.modules {
+            if let Some(ms) = m.shutdown_timeout_ms {
+                let what = format!("module `{}`: shutdown_timeout_ms", m.name);
+                bounded(what, "shutdown_timeout_ms", ms, MAX_WAIT_MS);
+            }
+            if let Some(ms) = m.watchdog_ms {
+                bounded(
+                    format!("module `{}`: watchdog_ms", m.name),
+                    "watchdog_ms",
+                    ms,
+                    MAX_WAIT_MS,
+                );
+            }
         }
         let mut seen = HashSet::new();
         for g in &self.config.groups {
