@@ -231,6 +231,11 @@ impl Binder<'_> {
             }
         }
         for (path, value) in &b.set {
+            if *path == format!("{}/enabled", self.module) {
+                let message = format!("{what}.set: `{path}` is this mission's own switch: turned off from its own action, it would never step again to end the action or the plan");
+                self.problem(path, message);
+                continue;
+            }
             let h = match self.handle(path).await {
                 Ok(h) if !path.contains("/stats/") => h,
                 Ok(_) => {
