@@ -152,6 +152,17 @@ fn check_warns_about_a_binding_no_action_uses_with_the_nearest_name() {
             && stderr.contains("m/params/actions[\"reprot_dock\"]: the plan has no action `reprot_dock` (nor `reprot_dock_...`); did you mean `report_dock`?"),
         "{stderr}"
     );
+    // A condition the plan waits on that nothing binds: legal (a tool may set it), but said.
+    std::fs::write(dir.path().join("m.plan"), "< door ? report_dock >").unwrap();
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel")).args(["check", &config.display().to_string()]),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "a warning, not an error: {stderr}");
+    assert!(
+        stderr.contains("warning: m/params/conditions: the plan's condition `door` is not bound; it is read from `m/in/conditions`"),
+        "{stderr}"
+    );
 }
 
 #[test]

@@ -381,6 +381,21 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
         }
     }
     let mut warnings = warnings;
+    // Legal (a tool, a context or a link may set `in/conditions`), but a plan waiting on a
+    // condition nothing binds waits for ever if nothing does: worth a word.
+    for atom in defaults
+        .iter()
+        .filter(|a| crate::remote::robot_of(a).is_none())
+    {
+        warnings.push(BindingProblem {
+            needle: "params/plan".into(),
+            message: format!(
+                "{m}/params/conditions: the plan's condition `{atom}` is not bound; it is read from `{m}/in/conditions` (false until a tool, a context rule or a link sets it){}",
+                nearest(atom, p.conditions.0.keys().map(String::as_str)),
+                m = p.module,
+            ),
+        });
+    }
     let used = |k: &String| {
         cond_names.contains(k) || cond_names.contains(&format!("{}#{k}", p.scope.agent))
     };
