@@ -105,11 +105,19 @@ fn every_block_of_the_guide_is_checked() {
                 };
                 no_deadlock(&at, &report);
             }
-            "rules" => {
-                let plan = "goto_A; say_x";
-                compile_text(plan, "p.plan", "p", Some((&b.text, &at)))
-                    .unwrap_or_else(|e| panic!("{e}"));
-            }
+            // A shipped rules file goes with the plan beside it: rules naming actions the plan
+            // lacks are refused.
+            "rules" => match b.attr("file") {
+                Some(file) => {
+                    let plan = Path::new(file).with_extension("plan");
+                    load_plan(&plan, Some(Path::new(file))).unwrap_or_else(|e| panic!("{at}: {e}"));
+                }
+                None => {
+                    let plan = "goto_A; say_x";
+                    compile_text(plan, "p.plan", "p", Some((&b.text, &at)))
+                        .unwrap_or_else(|e| panic!("{e}"));
+                }
+            },
             "ron" => match (b.attr("file"), b.attr("fragment")) {
                 (Some(file), _) if b.text.trim_start().contains("Agent(") => {
                     let out = petrel(&["check", file]);
