@@ -224,7 +224,7 @@ fn arc_to_unknown_node() {
     let msg = parse_pnml(&text, "u.pnml", "u").unwrap_err().to_string();
     assert_eq!(
         msg,
-        "u.pnml: arc 'a0': target 'zz' is not a place or transition id"
+        "u.pnml: arc 'a0' at line 3: target 'zz' is not a place or transition id"
     );
 }
 
@@ -251,10 +251,30 @@ fn unknown_function_in_label() {
 #[test]
 fn other_structural_errors() {
     let dup = pnml(&[("a", 1), ("b", 0)], &[], &[]).replace("\"n1\"", "\"n0\"");
-    assert!(parse_pnml(&dup, "d", "d")
-        .unwrap_err()
-        .to_string()
-        .contains("duplicate node id"));
+    let e = parse_pnml(&dup, "d", "d").unwrap_err().to_string();
+    assert!(
+        e.contains("place 'n0' at line ") && e.contains("duplicate id: place 'n0' at line "),
+        "{e}"
+    );
+    // An arc id taken twice (it was read as a second arc), a second net (it was ignored) and
+    // another format's namespace (it was read as PNML) are refused too.
+    let arcs = pnml(
+        &[("a", 1)],
+        &["go.start"],
+        &[("n0", "t0", 1), ("n0", "t0", 1)],
+    )
+    .replace("\"a1\"", "\"a0\"");
+    let e = parse_pnml(&arcs, "a", "a").unwrap_err().to_string();
+    assert!(e.contains("duplicate id: arc 'a0'"), "{e}");
+    let two = pnml(&[("a", 1)], &[], &[]).replace("</pnml>", "<net id=\"m\"/></pnml>");
+    let e = parse_pnml(&two, "n", "n").unwrap_err().to_string();
+    assert!(e.contains("a second <net>"), "{e}");
+    let other = "<pnml xmlns=\"http://example.com/not-pnml\"><net id=\"n\"/></pnml>";
+    let e = parse_pnml(other, "x", "x").unwrap_err().to_string();
+    assert!(
+        e.contains("namespace 'http://example.com/not-pnml' is not PNML's"),
+        "{e}"
+    );
     let bad = pnml(&[("a", 1)], &[], &[]).replace("<value>1</value>", "<value>lots</value>");
     assert!(parse_pnml(&bad, "m", "m")
         .unwrap_err()

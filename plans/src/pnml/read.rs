@@ -41,14 +41,30 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
             "expected the root element <pnml>".into(),
         ));
     }
-    let net = children(root, "net")
+    // PNML's namespace, if the file names one (editors such as PIPE and JARP name none).
+    if let Some(ns) = root.tag_name().namespace() {
+        if !ns.starts_with("http://www.pnml.org/") {
+            return Err(err(
+                "pnml",
+                format!("namespace '{ns}' is not PNML's (http://www.pnml.org/version-2009/grammar/pnml)"),
+            ));
+        }
+    }
+    let mut nets = children(root, "net");
+    let net = nets
         .next()
         .ok_or_else(|| err("pnml", "no <net> element".into()))?;
+    if let Some(second) = nets.next() {
+        let element = format!("net at line {}", line_of(second));
+        return Err(err(&element, "a second <net>: a plan file holds one net (put each plan in a file of its own; a sub-plan is an action named after its file)".into()));
+    }
     let mut raw = RawNet {
         name: default_name.to_string(),
         ..RawNet::default()
     };
-    read_nodes(net, &mut raw, file)?;
+    let mut ids = Ids::default();
+    read_nodes(net, &mut raw, file, &mut ids)?;
+    ids.check_arcs(file)?;
     for c in &raw.comments {
         if let Some(name) = c.text.trim().strip_prefix("PLAN NAME:") {
             raw.name = name.trim().to_string();
@@ -60,7 +76,7 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
 
 /// Reads the nodes of `net` and of its pages, in document order. Pages may nest; they are
 /// walked with an explicit stack, not by recursion.
-fn read_nodes(net: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
+fn read_nodes(net: Node, raw: &mut RawNet, file: &str, ids: &mut Ids) -> Result<(), PlanError> {
     let mut stack = vec![net.children()];
     while let Some(children) = stack.last_mut() {
         match children.next() {
@@ -68,11 +84,70 @@ fn read_nodes(net: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> 
                 stack.pop();
             }
             Some(n) if n.tag_name().name() == "page" => stack.push(n.children()),
-            Some(n) if n.is_element() => read_node(n, raw, file)?,
+            Some(n) if n.is_element() => {
+                ids.note(n, file)?;
+                read_node(n, raw, file)?
+            }
             Some(_) => {}
         }
     }
     Ok(())
+}
+
+/// The ids of a net's nodes and arcs with their lines, so that a duplicate id or an arc to
+/// nowhere is reported where it is written (the plan builder knows no lines).
+#[derive(Default)]
+struct Ids {
+    /// Node and arc ids: kind and line of the first.
+    seen: std::collections::HashMap<String, (&'static str, u32)>,
+    /// Arcs: id, source, target, line.
+    arcs: Vec<(String, String, String, u32)>,
+}
+
+impl Ids {
+    fn note(&mut self, n: Node, file: &str) -> Result<(), PlanError> {
+        let kind = match n.tag_name().name() {
+            "place" => "place",
+            "transition" => "transition",
+            "arc" => "arc",
+            _ => return Ok(()),
+        };
+        let Some(id) = n.attribute("id").filter(|id| !id.is_empty()) else {
+            return Ok(()); // reported by `read_node`
+        };
+        let line = line_of(n);
+        if let Some((first, at)) = self.seen.get(id) {
+            return Err(PlanError::Pnml {
+                file: file.to_string(),
+                element: format!("{kind} '{id}' at line {line}"),
+                message: format!("duplicate id: {first} '{id}' at line {at} has it already"),
+            });
+        }
+        self.seen.insert(id.to_string(), (kind, line));
+        if kind == "arc" {
+            let end = |a| n.attribute(a).unwrap_or("").to_string();
+            self.arcs
+                .push((id.to_string(), end("source"), end("target"), line));
+        }
+        Ok(())
+    }
+
+    /// Every arc joins a place and a transition of the net.
+    fn check_arcs(&self, file: &str) -> Result<(), PlanError> {
+        for (id, source, target, line) in &self.arcs {
+            for (which, end) in [("source", source), ("target", target)] {
+                let node = self.seen.get(end.as_str()).map(|(kind, _)| *kind);
+                if !matches!(node, Some("place" | "transition")) && !end.is_empty() {
+                    return Err(PlanError::Pnml {
+                        file: file.to_string(),
+                        element: format!("arc '{id}' at line {line}"),
+                        message: format!("{which} '{end}' is not a place or transition id"),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Reads one place, transition, arc or comment (other elements are ignored).
