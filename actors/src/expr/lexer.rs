@@ -41,9 +41,23 @@ pub(crate) fn lex(src: &str) -> Result<Vec<(Tok, Span)>, ExprError> {
             while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.') {
                 i += 1;
             }
-            let n: f64 = src[start..i].parse().map_err(|_| {
-                ExprError::at(src, start, format!("bad number `{}`", &src[start..i]))
-            })?;
+            // An exponent (`1e3`, `2.5e-3`): `e` then digits, with an optional sign.
+            if i < b.len() && matches!(b[i], b'e' | b'E') {
+                let sign = usize::from(matches!(b.get(i + 1), Some(b'+' | b'-')));
+                if b.get(i + 1 + sign).is_some_and(u8::is_ascii_digit) {
+                    i += 1 + sign;
+                    while i < b.len() && b[i].is_ascii_digit() {
+                        i += 1;
+                    }
+                }
+            }
+            let n: f64 = src[start..i]
+                .parse()
+                .ok()
+                .filter(|n: &f64| n.is_finite())
+                .ok_or_else(|| {
+                    ExprError::at(src, start, format!("bad number `{}`", &src[start..i]))
+                })?;
             let unit_start = i;
             while i < b.len() && is_word(b[i] as char) {
                 i += 1;
@@ -175,6 +189,16 @@ mod tests {
         let e = lex("a/b > 2h").unwrap_err();
         assert_eq!((e.line, e.column), (1, 8));
         assert!(e.message.contains("unknown unit `h`"), "{e}");
+        // Exponents are numbers, not units.
+        assert_eq!(
+            toks("1e3 2.5e-3ms 4E+1"),
+            vec![Tok::Num(1000.0), Tok::Num(2.5e-6), Tok::Num(40.0)]
+        );
+        assert!(lex("1e").unwrap_err().message.contains("unknown unit `e`"));
+        assert!(lex("1e999")
+            .unwrap_err()
+            .message
+            .contains("bad number `1e999`"));
         let e = lex("x\n  # 1").unwrap_err();
         assert_eq!((e.line, e.column), (2, 3));
         let e = lex("\"open").unwrap_err();
