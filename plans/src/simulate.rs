@@ -31,6 +31,8 @@ pub struct Script {
     finish: HashMap<String, i64>,
     fail: HashMap<String, i64>,
     conds: HashMap<String, Vec<(u64, u64)>>,
+    /// Every name the script gives, with its line: `true` for an action.
+    names: Vec<(bool, String, u32)>,
 }
 
 impl Script {
@@ -51,12 +53,19 @@ impl Script {
                         err(format!("'{n}' is not a step count; expected a number >= 0, or -1 for never"))
                     })?;
                     let map = if *kw == "finish" { &mut s.finish } else { &mut s.fail };
-                    map.insert(name.to_string(), n);
+                    if map.insert(name.to_string(), n).is_some() {
+                        return Err(err(format!("'{kw} {name}' is given twice; keep one")));
+                    }
+                    s.names.push((true, name.to_string(), i as u32 + 1));
                 }
                 ["cond", name, from, to] => {
                     let num = |w: &str| w.parse::<u64>().map_err(|_| err(format!("'{w}' is not a step number")));
                     let (from, to) = (num(from)?, num(to)?);
+                    if from > to {
+                        return Err(err(format!("steps {from} to {to}: FROM comes after TO")));
+                    }
                     s.conds.entry(name.to_string()).or_default().push((from, to));
+                    s.names.push((false, name.to_string(), i as u32 + 1));
                 }
                 _ => {
                     return Err(err(format!(
@@ -66,6 +75,47 @@ impl Script {
             }
         }
         Ok(s)
+    }
+}
+
+impl Script {
+    /// Checks that every action and condition the script names is one of `plan`'s (or of its
+    /// sub-plans'): a misspelt name would silently never finish or never hold.
+    pub fn check(&self, plan: &Plan, file: &str) -> Result<(), PlanError> {
+        let mut actions = Vec::new();
+        let mut conditions = Vec::new();
+        let mut plans = vec![plan];
+        while let Some(p) = plans.pop() {
+            conditions.extend(p.conditions().iter().map(String::as_str));
+            for e in p.executables() {
+                actions.push(e.name.as_str());
+                plans.extend(e.subplan.as_deref());
+            }
+        }
+        for (is_action, name, line) in &self.names {
+            let (known, what) = match is_action {
+                true => (&actions, "action"),
+                false => (&conditions, "condition"),
+            };
+            if !known.contains(&name.as_str()) {
+                let mut listed = known.clone();
+                listed.sort_unstable();
+                listed.dedup();
+                return Err(PlanError::Script {
+                    file: file.to_string(),
+                    line: *line,
+                    message: format!(
+                        "the plan has no {what} '{name}' (its {what}s: {})",
+                        if listed.is_empty() {
+                            "none".to_string()
+                        } else {
+                            listed.join(", ")
+                        }
+                    ),
+                });
+            }
+        }
+        Ok(())
     }
 }
 

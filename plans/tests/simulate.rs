@@ -113,6 +113,29 @@ fn script_errors_name_the_line() {
         .unwrap_err()
         .to_string();
     assert_eq!(e, "s.txt:1: 'z' is not a step number");
+    // Nonsense that used to run: a window backwards, a name twice, names the plan lacks.
+    let e = Script::parse("cond c 5 2", "s.txt")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "s.txt:1: steps 5 to 2: FROM comes after TO");
+    let e = Script::parse("finish a 1\nfinish a 2", "s.txt")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "s.txt:2: 'finish a' is given twice; keep one");
+    let plan =
+        petrel_plans::compile_text("a; < c ? b : (not c) ? d >", "p.plan", "p", None).unwrap();
+    let script = Script::parse("finish a 1\ncond c 0 5\n\nfinish zzz 3", "s.txt").unwrap();
+    let e = script.check(&plan, "s.txt").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "s.txt:4: the plan has no action 'zzz' (its actions: a, b, d)"
+    );
+    let script = Script::parse("cond cc 0 5", "s.txt").unwrap();
+    let e = script.check(&plan, "s.txt").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "s.txt:1: the plan has no condition 'cc' (its conditions: c)"
+    );
 }
 
 #[test]

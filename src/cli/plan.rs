@@ -128,7 +128,10 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
                             ))
                         }
                     };
-                    match Script::parse(&text, &path.display().to_string()) {
+                    let file = path.display().to_string();
+                    match Script::parse(&text, &file)
+                        .and_then(|s| s.check(&loaded.plan, &file).map(|()| s))
+                    {
                         Ok(script) => script,
                         Err(e) => return bad_input(e.to_string()),
                     }
