@@ -285,8 +285,8 @@ impl AnyHandle {
             if let Some(refused) = check.refuses(value) {
                 return Err(crate::BlackboardError::OutOfRange {
                     key: key(),
-                    value: crate::range::short_number(refused),
-                    range: check.range.expected(),
+                    value: refused,
+                    range: check.expected(),
                     doc: rule.doc.clone(),
                 });
             }

@@ -120,7 +120,7 @@ pub struct PropertyDecl {
 impl PropertyDecl {
     /// The values it accepts, for numeric parameters.
     pub fn range(&self) -> Option<crate::Range> {
-        self.range.map(|r| r.range)
+        self.range.filter(|r| r.is_numeric()).map(|r| r.range)
     }
 
     /// The default value as RON text, or `-` for queues.
@@ -224,6 +224,14 @@ impl Ports {
         let input = Input::new(self.value(PropertyKind::Param, path, default, doc));
         self.limit_last(range);
         input
+    }
+
+    /// Checks the values of the property declared last with `check` (see [`RangeCheck`]).
+    ///
+    /// [`RangeCheck`]: crate::range::RangeCheck
+    pub(crate) fn check_last(&mut self, check: crate::range::RangeCheck) {
+        let decl = self.decls.last_mut().expect("just declared");
+        decl.range = Some(check);
     }
 
     fn limit_last(&mut self, range: crate::Range) {

@@ -76,11 +76,14 @@ impl fmt::Display for Range {
     }
 }
 
-/// A parameter's range with the way to read its values as numbers.
+/// A parameter's range with the way to read its values as numbers; or, for a text property
+/// that takes a few words (`control/fault`), those words.
 #[derive(Clone, Copy)]
 pub(crate) struct RangeCheck {
     pub range: Range,
     value_of: fn(&AnyValue) -> Option<f64>,
+    /// The words a `String` property takes (empty: a number check).
+    choices: &'static [&'static str],
 }
 
 impl RangeCheck {
@@ -88,12 +91,44 @@ impl RangeCheck {
         RangeCheck {
             range,
             value_of: number,
+            choices: &[],
         }
     }
 
-    /// The value as a number if it is out of range.
-    pub fn refuses(&self, value: &AnyValue) -> Option<f64> {
-        (self.value_of)(value).filter(|x| !self.range.contains(*x))
+    /// Whether it checks numbers (a range people can be shown), not words.
+    pub fn is_numeric(&self) -> bool {
+        self.choices.is_empty()
+    }
+
+    /// A `String` property that takes only `choices`.
+    pub fn one_of(choices: &'static [&'static str]) -> Self {
+        RangeCheck {
+            range: Range::FINITE,
+            value_of: |_| None,
+            choices,
+        }
+    }
+
+    /// The value as people read it, if it is refused.
+    pub fn refuses(&self, value: &AnyValue) -> Option<String> {
+        if !self.choices.is_empty() {
+            let text = value.downcast_ref::<String>()?;
+            return (!self.choices.contains(&text.as_str())).then(|| format!("{text:?}"));
+        }
+        (self.value_of)(value)
+            .filter(|x| !self.range.contains(*x))
+            .map(short_number)
+    }
+
+    /// What it takes, for a message: `a value in 0.1..=10`, `one of "", "panic"`.
+    pub fn expected(&self) -> String {
+        match self.choices {
+            [] => self.range.expected(),
+            words => {
+                let words: Vec<String> = words.iter().map(|w| format!("{w:?}")).collect();
+                format!("one of {}", words.join(", "))
+            }
+        }
     }
 }
 
@@ -104,6 +139,7 @@ impl RangeCheck {
         RangeCheck {
             range: Range::FINITE,
             value_of: non_finite_field::<T>,
+            choices: &[],
         }
     }
 }
@@ -152,7 +188,10 @@ mod tests {
         }
         assert_eq!(check.refuses(&(Arc::new(0.1) as AnyValue)), None);
         assert_eq!(check.refuses(&(Arc::new(7_i64) as AnyValue)), None);
-        assert_eq!(check.refuses(&(Arc::new(70_i64) as AnyValue)), Some(70.0));
+        assert_eq!(
+            check.refuses(&(Arc::new(70_i64) as AnyValue)),
+            Some("70".into())
+        );
         let finite = RangeCheck::new(Range::FINITE);
         assert_eq!(finite.refuses(&(Arc::new(-1e300) as AnyValue)), None);
         assert!(finite

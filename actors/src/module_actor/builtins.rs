@@ -34,6 +34,9 @@ pub(crate) struct Builtins {
     pub mean_interval_ms: Output<f64>,
 }
 
+/// What `control/fault` takes ("" once the fault is taken).
+pub(crate) const FAULTS: &[&str] = &["", "panic", "error", "hang", "spin", "block"];
+
 pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
     use PropertyKind::{Enabled, Stats};
     // Written by the supervisor, declared here so that every module has it.
@@ -51,12 +54,17 @@ pub(crate) fn declare_builtins(ports: &mut Ports) -> Builtins {
     );
     Builtins {
         enabled: ports.builtin(Enabled, "enabled", true, "whether the module steps"),
-        fault: ports.builtin(
-            PropertyKind::Control,
-            "control/fault",
-            String::new(),
-            "write panic, error or hang to make the next step fail, spin or block to make it never return (fault injection)",
-        ),
+        fault: {
+            let fault = ports.builtin(
+                PropertyKind::Control,
+                "control/fault",
+                String::new(),
+                "write panic, error or hang to make the next step fail, spin or block to make it never return (fault injection)",
+            );
+            // Anything else was ignored with a warning in the agent's log, the writer told ok.
+            ports.check_last(crate::range::RangeCheck::one_of(FAULTS));
+            fault
+        },
         status: ports.builtin(
             Stats,
             "stats/status",

@@ -66,8 +66,8 @@ impl Registry {
         if let Some(check) = decl.range {
             if let Some(refused) = check.refuses(value) {
                 return Err(BlackboardError::OutOfRange {
-                    value: crate::range::short_number(refused),
-                    range: check.range.expected(),
+                    value: refused,
+                    range: check.expected(),
                     doc: decl.doc.clone(),
                     key,
                 });
