@@ -41,7 +41,13 @@ impl ConfigError {
 
     /// A RON syntax error in `file`; `what` names the kind of file for the reader.
     pub fn from_ron(file: &Path, error: &ron::error::SpannedError, what: &str) -> Self {
-        let message = format!("{} (RON syntax of {what})", error.code);
+        // Some of RON's own words are for programmers: say what to do instead.
+        let code = match &error.code {
+            ron::Error::IntegerOutOfBounds => "a whole number out of range for this field (counts and times in ms take 0 or more; see the field's documentation for its limit)".to_string(),
+            ron::Error::ExceededRecursionLimit => "nested too deeply (more than 128 levels of brackets)".to_string(),
+            other => other.to_string(),
+        };
+        let message = format!("{code} (RON syntax of {what})");
         ConfigError {
             file: file.into(),
             line: error.span.start.line,
