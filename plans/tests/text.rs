@@ -359,6 +359,11 @@ fn a_block_repeats_n_times() {
     );
     assert!(error("{ a } * 0", None).contains("expected a number of times from 1 to 1000"));
     assert!(error("{ a } * x", None).contains("'x'"));
+    // An empty block was a plan that reached its goal doing nothing.
+    assert_eq!(
+        error("a; { }; b", None),
+        "t.plan:1:4: empty block '{ }'; expected at least one action inside"
+    );
     // Nested repeats multiply: refused at the '*' that goes over, before anything is built.
     let huge = error("{ { { say_a } * 1000 } * 1000 } * 1000", None);
     assert!(

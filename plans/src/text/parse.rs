@@ -146,6 +146,9 @@ impl<'a> Parser<'a> {
                     if t != Tok::Punct("}") {
                         return Err(self.unclosed(at, &t, *open_at));
                     }
+                    if items.is_empty() {
+                        return self.err(*open_at, "empty block '{ }'; expected at least one action inside");
+                    }
                     branches.push(std::mem::take(&mut items));
                     if self.eat("||")? {
                         match self.next()? {
