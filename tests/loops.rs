@@ -151,6 +151,23 @@ fn a_context_that_undoes_its_own_condition_is_warned_by_check_and_named_once_at_
         )),
         "{err}"
     );
+    // Said to be on purpose, the warning goes; the run below still names a real loop.
+    let quiet = config.with_file_name("quiet.rules.ron");
+    let original = std::fs::read_to_string(&rules).unwrap();
+    let marked = original.replace("set:", "reads_own_changes: true, set:");
+    std::fs::write(&quiet, marked).unwrap();
+    let quiet_config = config.with_file_name("quiet.ron");
+    let original = std::fs::read_to_string(&config).unwrap();
+    let pointed = original.replace("ctx.rules.ron", "quiet.rules.ron");
+    std::fs::write(&quiet_config, pointed).unwrap();
+    let check = bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel")).args(["check", quiet_config.to_str().unwrap()]),
+    );
+    let quiet_err = text(&check.stderr);
+    assert!(
+        check.status.success() && !quiet_err.contains("warning"),
+        "{quiet_err}"
+    );
 
     let Ended { code, summary, log } = run_until_reported(&config, &[], "re-triggers itself");
     assert_eq!(code, Some(0), "{log}");

@@ -75,6 +75,11 @@ pub struct ContextRule {
     /// Keep the effects when the context ends (default: restore what it changed).
     #[serde(default)]
     pub sticky: bool,
+    /// Its conditions read what it changes, on purpose (e.g. a brightness divided by the
+    /// exposure it sets): `petrel check` does not warn that it may undo itself. The runtime
+    /// still names a context that does switch itself on and off in a loop.
+    #[serde(default)]
+    pub reads_own_changes: bool,
 }
 
 /// A problem in a rules file, located in it (the same shape as a config error).

@@ -147,7 +147,10 @@ impl<'a> Parser<'a> {
                         return Err(self.unclosed(at, &t, *open_at));
                     }
                     if items.is_empty() {
-                        return self.err(*open_at, "empty block '{ }'; expected at least one action inside");
+                        return self.err(
+                            *open_at,
+                            "empty block '{ }'; expected at least one action inside",
+                        );
                     }
                     branches.push(std::mem::take(&mut items));
                     if self.eat("||")? {
