@@ -33,6 +33,11 @@ impl Engine {
             let err = |needle: Option<&str>, offset, message| {
                 loaded.error(&rule.name, needle, offset, message)
             };
+            if rule.name.trim().is_empty() {
+                let message = "a context without a name: its switches and errors could not say which it is; give it `name: \"...\"`";
+                errors.push(err(Some("name: \"\""), None, message.into()));
+                continue;
+            }
             if names.contains(&rule.name) {
                 errors.push(err(
                     None,
