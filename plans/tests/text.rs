@@ -301,7 +301,7 @@ fn syntax_errors_have_line_and_column() {
     );
     assert_eq!(
         error("a|x", None),
-        "t.plan:1:3: unexpected 'x'; expected a number of seconds after '|'"
+        "t.plan:1:3: unexpected 'x'; expected a whole number of seconds after '|' (0 to 4294967295)"
     );
     assert_eq!(
         error("{ a; b", None),

@@ -274,7 +274,7 @@ impl<'a> Parser<'a> {
                     return self.err(
                         at,
                         format!(
-                            "unexpected {}; expected a number of seconds after '|'",
+                            "unexpected {}; expected a whole number of seconds after '|' (0 to 4294967295)",
                             show(&t)
                         ),
                     )
