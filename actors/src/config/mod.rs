@@ -84,8 +84,9 @@ pub struct AgentConfig {
 pub struct ModuleConfig {
     /// Instance name, unique in the agent.
     pub name: String,
-    /// Registered module type, e.g. `demo.scale`.
-    #[serde(rename = "type")]
+    /// Registered module type, e.g. `demo.scale`. An overlay may leave it out to keep the
+    /// base config's; a config must give it (empty here when left out).
+    #[serde(rename = "type", default)]
     pub type_name: String,
     /// Property values by path (`params/factor`, `enabled`, ...), checked against their types.
     #[serde(default, deserialize_with = "unique_keys")]
@@ -207,6 +208,14 @@ impl ConfigFile {
                     ),
                 );
                 errors.push(e);
+                continue;
+            }
+            if m.type_name.is_empty() {
+                let message = format!(
+                    "module `{}` has no `type`; expected e.g. `type: \"demo.counter\"` (`petrel modules` lists them)",
+                    m.name
+                );
+                errors.push(self.locate(&format!("\"{}\"", m.name), message));
                 continue;
             }
             let Some(module_type) = types.get(&m.type_name) else {

@@ -6,7 +6,7 @@ impl ConfigFile {
     /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
     /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
     /// `realtime_priority`; per module
-    /// `type`, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
+    /// `type` if given, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
     /// and their `values`, `links` and `capacities` are merged key by key; modules only it
     /// has are appended.
     pub fn overlay(&mut self, overlay: ConfigFile) {
@@ -50,7 +50,10 @@ impl ConfigFile {
                 Some(base) => {
                     let wrote =
                         |field: &str| overlay.written.contains(&format!("{}/{field}", m.name));
-                    base.type_name = m.type_name;
+                    // Left out: the base config's type stays.
+                    if !m.type_name.is_empty() {
+                        base.type_name = m.type_name;
+                    }
                     if wrote("group") {
                         base.group = m.group;
                     }
