@@ -264,7 +264,8 @@ pub(crate) struct RunArgs {
     /// switches, plan firings and the log (or what the config's `record:` section selects).
     #[arg(long)]
     record: Option<PathBuf>,
-    /// How the standard types are written: Foxglove schemas (JSON) or ROS 2 messages (CDR).
+    /// How the standard types are written (default `foxglove`: protobuf for grids, scans, poses
+    /// and images, JSON for the rest; `foxglove-json`: all JSON; `ros2`: ROS 2 messages, CDR).
     #[arg(long, value_enum)]
     record_format: Option<record::RecordFormat>,
     /// How the recording's chunks are compressed: zstd (default: less CPU and smaller files on
