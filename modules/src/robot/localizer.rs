@@ -88,17 +88,10 @@ impl LocalizerModule {
             self.size.value(),
             self.origin.value(),
         );
-        let cells = |m: f64| (m / res).ceil();
-        let (w, h) = (cells(size.0.x), cells(size.0.y));
-        if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
-            bail!(
-                "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
-                crate::sim::Grid::MAX_CELLS, petrel_actors::short_number(size.0.x), petrel_actors::short_number(size.0.y), petrel_actors::short_number(res)
-            );
-        }
+        let (width, height) = super::grid_cells(res, size)?;
         let matcher = ScanMatcherParams {
-            width: w as u32,
-            height: h as u32,
+            width,
+            height,
             resolution: res,
             origin: (origin.0.x, origin.0.y),
             laser_mount: self.laser_mount.value(),

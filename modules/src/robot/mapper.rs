@@ -7,9 +7,8 @@ use petrel_actors::{
     QueueReader, Range, Schedule,
 };
 
-use super::{check_params, param_error};
+use super::param_error;
 use crate::nav::{Mapper, MapperParams};
-use crate::sim::error::positive;
 
 /// Scans kept waiting for a matching pose; beyond this the pose source is presumed silent and
 /// the oldest scan is mapped with the latest pose.
@@ -128,18 +127,10 @@ impl MapperModule {
             self.size.value(),
             self.origin.value(),
         );
-        check_params(positive, &[("resolution", res)])?;
-        let cells = |m: f64| (m / res).ceil();
-        let (w, h) = (cells(size.0.x), cells(size.0.y));
-        if !(w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
-            anyhow::bail!(
-                "invalid parameter `params/size`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
-                crate::sim::Grid::MAX_CELLS, petrel_actors::short_number(size.0.x), petrel_actors::short_number(size.0.y), petrel_actors::short_number(res)
-            );
-        }
+        let (width, height) = super::grid_cells(res, size)?;
         let params = MapperParams {
-            width: w as u32,
-            height: h as u32,
+            width,
+            height,
             resolution: res,
             origin: (origin.0.x, origin.0.y),
             laser_mount: self.laser_mount.value(),

@@ -107,6 +107,21 @@ fn initialized<T>(built: &mut Option<T>) -> &mut T {
 
 /// `check`'s answer for a module whose `init` builds a core from its parameters: nothing, or
 /// why the core cannot be built.
+/// The cells (columns, rows) of a grid of extent `size` (m) at `res` m a cell: at least one
+/// each way, at most [`crate::sim::Grid::MAX_CELLS`] in all; an error naming both parameters.
+fn grid_cells(res: f64, size: petrel_actors::Point2) -> anyhow::Result<(u32, u32)> {
+    let cells = |m: f64| (m / res).ceil();
+    let (w, h) = (cells(size.0.x), cells(size.0.y));
+    if !(res > 0.0 && w >= 1.0 && h >= 1.0 && w * h <= crate::sim::Grid::MAX_CELLS as f64) {
+        let n = petrel_actors::short_number;
+        anyhow::bail!(
+            "invalid parameters `params/size` and `params/resolution`: expected a positive extent of at most {} cells, got {} x {} m at {} m per cell",
+            crate::sim::Grid::MAX_CELLS, n(size.0.x), n(size.0.y), n(res)
+        );
+    }
+    Ok((w as u32, h as u32))
+}
+
 fn check_built<T>(built: anyhow::Result<T>) -> Vec<petrel_actors::CheckProblem> {
     built.err().iter().map(check_problem).collect()
 }
