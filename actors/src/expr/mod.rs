@@ -101,6 +101,24 @@ impl ExprError {
     }
 }
 
+/// An expression as an error message quotes it: control characters escaped, and at most 80
+/// characters (a generated 200 KB expression made a 200 KB error line).
+pub fn quoted(src: &str) -> String {
+    const MAX: usize = 80;
+    let mut out = String::new();
+    for (i, c) in src.chars().enumerate() {
+        if i == MAX {
+            out.push('…');
+            break;
+        }
+        match c.is_control() {
+            true => out.extend(c.escape_default()),
+            false => out.push(c),
+        }
+    }
+    out
+}
+
 /// Every property an expression names (paths as written, each once, in order).
 pub fn properties(ast: &Ast) -> Vec<String> {
     fn walk(a: &Ast, out: &mut Vec<String>) {

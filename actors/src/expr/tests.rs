@@ -478,3 +478,11 @@ fn arithmetic_that_leaves_the_numbers_cannot_be_evaluated() {
     assert!(e.message.contains("division by zero"), "{e}");
     assert_eq!((e.line, e.column), (1, 11));
 }
+
+#[test]
+fn errors_quote_at_most_80_characters_with_control_characters_escaped() {
+    assert_eq!(quoted("a/out/x > 1"), "a/out/x > 1");
+    assert_eq!(quoted("a\u{0}b\nc"), "a\\u{0}b\\nc");
+    let long = "x".repeat(200_000);
+    assert_eq!(quoted(&long), format!("{}…", "x".repeat(80)));
+}

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 use std::time::Duration;
 
-use petrel_actors::expr::{never_true, parse, properties, ExprId, ExprSet, Ty, TypeEnv};
+use petrel_actors::expr::{never_true, parse, properties, quoted, ExprId, ExprSet, Ty, TypeEnv};
 use petrel_actors::TypeInfo;
 use tokio::time::Instant;
 
@@ -52,7 +52,12 @@ impl Engine {
                 match engine.exprs.add(src, &env, Some(want)) {
                     Ok(id) => Some(id),
                     Err(e) => {
-                        let message = format!("context `{}`: in `{src}`: {}", rule.name, e.message);
+                        let message = format!(
+                            "context `{}`: in `{}`: {}",
+                            rule.name,
+                            quoted(src),
+                            e.message
+                        );
                         errors.push(err(Some(src), Some((e.line, e.column)), message));
                         None
                     }
@@ -276,7 +281,12 @@ fn constant_refused(
     one.evaluate(Instant::now());
     let value = match one.value(id)? {
         Ok(value) => value,
-        Err(e) => return Some(format!("`{target}`: `{src}` cannot be evaluated: {e}")),
+        Err(e) => {
+            return Some(format!(
+                "`{target}`: `{}` cannot be evaluated: {e}",
+                quoted(src)
+            ))
+        }
     };
     match super::to_property(value, info) {
         Ok(value) => schema.refuses(target, &value),

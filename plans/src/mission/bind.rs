@@ -146,7 +146,10 @@ impl Binder<'_> {
         let ast = match parse(src) {
             Ok(a) => a,
             Err(e) => {
-                self.problem(needle, format!("{what}: {e} (in `{src}`)"));
+                self.problem(
+                    needle,
+                    format!("{what}: {e} (in `{}`)", petrel_actors::expr::quoted(src)),
+                );
                 return None;
             }
         };
@@ -160,7 +163,10 @@ impl Binder<'_> {
         match self.exprs.add(src, &env, Some(&Ty::Bool)) {
             Ok(id) => Some(id),
             Err(e) => {
-                self.problem(needle, format!("{what}: {e} (in `{src}`)"));
+                self.problem(
+                    needle,
+                    format!("{what}: {e} (in `{}`)", petrel_actors::expr::quoted(src)),
+                );
                 None
             }
         }
