@@ -64,7 +64,7 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
     };
     let mut ids = Ids::default();
     read_nodes(net, &mut raw, file, &mut ids)?;
-    ids.check_arcs(file)?;
+    ids.check_arcs(&doc, file)?;
     for c in &raw.comments {
         if let Some(name) = c.text.trim().strip_prefix("PLAN NAME:") {
             raw.name = name.trim().to_string();
@@ -94,14 +94,16 @@ fn read_nodes(net: Node, raw: &mut RawNet, file: &str, ids: &mut Ids) -> Result<
     Ok(())
 }
 
-/// The ids of a net's nodes and arcs with their lines, so that a duplicate id or an arc to
-/// nowhere is reported where it is written (the plan builder knows no lines).
+/// The ids of a net's nodes and arcs with where they are written, so that a duplicate id or an
+/// arc to nowhere is reported at its line (the plan builder knows no lines). Positions are
+/// byte offsets, turned into lines only for an error: finding a line walks the text from its
+/// start, which for every node of a 100,000-place net took minutes.
 #[derive(Default)]
 struct Ids {
-    /// Node and arc ids: kind and line of the first.
-    seen: std::collections::HashMap<String, (&'static str, u32)>,
-    /// Arcs: id, source, target, line.
-    arcs: Vec<(String, String, String, u32)>,
+    /// Node and arc ids: kind and offset of the first.
+    seen: std::collections::HashMap<String, (&'static str, usize)>,
+    /// Arcs: id, source, target, offset.
+    arcs: Vec<(String, String, String, usize)>,
 }
 
 impl Ids {
@@ -115,32 +117,36 @@ impl Ids {
         let Some(id) = n.attribute("id").filter(|id| !id.is_empty()) else {
             return Ok(()); // reported by `read_node`
         };
-        let line = line_of(n);
-        if let Some((first, at)) = self.seen.get(id) {
+        let at = n.range().start;
+        if let Some((first, first_at)) = self.seen.get(id) {
+            let line = |offset| n.document().text_pos_at(offset).row;
             return Err(PlanError::Pnml {
                 file: file.to_string(),
-                element: format!("{kind} '{id}' at line {line}"),
-                message: format!("duplicate id: {first} '{id}' at line {at} has it already"),
+                element: format!("{kind} '{id}' at line {}", line(at)),
+                message: format!(
+                    "duplicate id: {first} '{id}' at line {} has it already",
+                    line(*first_at)
+                ),
             });
         }
-        self.seen.insert(id.to_string(), (kind, line));
+        self.seen.insert(id.to_string(), (kind, at));
         if kind == "arc" {
             let end = |a| n.attribute(a).unwrap_or("").to_string();
             self.arcs
-                .push((id.to_string(), end("source"), end("target"), line));
+                .push((id.to_string(), end("source"), end("target"), at));
         }
         Ok(())
     }
 
     /// Every arc joins a place and a transition of the net.
-    fn check_arcs(&self, file: &str) -> Result<(), PlanError> {
-        for (id, source, target, line) in &self.arcs {
+    fn check_arcs(&self, doc: &Document, file: &str) -> Result<(), PlanError> {
+        for (id, source, target, at) in &self.arcs {
             for (which, end) in [("source", source), ("target", target)] {
                 let node = self.seen.get(end.as_str()).map(|(kind, _)| *kind);
                 if !matches!(node, Some("place" | "transition")) && !end.is_empty() {
                     return Err(PlanError::Pnml {
                         file: file.to_string(),
-                        element: format!("arc '{id}' at line {line}"),
+                        element: format!("arc '{id}' at line {}", doc.text_pos_at(*at).row),
                         message: format!("{which} '{end}' is not a place or transition id"),
                     });
                 }
