@@ -204,6 +204,9 @@ read_methods!(PropertyHandle);
 pub struct AnyHandle {
     pub(crate) ep: Arc<Endpoint>,
     pub(crate) rule: Arc<WriteRule>,
+    /// The rule asks nothing beyond the type (settable, no range): the usual write, on the
+    /// reaction path of missions and contexts, checks one flag instead of reading the rule.
+    pub(crate) plain: bool,
 }
 
 /// What a write through an [`AnyHandle`] must respect, from the property's declaration: the
@@ -214,6 +217,32 @@ pub(crate) struct WriteRule {
     pub range: Option<crate::range::RangeCheck>,
     /// The property's one-line description, for the out-of-range message.
     pub doc: String,
+}
+
+impl WriteRule {
+    /// What a property of `kind` with `range` refuses of `value` (its type already checked):
+    /// the one check of [`AnyHandle::check`] and [`Registry::check_set`](crate::Registry).
+    pub fn check(
+        key: &str,
+        kind: crate::PropertyKind,
+        range: Option<&crate::range::RangeCheck>,
+        doc: &str,
+        value: &AnyValue,
+    ) -> Result<(), crate::BlackboardError> {
+        if !kind.settable() {
+            let key = key.to_string();
+            return Err(crate::BlackboardError::NotSettable { key, kind });
+        }
+        match range.and_then(|check| Some((check, check.refuses(value)?))) {
+            Some((check, refused)) => Err(crate::BlackboardError::OutOfRange {
+                key: key.to_string(),
+                value: refused,
+                range: check.expected(),
+                doc: doc.to_string(),
+            }),
+            None => Ok(()),
+        }
+    }
 }
 
 impl AnyHandle {
@@ -257,7 +286,9 @@ impl AnyHandle {
     /// for a module that writes through untyped handles during a step, so that those writes
     /// carry the step's time ([`Context::now`](crate::Context::now)) like its typed outputs'.
     pub fn set_at(&self, value: AnyValue, written: Instant) -> Result<(), crate::BlackboardError> {
-        self.check(&value)?;
+        if !(self.plain && self.ep.type_info().is_type_of(value.as_ref())) {
+            self.check(&value)?;
+        }
         self.ep.write_at(value, written);
         Ok(())
     }
@@ -275,23 +306,13 @@ impl AnyHandle {
             });
         }
         let rule = &*self.rule;
-        if !rule.kind.settable() {
-            return Err(crate::BlackboardError::NotSettable {
-                key: key(),
-                kind: rule.kind,
-            });
-        }
-        if let Some(check) = rule.range {
-            if let Some(refused) = check.refuses(value) {
-                return Err(crate::BlackboardError::OutOfRange {
-                    key: key(),
-                    value: refused,
-                    range: check.expected(),
-                    doc: rule.doc.clone(),
-                });
-            }
-        }
-        Ok(())
+        WriteRule::check(
+            &self.ep.key,
+            rule.kind,
+            rule.range.as_ref(),
+            &rule.doc,
+            value,
+        )
     }
 
     /// The property's `module/path`.

@@ -59,20 +59,7 @@ impl Registry {
     pub fn check_set(&self, address: &str, value: &AnyValue) -> Result<String, BlackboardError> {
         let key = self.key_of(address)?;
         let decl = &self.entries[&key].decl;
-        let kind = decl.kind;
-        if !kind.settable() {
-            return Err(BlackboardError::NotSettable { key, kind });
-        }
-        if let Some(check) = decl.range {
-            if let Some(refused) = check.refuses(value) {
-                return Err(BlackboardError::OutOfRange {
-                    value: refused,
-                    range: check.expected(),
-                    doc: decl.doc.clone(),
-                    key,
-                });
-            }
-        }
+        crate::handle::WriteRule::check(&key, decl.kind, decl.range.as_ref(), &decl.doc, value)?;
         Ok(key)
     }
 
@@ -152,6 +139,7 @@ impl Registry {
         };
         Ok(crate::AnyHandle {
             ep,
+            plain: rule.kind.settable() && rule.range.is_none(),
             rule: Arc::new(rule),
         })
     }
