@@ -226,6 +226,27 @@ impl Ports {
         input
     }
 
+    /// Declares a word parameter that takes only one of `choices` (a waveform, a drive, a
+    /// mode): a config, an overlay, a tool or a context rule writing another word is refused,
+    /// naming the choices, at load, at `petrel check` and at run time alike.
+    pub fn param_one_of(
+        &mut self,
+        path: &str,
+        default: &'static str,
+        choices: &'static [&'static str],
+        doc: &str,
+    ) -> Input<String> {
+        let input = Input::new(self.value(PropertyKind::Param, path, default.to_string(), doc));
+        if !choices.contains(&default) {
+            self.errors.push(format!(
+                "parameter `{path}` of module `{}`: its default {default:?} is not one of its choices",
+                self.module
+            ));
+        }
+        self.check_last(crate::range::RangeCheck::one_of(choices));
+        input
+    }
+
     /// Checks the values of the property declared last with `check` (see [`RangeCheck`]).
     ///
     /// [`RangeCheck`]: crate::range::RangeCheck

@@ -285,3 +285,42 @@ fn every_field_an_overlay_writes_replaces_the_base_and_nothing_else_does() {
     again.overlay(ConfigFile::parse("o.ron", r#"Agent(name: "r1", modules: [])"#).unwrap());
     assert_eq!(again.config.supervision.max_restarts, 50);
 }
+
+/// A word parameter (`demo.signal`'s waveform) takes only its words, at load and at run time:
+/// an unknown waveform set while running had made the signal a silent 0.
+#[tokio::test(start_paused = true)]
+async fn a_word_parameter_refuses_other_words_at_load_and_at_run_time() {
+    let loaded = errors(
+        "Agent(name: \"r1\", modules: [\n  (name: \"s\", type: \"demo.signal\", values: {\"params/waveform\": \"squiggle\"}),\n])",
+    );
+    assert_eq!(loaded.len(), 1, "{loaded:?}");
+    assert!(
+        loaded[0].starts_with("bad.ron:2:")
+            && loaded[0]
+                .contains("expected one of \"sine\", \"square\", \"triangle\", \"sawtooth\""),
+        "{}",
+        loaded[0]
+    );
+    let agent = crate::support::start(
+        "Agent(name: \"r1\", modules: [(name: \"s\", type: \"demo.signal\")])",
+    )
+    .await;
+    let bb = agent.blackboard();
+    let refused = bb
+        .set("s/params/waveform", "squiggle".to_string())
+        .await
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        refused,
+        "`s/params/waveform` = \"squiggle\": expected one of \"sine\", \"square\", \"triangle\", \"sawtooth\" (sine, square, triangle or sawtooth)"
+    );
+    bb.set("s/params/waveform", "square".to_string())
+        .await
+        .unwrap();
+    assert_eq!(
+        *bb.get::<String>("s/params/waveform").await.unwrap(),
+        "square"
+    );
+    agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
+}

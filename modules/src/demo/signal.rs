@@ -1,6 +1,5 @@
 use std::f64::consts::TAU;
 
-use anyhow::bail;
 use petrel_actors::{Context, Module, Output, Param, Ports, Range, Schedule};
 
 /// `demo.signal`: a periodic waveform generator (sine, square, triangle, sawtooth), to stand in
@@ -13,6 +12,9 @@ pub struct Signal {
     offset: Param<f64>,
     value: Output<f64>,
 }
+
+/// The waveforms [`wave`] knows.
+const WAVEFORMS: &[&str] = &["sine", "square", "triangle", "sawtooth"];
 
 /// The waveform value in `[-1, 1]` at `phase` (in periods).
 fn wave(waveform: &str, phase: f64) -> Option<f64> {
@@ -45,9 +47,12 @@ impl Module for Signal {
                 Range::new(1.0, 3.6e6),
                 "time between samples, ms",
             ),
-            waveform: ports.param(
+            // One of the known words, checked wherever it is written: an unknown waveform set
+            // at run time had made the signal a silent 0.
+            waveform: ports.param_one_of(
                 "params/waveform",
-                "sine".to_string(),
+                "sine",
+                WAVEFORMS,
                 "sine, square, triangle or sawtooth",
             ),
             period_s: ports.param_in(
@@ -66,29 +71,10 @@ impl Module for Signal {
         Schedule::every(super::period(self.sample_ms.value()))
     }
 
-    /// An unknown waveform: `petrel check` says so, as `init` would.
-    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
-        let waveform = self.waveform.get();
-        match wave(&waveform, 0.0) {
-            Some(_) => Vec::new(),
-            None => vec![petrel_actors::CheckProblem::new(
-                "params/waveform",
-                unknown_waveform(&waveform),
-            )],
-        }
-    }
-
-    async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let waveform = self.waveform.get();
-        if wave(&waveform, 0.0).is_none() {
-            bail!("{}", unknown_waveform(&waveform));
-        }
-        Ok(())
-    }
-
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let t = ctx.steps() as f64 * self.sample_ms.value() as f64 / 1000.0;
         let phase = t / self.period_s.value().max(1e-9);
+        // Only known words pass the parameter's check.
         let w = wave(&self.waveform.get(), phase).unwrap_or(0.0);
         self.value
             .set(self.offset.value() + self.amplitude.value() * w);
@@ -96,13 +82,16 @@ impl Module for Signal {
     }
 }
 
-fn unknown_waveform(waveform: &str) -> String {
-    format!("params/waveform is `{waveform}`; expected sine, square, triangle or sawtooth")
-}
-
 #[cfg(test)]
 mod tests {
     use super::wave;
+
+    #[test]
+    fn every_listed_waveform_is_known() {
+        for w in super::WAVEFORMS {
+            assert!(wave(w, 0.3).is_some(), "{w}");
+        }
+    }
 
     #[test]
     fn waveforms_hit_their_extremes() {

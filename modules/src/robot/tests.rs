@@ -85,11 +85,6 @@ async fn bad_parameters_fail_init_naming_the_parameter() {
     let cases = [
         (
             "sim.world",
-            format!(r#""params/world": "{WORLD}", "params/drive": "tracked""#),
-            "`params/drive`: expected differential or holonomic, got `tracked`",
-        ),
-        (
-            "sim.world",
             format!(r#""params/world": "{WORLD}", "params/start": [1.0, 2.0]"#),
             "`params/start`: expected `[x, y, heading_deg]`",
         ),
@@ -217,6 +212,12 @@ fn out_of_range_parameters_are_refused_before_anything_starts_naming_the_range()
             "params/radius",
             "NaN",
             "= NaN: expected a value in 0.01..=5",
+        ),
+        (
+            "sim.world",
+            "params/drive",
+            "\"tracked\"",
+            "= \"tracked\": expected one of \"differential\", \"holonomic\"",
         ),
     ];
     for (ty, path, value, expected) in cases {

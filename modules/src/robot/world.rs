@@ -133,7 +133,7 @@ impl Module for SimWorld {
             deterministic: ports.param("params/deterministic", true, "true: every step advances exactly dt (a slow host slows simulated time down); false: follow the wall clock"),
             command_timeout: ports.param_in("params/command_timeout_s", 0.5, Range::new(0.0, 3600.0), "stop the robot when in/controlSpeed is not rewritten for this many simulated seconds (0 = never)"),
             radius: ports.param_in("params/radius", 0.2, Range::new(0.01, 5.0), "robot footprint radius, m"),
-            drive: ports.param("params/drive", "differential".to_string(), "differential or holonomic"),
+            drive: ports.param_one_of("params/drive", "differential", &["differential", "holonomic"], "differential or holonomic"),
             max_speed: ports.param_in("params/max_speed", 0.7, Range::new(0.01, 20.0), "largest |forward speed|, m/s"),
             max_lateral_speed: ports.param_in("params/max_lateral_speed", 0.5, Range::new(0.01, 20.0), "largest |sideways speed| (holonomic), m/s"),
             max_turn: ports.param_in("params/max_turn", 2.0, Range::new(0.01, 20.0), "largest |turn rate|, rad/s"),

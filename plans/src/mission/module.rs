@@ -16,7 +16,7 @@ use super::memory::{MissionMemory, PlanFiring};
 use super::prepare::{prepare, Problems, Setup};
 use super::run::{Run, StepTime, MAX_ROUNDS};
 use super::shown::{marking, Shown};
-use super::team::{is_serve, TeamIo, RUN};
+use super::team::{is_serve, TeamIo, RUN, SERVE};
 use super::timer::Timer;
 use crate::exec::{PlanState, PlanStatus};
 use crate::remote::Dispatch;
@@ -64,7 +64,7 @@ impl Module for Mission {
             actions: ports.param("params/actions", ActionBindings::default(), "action name (or prefix of `name_p1_p2`) -> (enable, set, restore, finished, failed)"),
             conditions: ports.param("params/conditions", ConditionBindings::default(), "condition atom -> boolean expression over properties"),
             places: ports.param("params/places", Places::default(), "named values action parameters may name: `goto_kitchen` with {\"kitchen\": (x: 2.0, y: 1.0)}"),
-            mode: ports.param("params/mode", RUN.to_string(), "run: run the plan, sending other robots' `robot#` actions to their agents; serve: run no plan, carry out this agent's `agent#` actions for the plan a coordinator runs"),
+            mode: ports.param_one_of("params/mode", RUN, &[RUN, SERVE], "run: run the plan, sending other robots' `robot#` actions to their agents; serve: run no plan, carry out this agent's `agent#` actions for the plan a coordinator runs"),
             executor: ports.param("params/executor", "mission".to_string(), "the module (a mission.pnp in serve mode) that carries out `robot#` actions on each robot's agent"),
             outbox: ports.queue_out("out/outbox", 256, "team plan messages to robots or to the coordinator"),
             firings: ports.queue_out("out/firings", 64, "what each step fired, in order, and the marking it left (not pushed while the plan fires in a circle: the loop report names it)"),

@@ -24,6 +24,7 @@ impl SimWorld {
         let drive = match self.drive.get().as_str() {
             "differential" => DriveKind::Differential,
             "holonomic" => DriveKind::Holonomic,
+            // The parameter's check lets no other word through; kept for a core built by hand.
             other => bail!("invalid parameter `params/drive`: expected differential or holonomic, got `{other}`"),
         };
         let odom_noise = match self.odom_noise.get().as_slice() {
