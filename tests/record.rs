@@ -139,6 +139,16 @@ fn a_recorded_run_is_listed_and_replayed_in_place_of_a_module() {
     );
     assert!(listing.contains("format:    ros2"), "{listing}");
     assert!(listing.contains("/d/counter/out/value"), "{listing}");
+    // The run's summary counts the channels a reader finds (not those that got no message).
+    let said = stdout
+        .split_once(" messages on ")
+        .and_then(|(_, rest)| rest.split_once(" channels"))
+        .map(|(n, _)| n.to_string());
+    let listed = listing
+        .lines()
+        .find_map(|l| l.strip_prefix("channels:"))
+        .map(|n| n.trim().to_string());
+    assert!(said.is_some() && said == listed, "{stdout}\n{listing}");
     let out = petrel(
         dir.path(),
         &[

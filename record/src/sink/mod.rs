@@ -87,7 +87,8 @@ pub struct SinkReport {
     pub dropped: u64,
     /// Values that could not be encoded.
     pub failed: u64,
-    /// Channels.
+    /// Channels in the recording: those that got a message (a channel appears in a file
+    /// with its first message, so one that got none is not there for a reader to count).
     pub channels: usize,
 }
 
@@ -269,7 +270,7 @@ impl Sink {
             written: self.channels.iter().map(|c| c.written).sum(),
             dropped: self.channels.iter().map(|c| c.dropped).sum(),
             failed: self.channels.iter().map(|c| c.failed).sum(),
-            channels: self.channels.len(),
+            channels: self.channels.iter().filter(|c| c.written > 0).count(),
         })
     }
 }
