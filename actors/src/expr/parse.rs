@@ -271,7 +271,12 @@ impl Parser<'_> {
                 return Err(self.chained(first, s));
             }
             comparison = (prec == CMP).then_some(s);
-            self.enter(s)?;
+            // A flat chain is as deep as it is long: say so, or the limit reads as a mystery.
+            self.enter(s).map_err(|mut e| {
+                e.message
+                    .push_str(" (each operator of a chain counts one level)");
+                e
+            })?;
             links += 1;
             self.pos += 1;
             let rhs = self.expr(prec + 1)?;
