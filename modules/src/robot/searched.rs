@@ -83,6 +83,10 @@ impl Module for SearchedModule {
             self.skipped.set(self.skipped.value() + 1);
             return Ok(());
         }
+        // Before the localizer's first estimate the pose reads (0, 0, 0): not where it looked.
+        if self.robot.version() == 0 {
+            return Ok(());
+        }
         self.counted.set(self.counted.value() + 1);
         if core.look(self.robot.value(), &self.map.get()) > 0 {
             self.searched.set(core.grid());

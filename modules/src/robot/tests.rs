@@ -358,6 +358,13 @@ async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
             confidence: 1.0,
         }])
     };
+    // Sightings are placed only once the localizer gave a pose.
+    bb.set(
+        "victims/in/robotPose",
+        petrel_actors::Pose2::new(0.0, 0.0, 0.0),
+    )
+    .await
+    .unwrap();
     // One sighting: a candidate, not yet a victim (two confirm one).
     bb.set("victims/in/detections", sighting()).await.unwrap();
     for _ in 0..500 {
@@ -373,6 +380,53 @@ async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
     // (which the new instance does not count twice).
     bb.set("victims/in/detections", sighting()).await.unwrap();
     wait_for(&agent, "victims/out/pending", 1).await;
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+/// Before the localizer's first estimate the pose input reads (0, 0, 0): a frame seen then is
+/// neither placed as a sighting nor counted as searched floor (a team robot placed a victim
+/// metres off from there at start).
+#[tokio::test(start_paused = true)]
+async fn frames_before_the_first_pose_place_nothing() {
+    use crate::vision::{Detection, Detections};
+    use petrel_actors::{OccupancyGrid, Pose2};
+    let agent = start(
+        r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 1}),
+           (name: "searched", type: "nav.searched", values: {"params/min_views": 1})"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    let map = OccupancyGrid {
+        width: 10,
+        height: 10,
+        resolution: 1.0,
+        origin: Pose2::default(),
+        data: vec![0i8; 100].into(),
+    };
+    bb.set("searched/in/map", map).await.unwrap();
+    let sighting = Detections(vec![Detection {
+        bearing: 0.0,
+        range: 2.0,
+        confidence: 1.0,
+    }]);
+    bb.set("victims/in/detections", sighting.clone())
+        .await
+        .unwrap();
+    bb.set("searched/in/frames", 1i64).await.unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    assert_eq!(*bb.get::<i64>("victims/out/pending").await.unwrap(), 0);
+    assert_eq!(*bb.get::<i64>("searched/out/frames").await.unwrap(), 0);
+    // The first estimate: frames count from now on.
+    for target in ["victims", "searched"] {
+        bb.set(&format!("{target}/in/robotPose"), Pose2::new(2.5, 5.5, 0.0))
+            .await
+            .unwrap();
+    }
+    bb.set("victims/in/detections", sighting).await.unwrap();
+    bb.set("searched/in/frames", 2i64).await.unwrap();
+    wait_for(&agent, "victims/out/pending", 1).await;
+    wait_for(&agent, "searched/out/frames", 1).await;
+    assert!(*bb.get::<f64>("searched/out/area").await.unwrap() > 0.0);
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 

@@ -130,7 +130,13 @@ impl Module for VictimMapper {
         if self.frame_version != Some(frame.version) {
             self.frame_version = Some(frame.version);
             core.next_frame();
-            for d in &frame.value.0 {
+            // Before the localizer's first estimate the pose reads (0, 0, 0): a sighting placed
+            // from there lands metres from its victim (seen at start in the rescue team).
+            let placed = match self.robot.version() {
+                0 => &[][..],
+                _ => &frame.value.0[..],
+            };
+            for d in placed {
                 // Why a victim was, or was not, confirmed: each sighting and the pose it is
                 // placed from.
                 tracing::debug!(
