@@ -205,11 +205,22 @@ pub fn substitute(text: &str, params: &[String], places: &Places) -> Result<Stri
                     if known.is_empty() { "none".to_string() } else { known.join(", ") }
                 ));
             }
-            (None, None) => out.push_str(param),
+            (None, None) => out.push_str(&param_literal(param)),
         }
     }
     out.push_str(rest);
     Ok(out)
+}
+
+/// A parameter as a value in an expression: a number or `true`/`false` as it is, anything
+/// else as a string. Never as code: a PNML action `check_a/out/x` must not read a property.
+fn param_literal(param: &str) -> String {
+    let number = param.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.')
+        && param.parse::<f64>().is_ok_and(f64::is_finite);
+    match number || param == "true" || param == "false" {
+        true => param.to_string(),
+        false => format!("{param:?}"),
+    }
 }
 
 fn plural(n: usize) -> &'static str {
@@ -354,6 +365,15 @@ mod tests {
         assert!(substitute("$4 > 1", &p, &none)
             .unwrap_err()
             .contains("3 parameters"));
+        // A parameter is a value, never code: a word is a string, a path is not read.
+        let words: Vec<String> = ["x", "a/out/x", "true", "-1.5", "inf", "1)or(1"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        assert_eq!(
+            substitute("[$1, $2, $3, $4, $5, $6]", &words, &none).unwrap(),
+            r#"["x", "a/out/x", true, -1.5, "inf", "1)or(1"]"#
+        );
     }
 
     #[test]
