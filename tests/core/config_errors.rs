@@ -324,3 +324,53 @@ async fn a_word_parameter_refuses_other_words_at_load_and_at_run_time() {
     );
     agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
 }
+
+/// A value beside a link of the same property would never be read: in one file it is an
+/// error at the value; an overlay's value replaces the base's link (and its link the base's
+/// value), so a snapshot taken after `petrel unlink` resumes with the value.
+#[test]
+fn a_value_and_a_link_on_one_property_are_an_error_in_one_file_and_the_last_word_across_overlays() {
+    let both = errors(
+        "Agent(name: \"r1\", modules: [\n  (name: \"src\", type: \"demo.counter\"),\n  (name: \"e\", type: \"demo.scale\",\n   values: {\"in/value\": 2.0},\n   links: {\"in/value\": \"src/out/value\"}),\n])",
+    );
+    assert_eq!(both.len(), 1, "{both:?}");
+    assert!(
+        both[0].starts_with("bad.ron:4:")
+            && both[0].contains("`e/in/value` has both a value and a link (to `src/out/value`)"),
+        "{}",
+        both[0]
+    );
+    let base = || {
+        ConfigFile::parse(
+            "base.ron",
+            r#"Agent(name: "r1", modules: [(name: "src", type: "demo.counter"),
+                (name: "e", type: "demo.scale", values: {"params/factor": 2.0},
+                 links: {"in/value": "src/out/value"})])"#,
+        )
+        .unwrap()
+    };
+    let mut unlinked = base();
+    unlinked.overlay(
+        ConfigFile::parse(
+            "snap.ron",
+            r#"Agent(name: "r1", modules: [(name: "e", values: {"in/value": 7.0})])"#,
+        )
+        .unwrap(),
+    );
+    let e = &unlinked.config.modules[1];
+    assert!(e.links.is_empty() && e.values.len() == 2, "{e:?}");
+    assert!(unlinked.build(&registry()).is_ok());
+    let mut relinked = base();
+    relinked.overlay(
+        ConfigFile::parse(
+            "o.ron",
+            r#"Agent(name: "r1", modules: [(name: "e", links: {"params/factor": "src/out/value"})])"#,
+        )
+        .unwrap(),
+    );
+    let e = &relinked.config.modules[1];
+    assert!(
+        e.values.is_empty() && e.links.len() == 2,
+        "the overlay's link replaces the base's value: {e:?}"
+    );
+}

@@ -268,6 +268,20 @@ impl ConfigFile {
             .iter()
             .filter(|m| registry.module_type(&m.name) == Some(m.type_name.as_str()))
             .collect();
+        // A linked property reads its link's target: a value beside the link would never be
+        // read, and losing it silently is worse than saying so.
+        for &m in &declared {
+            for (key, target) in m.links.iter().filter(|(k, _)| m.values.contains_key(*k)) {
+                errors.push(self.error(
+                    &m.name,
+                    Some(key),
+                    format!(
+                        "`{}/{key}` has both a value and a link (to `{}`): a linked property reads what it links to, so the value would never be read; remove one of them",
+                        m.name, target.url
+                    ),
+                ));
+            }
+        }
         // Values first, then links: a link may point at any module, declared before or after.
         let mut failed: Vec<(&ModuleConfig, &str, BlackboardError)> = Vec::new();
         for &m in &declared {

@@ -7,8 +7,9 @@ impl ConfigFile {
     /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
     /// `realtime_priority`; per module
     /// `type` if given, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
-    /// and their `values`, `links` and `capacities` are merged key by key; modules only it
-    /// has are appended.
+    /// and their `values`, `links` and `capacities` are merged key by key (a value the overlay
+    /// gives replaces the base's link of that property, a link it gives the base's value);
+    /// modules only it has are appended.
     pub fn overlay(&mut self, overlay: ConfigFile) {
         let source = self.sources.len();
         let wrote = |field: &str| overlay.written.contains(field);
@@ -68,6 +69,15 @@ impl ConfigFile {
                     }
                     if wrote("long_steps") {
                         base.long_steps = m.long_steps;
+                    }
+                    // An input the overlay gives a value is no longer linked, and one it
+                    // links has no value: its word is the last (a snapshot taken after
+                    // `petrel unlink` holds the value of an input the base config linked).
+                    for key in m.values.keys().filter(|k| !m.links.contains_key(*k)) {
+                        base.links.remove(key);
+                    }
+                    for key in m.links.keys().filter(|k| !m.values.contains_key(*k)) {
+                        base.values.remove(key);
                     }
                     base.values.extend(m.values);
                     base.links.extend(m.links);
