@@ -70,7 +70,7 @@ impl Module for VictimMapper {
             dismiss: ports.input("in/dismiss", false, "while true: the target is dismissed (not a victim), then out/dismissDone is true"),
             merge_radius: ports.param_in("params/merge_radius", 1.5, Range::new(0.01, 100.0), "sightings this close are one victim, m"),
             confirm_hits: ports.param_in("params/confirm_hits", 3, Range::new(1.0, 1000.0), "sightings that make a seen victim"),
-            min_confidence: ports.param_in("params/min_confidence", 0.1, Range::new(0.0, 1.0), "weaker detections are ignored, 0..1"),
+            min_confidence: ports.param_in("params/min_confidence", 0.7, Range::new(0.0, 1.0), "weaker detections are ignored, 0..1"),
             max_range: ports.param_in("params/max_range", 5.0, Range::new(0.1, 100.0), "farther detections are ignored, m"),
             confirm_range: ports.param_in("params/confirm_range", 5.0, Range::new(0.1, 100.0), "a victim is seen only once one of its sightings was this close (a far victim's range can be metres short), m"),
             standoff: ports.param_in("params/standoff", 1.0, Range::new(0.01, 20.0), "distance of the approach pose from the target, m"),
