@@ -93,7 +93,7 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-team"), &AGENTS);
     let bin = env!("CARGO_BIN_EXE_petrel");
-    let child = spawn_run(bin, dir.path(), &configs, "440s", Stdio::piped());
+    let child = spawn_run(bin, dir.path(), &configs, "440s", Stdio::piped(), Some(LOG));
     let out = wait(child);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -130,7 +130,7 @@ fn the_rescue_team_splits_the_floor_and_reaches_the_plan_goal() {
             "{robot} explored nothing:\n{stdout}"
         );
     }
-    assert_every_victim_found(&stdout);
+    assert_every_victim_found(&stdout, &stderr);
     // Victims found by any robot are merged into the coordinator's list, with who found them.
     assert!(
         stdout.contains("[victims] victim 1 at ("),
@@ -148,9 +148,10 @@ fn a_robot_whose_agent_dies_at_a_set_time_hands_its_frontier_on_and_every_victim
     let dir = tempfile::tempdir().unwrap();
     let configs = team_configs(dir.path(), &team_name("rescue-dies"), &FAULT_AGENTS);
     let bin = env!("CARGO_BIN_EXE_petrel");
-    let child = spawn_run(bin, dir.path(), &configs, "440s", Stdio::null());
+    let child = spawn_run(bin, dir.path(), &configs, "440s", Stdio::piped(), Some(LOG));
     let out = wait(child);
     let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         out.status.success() && stdout.contains("plan `team`: goal"),
         "{}\n{stdout}",
@@ -171,7 +172,7 @@ fn a_robot_whose_agent_dies_at_a_set_time_hands_its_frontier_on_and_every_victim
     }
     // The summary says who left when; the others found every victim.
     assert!(stdout.contains(", left the team at t = 40."), "{stdout}");
-    assert_every_victim_found(&stdout);
+    assert_every_victim_found(&stdout, &stderr);
 }
 
 #[test]
@@ -190,6 +191,7 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
             configs,
             "440s",
             stderr,
+            Some(LOG),
         )
     };
     let mut team = run(&others, Stdio::piped());
@@ -213,6 +215,7 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
     }
     let out = wait(team);
     let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         out.status.success() && stdout.contains("plan `team`: goal"),
         "{}\n{stdout}",
@@ -231,13 +234,19 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
             && stdout.contains("robot_3#search: 1 start, 1 end, 0 failures"),
         "{stdout}"
     );
-    assert_every_victim_found(&stdout);
+    assert_every_victim_found(&stdout, &stderr);
 }
+
+/// The log of a team run: the victim mappers' sightings and the frontiers assigned, so that a
+/// victim not found can be explained (see [`sightings_near`]).
+const LOG: &str =
+    "info,petrel_modules::robot::victim_mapper=debug,petrel_modules::robot::team_search=debug";
 
 /// Every victim of the floor is on the coordinator's list (`  N (x, y) found by ...`), within
 /// 1.5 m (sightings on the shaking rubble floor land up to about 1.2 m off; victims are more
-/// than 4 m apart).
-fn assert_every_victim_found(stdout: &str) {
+/// than 4 m apart). A victim missing is shown with the sightings placed near it and the
+/// frontiers assigned near it (from `stderr`, logged at [`LOG`]).
+fn assert_every_victim_found(stdout: &str, stderr: &str) {
     let found: Vec<(f64, f64)> = stdout
         .lines()
         .filter(|l| l.contains(") found by robot_"))
@@ -250,7 +259,80 @@ fn assert_every_victim_found(stdout: &str) {
     for (x, y) in VICTIMS {
         assert!(
             found.iter().any(|(fx, fy)| (fx - x).hypot(fy - y) < 1.5),
-            "the victim at ({x}, {y}) was not found; the team's list: {found:?}\n{stdout}"
+            "the victim at ({x}, {y}) was not found; the team's list: {found:?}\n{stdout}\n{}",
+            sightings_near(stderr, x, y)
         );
     }
+}
+
+/// The log lines about the floor around `(x, y)`: sightings placed within 2 m of it (with the
+/// pose they were placed from and their confidence) and frontiers assigned within 3 m.
+fn sightings_near(stderr: &str, x: f64, y: f64) -> String {
+    let field = |line: &str, name: &str| -> Option<f64> {
+        let at = line.find(&format!(" {name}="))? + name.len() + 2;
+        line[at..].split([' ', ',']).next()?.parse().ok()
+    };
+    let (mut near, mut frontiers, mut sightings) = (Vec::new(), Vec::new(), 0);
+    for line in stderr.lines() {
+        if line.contains("sighting") {
+            sightings += 1;
+            let (Some(rx), Some(ry), Some(th), Some(b), Some(r)) = (
+                field(line, "x"),
+                field(line, "y"),
+                field(line, "theta"),
+                field(line, "bearing"),
+                field(line, "range"),
+            ) else {
+                continue;
+            };
+            let (px, py) = (rx + r * (th + b).cos(), ry + r * (th + b).sin());
+            if (px - x).hypot(py - y) < 2.0 {
+                near.push(line.to_string());
+            }
+        } else if line.contains("frontier assigned") {
+            if let (Some(fx), Some(fy)) = (field(line, "x"), field(line, "y")) {
+                if (fx - x).hypot(fy - y) < 3.0 {
+                    frontiers.push(line.to_string());
+                }
+            }
+        }
+    }
+    let shown = |lines: &[String]| {
+        lines
+            .iter()
+            .take(30)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    format!(
+        "sightings placed within 2 m of ({x}, {y}): {} of {sightings}\n{}\nfrontiers assigned within 3 m: {}\n{}",
+        near.len(),
+        shown(&near),
+        frontiers.len(),
+        shown(&frontiers)
+    )
+}
+
+/// The explanation of a missed victim finds what the log says about its floor.
+#[test]
+fn a_missed_victim_is_shown_with_the_sightings_and_frontiers_near_it() {
+    let log = [
+        // Placed at (3.0, 8.0): near.
+        "T DEBUG module: petrel_modules::robot::victim_mapper: sighting x=1.0 y=8.0 theta=0.0 bearing=0.0 range=2.0 confidence=1.0 agent=robot_2",
+        // Placed at (1.0, 4.0): far.
+        "T DEBUG module: petrel_modules::robot::victim_mapper: sighting x=1.0 y=2.0 theta=1.5707963 bearing=0.0 range=2.0 confidence=1.0 agent=robot_2",
+        "T DEBUG module: petrel_modules::robot::team_search: frontier assigned robot=\"robot_3\" x=4.0 y=9.0 t=12.5 agent=coordinator",
+        "T DEBUG module: petrel_modules::robot::team_search: frontier assigned robot=\"robot_3\" x=12.0 y=9.0 t=14.5 agent=coordinator",
+    ]
+    .join("\n");
+    let shown = sightings_near(&log, 3.3, 8.1);
+    assert!(
+        shown.starts_with("sightings placed within 2 m of (3.3, 8.1): 1 of 2\n")
+            && shown.contains("x=1.0 y=8.0")
+            && shown.contains("frontiers assigned within 3 m: 1\n")
+            && shown.contains("x=4.0 y=9.0")
+            && !shown.contains("x=12.0"),
+        "{shown}"
+    );
 }

@@ -274,15 +274,21 @@ pub async fn wait_for<T: PropertyType>(
 }
 
 /// Starts `bin run CONFIGS --for RUN_FOR` in `dir`, standard output piped and standard error
-/// as asked: a whole team as one process, the way the rescue-team tests and measurements run it.
+/// as asked, with `RUST_LOG` set to `log` if given: a whole team as one process, the way the
+/// rescue-team tests and measurements run it.
 pub fn spawn_run<S: AsRef<std::ffi::OsStr>>(
     bin: &str,
     dir: &std::path::Path,
     configs: &[S],
     run_for: &str,
     stderr: std::process::Stdio,
+    log: Option<&str>,
 ) -> std::process::Child {
-    std::process::Command::new(bin)
+    let mut command = std::process::Command::new(bin);
+    if let Some(log) = log {
+        command.env("RUST_LOG", log);
+    }
+    command
         .current_dir(dir)
         .arg("run")
         .args(configs)

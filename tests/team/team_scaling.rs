@@ -186,7 +186,7 @@ fn run(n: usize) -> Figures {
     let cpu_before = children_cpu();
     let started = Instant::now();
     let bin = std::env::var("PETREL_BIN").unwrap_or(env!("CARGO_BIN_EXE_petrel").into());
-    let child = spawn_run(&bin, dir.path(), &configs, "1200s", Stdio::null());
+    let child = spawn_run(&bin, dir.path(), &configs, "1200s", Stdio::null(), None);
     let pid = child.id();
     // The kernel forgets a socket's counters when it closes: keep the last seen of each.
     let seen = Arc::new(Mutex::new(HashMap::<String, u64>::new()));
