@@ -89,7 +89,7 @@ pub struct ModuleConfig {
     #[serde(rename = "type", default)]
     pub type_name: String,
     /// Property values by path (`params/factor`, `enabled`, ...), checked against their types.
-    #[serde(default, deserialize_with = "unique_keys")]
+    #[serde(default, deserialize_with = "unique::unique_values")]
     pub values: BTreeMap<String, ron::Value>,
     /// Links: own input or parameter path → target property address, or another agent's
     /// property with transport settings (see [`LinkTarget`]).

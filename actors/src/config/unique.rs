@@ -1,12 +1,15 @@
 //! Maps read from configs and rules files that refuse a key written twice. Serde's own map
 //! keeps the last value without a word, so `{"params/factor": "oops", "params/factor": 2.0}`
-//! passed `petrel check` with its first, invalid value never looked at.
+//! passed `petrel check` with its first, invalid value never looked at. RON's dynamic
+//! [`ron::Value`] does the same inside a value (two `"say_a"` bindings in a mission's
+//! `params/actions`): [`unique_values`] reads values through [`StrictValue`], which refuses
+//! them at any depth.
 
 use std::collections::BTreeMap;
 use std::fmt;
 use std::marker::PhantomData;
 
-use serde::de::{Deserializer, Error, MapAccess, Visitor};
+use serde::de::{Deserializer, Error, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 
 /// Deserializes a map of string keys, refusing a key that appears twice (for
@@ -43,6 +46,149 @@ where
     d.deserialize_map(Unique(PhantomData))
 }
 
+/// [`unique_keys`] for a map of [`ron::Value`]s, each read as a [`StrictValue`]: a key written
+/// twice is refused at the top and inside every value.
+pub fn unique_values<'de, D>(d: D) -> Result<BTreeMap<String, ron::Value>, D::Error>
+where
+    D: Deserializer<'de>,
+{
+    let strict: BTreeMap<String, StrictValue> = unique_keys(d)?;
+    Ok(strict.into_iter().map(|(k, v)| (k, v.0)).collect())
+}
+
+/// A [`ron::Value`] read as RON reads one, except that a map writing a key twice is an error
+/// naming the key (RON's own keeps the last).
+pub struct StrictValue(pub ron::Value);
+
+impl<'de> Deserialize<'de> for StrictValue {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(StrictVisitor).map(StrictValue)
+    }
+}
+
+struct StrictVisitor;
+
+fn number(n: impl Into<ron::value::Number>) -> ron::Value {
+    ron::Value::Number(n.into())
+}
+
+impl<'de> Visitor<'de> for StrictVisitor {
+    type Value = ron::Value;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a RON value")
+    }
+
+    fn visit_bool<E: Error>(self, v: bool) -> Result<ron::Value, E> {
+        Ok(ron::Value::Bool(v))
+    }
+
+    // Every width, as RON's own visitor: a value reads back as the same `Number` variant.
+    fn visit_i8<E: Error>(self, v: i8) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_i16<E: Error>(self, v: i16) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_i32<E: Error>(self, v: i32) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_i64<E: Error>(self, v: i64) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_u8<E: Error>(self, v: u8) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_u16<E: Error>(self, v: u16) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_u32<E: Error>(self, v: u32) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_u64<E: Error>(self, v: u64) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_f32<E: Error>(self, v: f32) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_f64<E: Error>(self, v: f64) -> Result<ron::Value, E> {
+        Ok(number(v))
+    }
+
+    fn visit_char<E: Error>(self, v: char) -> Result<ron::Value, E> {
+        Ok(ron::Value::Char(v))
+    }
+
+    fn visit_str<E: Error>(self, v: &str) -> Result<ron::Value, E> {
+        Ok(ron::Value::String(v.to_owned()))
+    }
+
+    fn visit_string<E: Error>(self, v: String) -> Result<ron::Value, E> {
+        Ok(ron::Value::String(v))
+    }
+
+    fn visit_bytes<E: Error>(self, v: &[u8]) -> Result<ron::Value, E> {
+        Ok(ron::Value::Bytes(v.to_vec()))
+    }
+
+    fn visit_byte_buf<E: Error>(self, v: Vec<u8>) -> Result<ron::Value, E> {
+        Ok(ron::Value::Bytes(v))
+    }
+
+    fn visit_none<E: Error>(self) -> Result<ron::Value, E> {
+        Ok(ron::Value::Option(None))
+    }
+
+    fn visit_some<D: Deserializer<'de>>(self, d: D) -> Result<ron::Value, D::Error> {
+        Ok(ron::Value::Option(Some(Box::new(
+            d.deserialize_any(StrictVisitor)?,
+        ))))
+    }
+
+    fn visit_unit<E: Error>(self) -> Result<ron::Value, E> {
+        Ok(ron::Value::Unit)
+    }
+
+    fn visit_newtype_struct<D: Deserializer<'de>>(self, d: D) -> Result<ron::Value, D::Error> {
+        d.deserialize_any(StrictVisitor)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<ron::Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(StrictValue(x)) = seq.next_element()? {
+            items.push(x);
+        }
+        Ok(ron::Value::Seq(items))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<ron::Value, A::Error> {
+        let mut out = ron::Map::new();
+        while let Some(StrictValue(key)) = map.next_key()? {
+            if out.get(&key).is_some() {
+                let shown = match &key {
+                    ron::Value::String(s) => s.clone(),
+                    other => ron::to_string(other).unwrap_or_else(|_| format!("{other:?}")),
+                };
+                return Err(A::Error::custom(format!(
+                    "`{shown}` is written twice in this map; keep one"
+                )));
+            }
+            let StrictValue(value) = map.next_value()?;
+            out.insert(key, value);
+        }
+        Ok(ron::Value::Map(out))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -51,6 +197,28 @@ mod tests {
     struct Config {
         #[serde(deserialize_with = "unique_keys")]
         values: BTreeMap<String, ron::Value>,
+    }
+
+    #[derive(Debug, Deserialize)]
+    struct Strict {
+        #[serde(deserialize_with = "unique_values")]
+        values: BTreeMap<String, ron::Value>,
+    }
+
+    #[test]
+    fn a_key_written_twice_inside_a_value_is_refused_where_it_is_written_again() {
+        let text = "(values: {\"m/params/actions\": {\n  \"say_a\": (finished: \"x\"),\n  \"say_a\": (finished: \"y\"),\n}})";
+        let e = ron::from_str::<Strict>(text).unwrap_err();
+        assert_eq!(e.span.start.line, 3, "{e}");
+        assert!(e.to_string().contains("`say_a` is written twice"), "{e}");
+        // A struct's field twice, inside a list.
+        let e = ron::from_str::<Strict>("(values: {\"a\": [(x: 1.0, x: 2.0)]})").unwrap_err();
+        assert!(e.to_string().contains("`x` is written twice"), "{e}");
+        // Everything else reads as RON's own Value reads it.
+        let text = r#"(values: {"a": [1, -2, 3.5, "s", 'c', true, (x: 1.0, y: 2.0), Some(4), None, (), kitchen, {"k": [1, 2]}, (1, 2)]})"#;
+        let strict = ron::from_str::<Strict>(text).unwrap();
+        let plain = ron::from_str::<Config>(text).unwrap();
+        assert_eq!(strict.values, plain.values);
     }
 
     #[test]
