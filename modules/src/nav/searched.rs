@@ -17,8 +17,11 @@
 //! counting it there would leave the unknown space beyond it no frontier to explore. Seen from
 //! nearer, where the laser would have mapped what lies beyond if it could, it counts: space no
 //! scan can map (behind glass, outside the walls) does not keep a search going forever.
-//! Frames too dark or too blurred to detect anything are not counted by the module that
-//! feeds this map ([`crate::robot`]'s `nav.searched`), which knows the image quality.
+//! Frames too dark or too bright to detect anything are not counted by the module that
+//! feeds this map ([`crate::robot`]'s `nav.searched`), which reads the image's brightness.
+//! Motion blur is not judged there (the module knows neither the motion nor the exposure):
+//! a frame smeared by a turn under a dark room's long exposure counts like a sharp one, which
+//! is why the rescue rules slow a robot down in the dark.
 //!
 //! The map shares the navigation map's geometry, so the explorer can read both cell by cell.
 
