@@ -119,3 +119,32 @@ async fn every_reader_gets_the_pushed_image_itself_never_a_copy() {
     }
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+/// A consumer linked while the stream runs (an agent joining a team late) counts gaps from the
+/// first item it receives: the items sent before it was linked are not missing between two it
+/// saw (the team demo's consumer reported `gaps 5` at every start).
+#[tokio::test(start_paused = true)]
+async fn a_consumer_linked_late_counts_no_gap_before_its_first_item() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "producer", type: "demo.producer", values: {"params/period_ms": 10}),
+            (name: "c", type: "demo.consumer"),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard().clone();
+    advance(105).await;
+    bb.link("c/in/items", "producer/out/items").await.unwrap();
+    advance(100).await;
+    bb.set("producer/enabled", false).await.unwrap();
+    advance(20).await;
+    let produced = *bb.get::<i64>("producer/state/next").await.unwrap();
+    let received = *bb.get::<i64>("c/out/received").await.unwrap();
+    assert!(
+        received > 0 && received < produced,
+        "{received} of {produced}"
+    );
+    assert_eq!(*bb.get::<i64>("c/out/gaps").await.unwrap(), 0);
+    assert_eq!(*bb.get::<i64>("c/state/last").await.unwrap(), produced - 1);
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

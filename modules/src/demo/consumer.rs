@@ -1,6 +1,10 @@
 use petrel_actors::{Context, Module, Output, Param, Ports, QueueReader, Range, Schedule, State};
 
-/// `demo.consumer`: reads numbered items and checks that none is missing or repeated.
+/// `state/last` before the first item.
+const NONE_YET: i64 = -1;
+
+/// `demo.consumer`: reads numbered items and checks that none is missing or repeated, from the
+/// first one it receives.
 pub struct Consumer {
     items: QueueReader<i64>,
     report_every: Param<i64>,
@@ -26,8 +30,8 @@ impl Module for Consumer {
             ),
             last: ports.state(
                 "state/last",
-                -1,
-                "number of the last item seen (kept across restarts)",
+                NONE_YET,
+                "number of the last item seen (kept across restarts); -1: none yet",
             ),
             received: ports.output("out/received", 0, "items received"),
             gaps: ports.output("out/gaps", 0, "items missing between consecutive numbers"),
@@ -55,6 +59,11 @@ impl Module for Consumer {
         );
         for item in &batch {
             let n = *item.value;
+            // The first item starts the count, less what this reader lost before it: items sent
+            // before the consumer was linked (an agent that joins a team late) are not missing.
+            if last == NONE_YET {
+                last = (n - 1 - self.items.dropped()).max(NONE_YET);
+            }
             if n <= last {
                 dups += 1;
             } else {
