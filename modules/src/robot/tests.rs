@@ -258,6 +258,17 @@ async fn time_scale_sets_the_pace_of_simulated_time_in_both_modes() {
     }
 }
 
+/// A 10 m x 10 m free map of 1 m cells, its origin at (0, 0).
+fn free_map() -> petrel_actors::OccupancyGrid {
+    petrel_actors::OccupancyGrid {
+        width: 10,
+        height: 10,
+        resolution: 1.0,
+        origin: petrel_actors::Pose2::default(),
+        data: vec![0i8; 100].into(),
+    }
+}
+
 /// Waits (bounded, on the paused clock) until `path` holds `want`.
 async fn wait_for(agent: &Agent, path: &str, want: i64) {
     for _ in 0..500 {
@@ -280,15 +291,8 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     )
     .await;
     let bb = agent.blackboard();
-    // A 10 m x 10 m free map, 1 m cells; the camera in cell (0, 5) facing +x.
-    let map = OccupancyGrid {
-        width: 10,
-        height: 10,
-        resolution: 1.0,
-        origin: Pose2::default(),
-        data: vec![0i8; 100].into(),
-    };
-    bb.set("searched/in/map", map).await.unwrap();
+    // The camera in cell (0, 5) facing +x.
+    bb.set("searched/in/map", free_map()).await.unwrap();
     bb.set("searched/in/robotPose", Pose2::new(0.5, 5.5, 0.0))
         .await
         .unwrap();
@@ -389,21 +393,14 @@ async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
 #[tokio::test(start_paused = true)]
 async fn frames_before_the_first_pose_place_nothing() {
     use crate::vision::{Detection, Detections};
-    use petrel_actors::{OccupancyGrid, Pose2};
+    use petrel_actors::Pose2;
     let agent = start(
         r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 1}),
            (name: "searched", type: "nav.searched", values: {"params/min_views": 1})"#,
     )
     .await;
     let bb = agent.blackboard();
-    let map = OccupancyGrid {
-        width: 10,
-        height: 10,
-        resolution: 1.0,
-        origin: Pose2::default(),
-        data: vec![0i8; 100].into(),
-    };
-    bb.set("searched/in/map", map).await.unwrap();
+    bb.set("searched/in/map", free_map()).await.unwrap();
     let sighting = Detections(vec![Detection {
         bearing: 0.0,
         range: 2.0,
