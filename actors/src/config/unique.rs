@@ -68,8 +68,13 @@ impl<'de> Deserialize<'de> for StrictValue {
 
 struct StrictVisitor;
 
-fn number(n: impl Into<ron::value::Number>) -> ron::Value {
-    ron::Value::Number(n.into())
+/// The visitor's methods for numbers, one per width.
+macro_rules! numbers {
+    ($($visit:ident: $ty:ty),*) => {
+        $(fn $visit<E: Error>(self, v: $ty) -> Result<ron::Value, E> {
+            Ok(ron::Value::Number(v.into()))
+        })*
+    };
 }
 
 impl<'de> Visitor<'de> for StrictVisitor {
@@ -84,45 +89,8 @@ impl<'de> Visitor<'de> for StrictVisitor {
     }
 
     // Every width, as RON's own visitor: a value reads back as the same `Number` variant.
-    fn visit_i8<E: Error>(self, v: i8) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_i16<E: Error>(self, v: i16) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_i32<E: Error>(self, v: i32) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_i64<E: Error>(self, v: i64) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_u8<E: Error>(self, v: u8) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_u16<E: Error>(self, v: u16) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_u32<E: Error>(self, v: u32) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_u64<E: Error>(self, v: u64) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_f32<E: Error>(self, v: f32) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
-
-    fn visit_f64<E: Error>(self, v: f64) -> Result<ron::Value, E> {
-        Ok(number(v))
-    }
+    numbers!(visit_i8: i8, visit_i16: i16, visit_i32: i32, visit_i64: i64, visit_u8: u8,
+        visit_u16: u16, visit_u32: u32, visit_u64: u64, visit_f32: f32, visit_f64: f64);
 
     fn visit_char<E: Error>(self, v: char) -> Result<ron::Value, E> {
         Ok(ron::Value::Char(v))
