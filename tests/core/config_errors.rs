@@ -374,3 +374,17 @@ fn a_value_and_a_link_on_one_property_are_an_error_in_one_file_and_the_last_word
         "the overlay's link replaces the base's value: {e:?}"
     );
 }
+
+/// Beside a link to another agent, a value is what the input holds until the first sample
+/// arrives (and keeps if the link breaks): not an error.
+#[test]
+fn a_value_beside_a_link_to_another_agent_is_the_input_until_the_first_sample() {
+    let file = ConfigFile::parse(
+        "remote.ron",
+        r#"Agent(name: "b", team: (name: "t", connect: ["tcp/127.0.0.1:7447"]), modules: [
+            (name: "scale", type: "demo.scale", values: {"in/value": 7.0},
+             links: {"in/value": "petrel://a/count/out/value"})])"#,
+    )
+    .unwrap();
+    assert!(file.build(&registry()).is_ok());
+}

@@ -382,8 +382,8 @@ fn petrel_check_refuses_a_team_plan_without_a_team_and_an_unknown_mode() {
     );
     let err = check(r#""params/mode": "boss""#);
     assert!(
-        err.contains("params/mode: expected `run` (run the plan) or `serve`")
-            && err.contains("got `boss`"),
+        err.contains("boss.ron:2:")
+            && err.contains("`mission/params/mode` = \"boss\": expected one of \"run\", \"serve\" (run: run the plan"),
         "{err}"
     );
 }

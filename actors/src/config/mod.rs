@@ -268,10 +268,21 @@ impl ConfigFile {
             .iter()
             .filter(|m| registry.module_type(&m.name) == Some(m.type_name.as_str()))
             .collect();
-        // A linked property reads its link's target: a value beside the link would never be
-        // read, and losing it silently is worse than saying so.
+        // A property linked within the agent reads its link's target: a value beside the link
+        // would never be read, and losing it silently is worse than saying so. (A link to
+        // another agent is different: the value is what the input holds until the first
+        // sample arrives, and keeps if the link breaks.)
+        let local = |url: &str| {
+            crate::PropertyUrl::parse(url)
+                .map(|u| u.agent().is_none_or(|a| a == self.config.name))
+                .unwrap_or(true)
+        };
         for &m in &declared {
-            for (key, target) in m.links.iter().filter(|(k, _)| m.values.contains_key(*k)) {
+            let both = m
+                .links
+                .iter()
+                .filter(|(k, t)| m.values.contains_key(*k) && local(&t.url));
+            for (key, target) in both {
                 errors.push(self.error(
                     &m.name,
                     Some(key),

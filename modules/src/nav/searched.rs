@@ -6,8 +6,11 @@
 //! Exploration that ends when the laser map has no frontier left therefore leaves floor the
 //! camera never looked at. This map records, frame by frame, the cells that were in view: a
 //! cell is searched by a frame when its centre lies between `min_range` and `max_range` of the
-//! camera, within `fov / 2` of its heading, and the straight line from the camera to that
-//! centre crosses only known free cells of the navigation map (walls and unknown space hide
+//! camera, a victim standing on it would be whole in the image (its bearing plus the victim's
+//! half-width seen from there, `atan(victim_radius / distance)`, within `fov / 2` less a
+//! degree: the detector leaves a victim cut by the image's border for a later frame, and a
+//! fixed 50° counted floor near the camera where a victim could not be seen), and the straight
+//! line from the camera to that centre crosses only known free cells of the navigation map (walls and unknown space hide
 //! what lies behind them; an occupied cell in view is itself searched, its face was seen).
 //! One glimpse is not a search: a detector confirms a victim over several frames, so a cell
 //! counts as searched once it was in view in `min_views` frames.
@@ -30,6 +33,10 @@ use petrel_actors::{OccupancyGrid, Pose2};
 use crate::sim::error::{positive, ParamError};
 use crate::sim::raycast::traverse;
 
+/// Angle kept free inside the image's border, radians (1°): the detector drops a victim whose
+/// columns touch the border, and smooths texture over three columns (of 160 over 60°).
+const EDGE_MARGIN: f64 = 1.0 * std::f64::consts::PI / 180.0;
+
 /// Value of a searched cell in the published grid (ROS convention: 0 = free, known).
 pub const SEARCHED: i8 = 0;
 /// Value of a cell not searched yet (ROS convention: -1 = unknown).
@@ -38,9 +45,11 @@ pub const NOT_SEARCHED: i8 = -1;
 /// Searched-map parameters: what the camera and its detector can resolve.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SearchParams {
-    /// Field of view that counts, radians, centred on the camera's heading (default 50°: a
-    /// 60° camera less the margin a victim at the image's edge needs to be whole in view).
+    /// The camera's horizontal field of view, radians, centred on its heading (default 60°).
     pub fov: f64,
+    /// Radius of what is searched for, metres (default 0.25, a victim): a cell counts only where
+    /// a victim standing on it would be whole in view. 0 counts the whole field of view.
+    pub victim_radius: f64,
     /// Cells closer than this are not searched, metres (default 1.0).
     pub min_range: f64,
     /// Cells farther than this are not searched, metres (default 3.5).
@@ -59,7 +68,8 @@ pub struct SearchParams {
 impl Default for SearchParams {
     fn default() -> Self {
         SearchParams {
-            fov: 50f64.to_radians(),
+            fov: 60f64.to_radians(),
+            victim_radius: 0.25,
             min_range: 1.0,
             max_range: 3.5,
             occupied_threshold: 50,
@@ -79,6 +89,12 @@ impl SearchParams {
             });
         }
         positive("max_range", self.max_range)?;
+        if !(self.victim_radius >= 0.0 && self.victim_radius.is_finite()) {
+            return Err(ParamError {
+                param: "victim_radius".into(),
+                message: format!("expected metres >= 0, got {}", self.victim_radius),
+            });
+        }
         if !(self.min_range >= 0.0 && self.min_range < self.max_range) {
             return Err(ParamError {
                 param: "min_range".into(),
@@ -194,7 +210,7 @@ impl SearchedMap {
                 let off = (dy.atan2(dx) - heading + std::f64::consts::PI)
                     .rem_euclid(std::f64::consts::TAU)
                     - std::f64::consts::PI;
-                if off.abs() > p.fov / 2.0 {
+                if off.abs() + (p.victim_radius / d).atan() > p.fov / 2.0 - EDGE_MARGIN {
                     continue;
                 }
                 let mut clear = true;

@@ -14,6 +14,7 @@ pub struct SearchedModule {
     robot: Input<Pose2>,
     brightness: Input<f64>,
     fov_deg: Input<f64>,
+    victim_radius: Input<f64>,
     min_range: Input<f64>,
     max_range: Input<f64>,
     edge_range: Input<f64>,
@@ -40,7 +41,8 @@ impl Module for SearchedModule {
             map: ports.input("in/map", OccupancyGrid::default(), "the navigation map (walls and unknown space hide what lies behind them)"),
             robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead)"),
             brightness: ports.input("in/brightness", 0.5, "mean grey level of the frame, 0..1 (link to the detector's out/brightness)"),
-            fov_deg: ports.param_in("params/fov_deg", 50.0, Range::new(1.0, 179.0), "field of view that counts, degrees: the camera's less the margin a victim at the image edge needs"),
+            fov_deg: ports.param_in("params/fov_deg", 60.0, Range::new(1.0, 179.0), "the camera's horizontal field of view, degrees"),
+            victim_radius: ports.param_in("params/victim_radius", 0.25, Range::new(0.0, 5.0), "radius of a victim, m: a cell counts only where a victim standing on it would be whole in view (the detector leaves one cut by the image's border); 0: the whole field of view"),
             min_range: ports.param_in("params/min_range", 1.0, Range::new(0.0, 20.0), "closer floor is not searched (a victim overflows the image), m"),
             max_range: ports.param_in("params/max_range", 3.5, Range::new(0.1, 50.0), "farther floor is not searched (a victim is too small to resolve), m"),
             edge_range: ports.param_in("params/edge_range", 3.0, Range::new(0.0, 50.0), "floor beside unknown space is searched only from this near, m (the laser reaches about as far as the camera: the far edge of a scan is not searched yet); more than min_range (max_range or more: no difference)"),
@@ -106,6 +108,7 @@ impl SearchedModule {
         let min_views = count("min_views", self.min_views.value())?;
         let params = SearchParams {
             fov: self.fov_deg.value().to_radians(),
+            victim_radius: self.victim_radius.value(),
             min_range: self.min_range.value(),
             max_range: self.max_range.value(),
             edge_range: self.edge_range.value(),

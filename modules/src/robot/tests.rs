@@ -287,7 +287,7 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     let agent = start(
         r#"(name: "searched", type: "nav.searched",
             values: {"params/min_views": 1, "params/min_range": 1.0, "params/max_range": 2.5,
-                     "params/fov_deg": 100.0})"#,
+                     "params/fov_deg": 102.0, "params/victim_radius": 0.0})"#,
     )
     .await;
     let bb = agent.blackboard();

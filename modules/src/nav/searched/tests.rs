@@ -14,9 +14,12 @@ fn open(w: usize, h: usize) -> OccupancyGrid {
     map(&vec![row.as_str(); h], (0.0, 0.0))
 }
 
+/// The geometry alone: a 100° view (102° less the edge margin), nothing taken off for a
+/// victim's width.
 fn params(min_range: f64, max_range: f64) -> SearchParams {
     SearchParams {
-        fov: 100f64.to_radians(),
+        fov: 102f64.to_radians(),
+        victim_radius: 0.0,
         min_range,
         max_range,
         min_views: 1,

@@ -394,3 +394,82 @@ fn a_robot_in_the_dark_is_at_most_a_weak_sighting_that_the_victim_mapper_ignores
         .count();
     assert!(confident >= 9, "{confident} of 10 frames");
 }
+
+/// The searched map counts a cell only where the detector sees a victim standing there: lit
+/// frames of the rescue world's victims from 1 to 3.5 m, at bearings near the edge of what the
+/// map counts (10° to 27° off the heading, where a fixed 50° view had counted floor on which
+/// a victim 1.0 to 1.5 m away was seen in 2 of 343 frames). Measured with this model over 6,000
+/// frames: 90 % or more seen in each band of distance and bearing it counts.
+#[test]
+fn the_searched_map_counts_only_floor_where_a_victim_would_be_seen() {
+    use crate::nav::{SearchParams, SearchedMap};
+    use rand::{Rng, SeedableRng};
+    let w = rescue_world();
+    let cfg = CameraConfig::default();
+    let min = crate::vision::VictimMapParams::default().min_confidence;
+    // An open 16 m x 12 m map of 0.1 m cells: the line of sight is checked on the world here.
+    let open = petrel_actors::OccupancyGrid {
+        width: 160,
+        height: 120,
+        resolution: 0.1,
+        origin: Pose2::default(),
+        data: vec![0i8; 160 * 120].into(),
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    let (mut counted, mut seen, mut tried) = (0, 0, 0);
+    while counted < 150 && tried < 5_000 {
+        tried += 1;
+        let v = w.features.victims[rng.random_range(0..w.features.victims.len())];
+        let d: f64 = rng.random_range(1.0..3.5);
+        let b = rng.random_range(10f64..27.0).to_radians()
+            * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        let a: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let (x, y) = (v.0.x - d * a.cos(), v.0.y - d * a.sin());
+        let solid = |x: f64, y: f64| {
+            w.grid
+                .is_solid((x / 0.2).floor() as i64, (y / 0.2).floor() as i64)
+        };
+        let dark = w.features.dark.iter().any(|r| r.contains(x, y));
+        // In the world, on lit floor, with nothing between the camera and the victim.
+        if !(0.3..15.7).contains(&x)
+            || !(0.3..11.7).contains(&y)
+            || dark
+            || solid(x, y)
+            || (1..40).any(|k| {
+                let t = k as f64 / 40.0 * (d - 0.3);
+                solid(x + t * a.cos(), y + t * a.sin())
+            })
+        {
+            continue;
+        }
+        let camera = Pose2::new(x, y, a - b);
+        let mut map = SearchedMap::new(SearchParams {
+            min_views: 1,
+            ..SearchParams::default()
+        })
+        .unwrap();
+        map.look(camera, &open);
+        let (c, r) = ((v.0.x / 0.1).floor() as i64, (v.0.y / 0.1).floor() as i64);
+        if !map.is_searched(c, r) {
+            continue;
+        }
+        counted += 1;
+        let mut frame_rng = rand::rngs::StdRng::seed_from_u64(tried);
+        let img = still_frame(&w, camera, &cfg, &mut frame_rng);
+        if run(&img, &DetectorParams::default())
+            .detections
+            .iter()
+            .any(|det| (det.bearing - b).abs() < 0.15 && det.confidence >= min)
+        {
+            seen += 1;
+        }
+    }
+    assert!(
+        counted >= 150,
+        "only {counted} counted cells in {tried} tries"
+    );
+    assert!(
+        seen * 100 >= counted * 90,
+        "a victim was seen on {seen} of {counted} counted cells"
+    );
+}
