@@ -123,6 +123,22 @@ impl PropertyDecl {
         self.range.filter(|r| r.is_numeric()).map(|r| r.range)
     }
 
+    /// What it accepts, for a listing: a numeric parameter's range (`0..=1`) or the words a
+    /// text property takes (`sine|square`); `None` when it takes any value of its type.
+    pub fn accepts(&self) -> Option<String> {
+        let check = self.range?;
+        match check.choices() {
+            [] => Some(check.range.to_string()),
+            words => {
+                let shown: Vec<&str> = words
+                    .iter()
+                    .map(|w| if w.is_empty() { "\"\"" } else { w })
+                    .collect();
+                Some(shown.join("|"))
+            }
+        }
+    }
+
     /// The default value as RON text, or `-` for queues.
     pub fn default_text(&self) -> String {
         match &self.default {

@@ -100,6 +100,11 @@ impl RangeCheck {
         self.choices.is_empty()
     }
 
+    /// The words a `String` property takes (empty for a number check).
+    pub fn choices(&self) -> &'static [&'static str] {
+        self.choices
+    }
+
     /// A `String` property that takes only `choices`.
     pub fn one_of(choices: &'static [&'static str]) -> Self {
         RangeCheck {

@@ -46,7 +46,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
                 p.path.clone(),
                 p.kind.to_string(),
                 p.type_info.name().to_string(),
-                p.range().map_or_else(String::new, |r| r.to_string()),
+                p.accepts().unwrap_or_default(),
                 p.default_text(),
                 p.doc.clone(),
             ]
