@@ -327,3 +327,5 @@ fn laplacian_mean(img: &[f32], w: usize, h: usize) -> f64 {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_mapping;
