@@ -148,3 +148,5 @@ fn count(name: &str, value: i64) -> anyhow::Result<usize> {
 mod body_tests;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_vision;
