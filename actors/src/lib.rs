@@ -23,6 +23,7 @@ mod module_actor;
 mod module_types;
 mod panic_report;
 mod ports;
+mod property_kind;
 mod queue;
 mod range;
 mod realtime;
