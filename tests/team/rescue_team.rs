@@ -195,6 +195,15 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
         )
     };
     let mut team = run(&others, Stdio::piped());
+    // The team's log is read from the start: it logs every sighting, and a pipe nobody reads
+    // would fill while robot_1 starts, blocking the team's logging and with it the coordinator
+    // robot_1 waits for.
+    let mut team_log = team.stderr.take().unwrap();
+    let team_log = std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut team_log, &mut bytes);
+        bytes
+    });
     let mut victim = run(&robot_1, Stdio::piped());
     // Killed (SIGKILL: no goodbye) as soon as its search has started; the log line is the
     // signal, read as it comes (a dead or silent process ends the read: the test then fails).
@@ -215,7 +224,8 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
     }
     let out = wait(team);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let team_log = team_log.join().unwrap();
+    let stderr = String::from_utf8_lossy(&team_log);
     assert!(
         out.status.success() && stdout.contains("plan `team`: goal"),
         "{}\n{stdout}",
