@@ -39,11 +39,6 @@ pub struct PropertyDecl {
 }
 
 impl PropertyDecl {
-    /// The values it accepts, for numeric parameters.
-    pub fn range(&self) -> Option<crate::Range> {
-        self.range.filter(|r| r.is_numeric()).map(|r| r.range)
-    }
-
     /// What it accepts, for a listing: a numeric parameter's range (`0..=1`) or the words a
     /// text property takes (`sine|square`); `None` when it takes any value of its type.
     pub fn accepts(&self) -> Option<String> {

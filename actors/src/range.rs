@@ -95,11 +95,6 @@ impl RangeCheck {
         }
     }
 
-    /// Whether it checks numbers (a range people can be shown), not words.
-    pub fn is_numeric(&self) -> bool {
-        self.choices.is_empty()
-    }
-
     /// The words a `String` property takes (empty for a number check).
     pub fn choices(&self) -> &'static [&'static str] {
         self.choices

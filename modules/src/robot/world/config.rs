@@ -24,7 +24,7 @@ impl SimWorld {
         let drive = match self.drive.get().as_str() {
             "differential" => DriveKind::Differential,
             "holonomic" => DriveKind::Holonomic,
-            // The parameter's check lets no other word through; kept for a core built by hand.
+            // Not reached from a config or a tool: the parameter's check lets no other word in.
             other => bail!("invalid parameter `params/drive`: expected differential or holonomic, got `{other}`"),
         };
         let odom_noise = match self.odom_noise.get().as_slice() {
