@@ -80,6 +80,7 @@ impl Recorder {
                     }
                 };
                 let mut batch = Vec::new();
+                let mut spent = Vec::new();
                 let mut stop = false;
                 while !stop {
                     rx.take(&mut batch);
@@ -92,11 +93,14 @@ impl Recorder {
                             Msg::Entry(entry) => {
                                 sink.write(&entry)?;
                                 written += 1;
+                                // Freed on an agent's thread (see `Backlog::give_back`).
+                                spent.push(entry.value);
                             }
                             // What was queued before the stop is written; nothing after.
                             Msg::Stop => stop = true,
                         }
                     }
+                    rx.give_back(&mut spent);
                     if last_flush.elapsed() >= FLUSH_EVERY {
                         sync(&mut sink, &mut counters);
                         sink.flush()?;

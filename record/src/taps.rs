@@ -127,6 +127,8 @@ struct Drain {
     clock: StampClock,
     /// Values read in one pass, with the id of their tap, sent under one lock.
     batch: Vec<(usize, Entry)>,
+    /// Values the writer handed back, dropped at each pass (the buffer is kept).
+    spent: Vec<petrel_actors::AnyValue>,
 }
 
 impl Drain {
@@ -138,6 +140,7 @@ impl Drain {
             tx,
             clock,
             batch: Vec::new(),
+            spent: Vec::new(),
         }
     }
 
@@ -190,6 +193,10 @@ impl Drain {
 
     /// Reads the taps `ids` and sends what they hold.
     fn pass(&mut self, ids: &[usize]) {
+        // What the writer has written since the last pass is freed here, on the thread that
+        // allocated it (see `Backlog::give_back`).
+        self.tx.take_spent(&mut self.spent);
+        self.spent.clear();
         let log_ns = self.clock.unix_ns(Instant::now());
         for &id in ids {
             self.read(id, log_ns);
