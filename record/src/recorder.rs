@@ -157,7 +157,7 @@ impl Recorder {
             .watch_taps(move |key| selection.wants(&name, key))
             .await?;
         // What the agent holds now is tapped by the time `watch_taps` answers.
-        let tapped = Channels::drain(&self.channels, agent, taps);
+        let tapped = Channels::drain(&self.channels, agent, taps, blackboard);
         Ok(tapped)
     }
 

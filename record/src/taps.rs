@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use parking_lot::Mutex;
 use petrel_actors::team::{QueueTap, Tap, TapReady, ValueTap};
-use petrel_actors::WatchedTap;
+use petrel_actors::{Blackboard, WatchedTap};
 use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
@@ -76,10 +76,15 @@ impl Channels {
     /// Starts recording `agent` in one task: the taps `taps` holds now are added before this
     /// returns (their channels announced in order), those it receives later as they come.
     /// Returns how many were added now.
+    ///
+    /// The task runs beside the agent's modules ([`Blackboard::spawn_beside`]): their writes
+    /// wake it on their own thread, and the values it hands the writer were allocated there,
+    /// where it also frees them (see `Backlog::give_back`).
     pub fn drain(
         shared: &Arc<Mutex<Channels>>,
         agent: &str,
         mut taps: mpsc::UnboundedReceiver<WatchedTap>,
+        blackboard: &Blackboard,
     ) -> usize {
         let mut channels = shared.lock();
         if channels.closed {
@@ -91,7 +96,7 @@ impl Channels {
         }
         let added = drain.taps.len();
         let stop = channels.stop.subscribe();
-        let task = tokio::spawn(drain.run(taps, shared.clone(), stop));
+        let task = blackboard.spawn_beside(drain.run(taps, shared.clone(), stop));
         channels.drains.push(task);
         added
     }
@@ -118,6 +123,10 @@ struct Tapped {
 }
 
 /// One agent's taps, read by one task when they are marked ready.
+///
+/// Dropped, it reads every tap one last time: at the end of the recording, and also when its
+/// task is cancelled because the agent's thread ended first (an agent shut down before the
+/// recording finished), so that what the agent wrote last is recorded either way.
 struct Drain {
     agent: String,
     ready: TapReady,
@@ -129,6 +138,13 @@ struct Drain {
     batch: Vec<(usize, Entry)>,
     /// Values the writer handed back, dropped at each pass (the buffer is kept).
     spent: Vec<petrel_actors::AnyValue>,
+}
+
+impl Drop for Drain {
+    fn drop(&mut self) {
+        let all: Vec<usize> = (0..self.taps.len()).collect();
+        self.pass(&all);
+    }
 }
 
 impl Drain {
@@ -162,7 +178,7 @@ impl Drain {
     }
 
     /// Reads what the ready taps hold until `stop`, adding the taps declared meanwhile; then
-    /// reads every tap one last time.
+    /// reads every tap one last time (as it is dropped).
     async fn run(
         mut self,
         mut declared: mpsc::UnboundedReceiver<WatchedTap>,
@@ -187,8 +203,7 @@ impl Drain {
                 _ = self.ready.wait(&mut ids) => self.pass(&ids),
             }
         }
-        let all: Vec<usize> = (0..self.taps.len()).collect();
-        self.pass(&all);
+        // The last pass is `Drop`'s.
     }
 
     /// Reads the taps `ids` and sends what they hold.

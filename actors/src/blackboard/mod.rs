@@ -183,6 +183,9 @@ pub struct Blackboard {
     remote: Arc<crate::team::RemoteLinks>,
     /// Carries writes to other agents' properties, once the agent joined its team.
     writer: Arc<parking_lot::RwLock<Option<Arc<dyn crate::team::RemoteWriter>>>>,
+    /// The runtime the blackboard actor was started on: the agent's own thread, if it has one
+    /// (see [`spawn_beside`](Blackboard::spawn_beside)).
+    runtime: tokio::runtime::Handle,
 }
 
 impl Blackboard {
@@ -202,9 +205,25 @@ impl Blackboard {
                 agent,
                 remote,
                 writer,
+                runtime: tokio::runtime::Handle::current(),
             },
             join,
         ))
+    }
+
+    /// Spawns `future` beside the agent's modules: on the agent's own thread when it has one
+    /// (`scheduler: agent_thread`), else on the runtime the blackboard was started on.
+    ///
+    /// For a task that follows the agent's writes (a recorder reading what its modules
+    /// write): a module's write then wakes it on the writing thread, a same-thread wake rather
+    /// than a cross-thread one. The task must never block, and it ends (cancelled) when the
+    /// agent's thread does, at [`Agent::shutdown`](crate::Agent::shutdown).
+    pub fn spawn_beside<F>(&self, future: F) -> tokio::task::JoinHandle<F::Output>
+    where
+        F: std::future::Future + Send + 'static,
+        F::Output: Send + 'static,
+    {
+        self.runtime.spawn(future)
     }
 
     async fn call<T: Send + 'static>(
