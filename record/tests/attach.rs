@@ -183,6 +183,21 @@ async fn a_module_added_while_running_is_recorded_from_its_first_step() {
 /// written by modules stepping at different rates, is in the file, in order.
 #[tokio::test(start_paused = true)]
 async fn every_change_of_every_tapped_property_is_recorded() {
+    every_change_is_recorded().await;
+}
+
+/// The same on the wall clock, with the agent on its own thread as `petrel run` starts it
+/// (`scheduler: agent_thread`): the drain runs there too, between the modules' steps. The
+/// agent is shut down before the recording finishes (`Agent::stop`, then `Recorder::finish`),
+/// which ends the drain's task with the agent's thread.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_change_is_recorded_from_an_agent_on_its_own_thread() {
+    every_change_is_recorded().await;
+}
+
+/// Two counters (20 steps every 10 and 25 ms), recorded from before their first step; every
+/// version of their values and every item of their queues must be in the file, in order.
+async fn every_change_is_recorded() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("every.mcap");
     let file = ConfigFile::parse(
