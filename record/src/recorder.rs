@@ -172,7 +172,9 @@ impl Recorder {
     }
 
     /// Stops the taps (each drain sends what was written up to now first), writes what is queued,
-    /// finishes the file (summary, indexes, drop counts) and says what was recorded.
+    /// finishes the file (summary, indexes, drop counts) and says what was recorded. The agents
+    /// may be stopped first ([`Agent::stop`](petrel_actors::Agent::stop)): a drain whose agent's
+    /// thread ended has sent what the agent wrote last as it ended.
     pub async fn finish(mut self) -> io::Result<SinkReport> {
         let drains = self.channels.lock().close();
         for drain in drains {
