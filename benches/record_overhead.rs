@@ -22,7 +22,7 @@ use petrel::actors::{Agent, ConfigFile, DEFAULT_STOP_TIMEOUT};
 use petrel::record::{ChunkCompression, Format, RecordOptions, Recorder};
 
 /// How a run keeps time.
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy)]
 enum Clock {
     /// A current-thread runtime on a paused clock: the agent runs on the bench's thread.
     Paused,

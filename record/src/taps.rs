@@ -208,8 +208,8 @@ impl Drain {
 
     /// Reads the taps `ids` and sends what they hold.
     fn pass(&mut self, ids: &[usize]) {
-        // What the writer has written since the last pass is freed here, on the thread that
-        // allocated it (see `Backlog::give_back`).
+        // What the writer has written since the last pass is freed here, beside the modules
+        // that allocated it: on the agent's own thread when it has one (`Backlog::give_back`).
         self.tx.take_spent(&mut self.spent);
         self.spent.clear();
         let log_ns = self.clock.unix_ns(Instant::now());
