@@ -23,7 +23,18 @@ pub(crate) struct Settle {
     /// Time the running step spent settling, measured on a timed step only: left out of its
     /// duration, so that the modules it let run do not count against it (`step_budget`).
     pub waited: Duration,
+    /// The other modules' signals, looked up at the first [`Context::settle_agent`].
+    pub others: Option<Vec<Arc<Signal>>>,
 }
+
+/// The most yields one [`Context::settle_agent`] makes: enough for chains of modules on the
+/// agent's thread far longer than real pipelines.
+const SETTLE_AGENT_YIELDS: usize = 256;
+
+/// Then, for modules still busy (one moved off the agent's thread, whose step runs beside),
+/// it checks again every millisecond for at most this long, so that a module that never goes
+/// quiet (one woken by its own writes) holds it up for a bounded time.
+const SETTLE_AGENT_WAIT: Duration = Duration::from_millis(20);
 
 impl Context {
     /// Lets the modules this step has woken so far run (a module its write enabled, a reader
@@ -49,6 +60,49 @@ impl Context {
             self.settle.waited += began.elapsed();
         }
         signal.take_changes()
+    }
+
+    /// Lets the agent's other modules run until none has a step waiting: those woken by what
+    /// this step wrote, those woken by what they wrote in turn, and so on. Returns whether
+    /// the agent went quiet (false after a bounded number of yields, or when this module is
+    /// not bound to a signal).
+    ///
+    /// For a module that feeds an agent from outside at its own pace, a replay above all:
+    /// published one recorded instant at a time with this in between, each instant reaches
+    /// the modules downstream as it did live, however fast the replay goes. Only steps woken
+    /// by data are waited for (not periodic ticks or timeouts), only on the agent's own
+    /// thread is every such step sure to have run, and modules added after the first call
+    /// are not seen. The time spent is left out of the step's duration, as with
+    /// [`settle`](Self::settle).
+    pub async fn settle_agent(&mut self) -> bool {
+        let Some(me) = self.settle.signal.clone() else {
+            return false;
+        };
+        if self.settle.others.is_none() {
+            let Ok(signals) = self.blackboard.signals().await else {
+                return false;
+            };
+            let others = signals.into_iter().filter(|s| !Arc::ptr_eq(s, &me));
+            self.settle.others = Some(others.collect());
+        }
+        let began = self.settle.timed.then(Instant::now);
+        let others = self.settle.others.as_deref().unwrap_or_default();
+        let busy = || others.iter().any(|s| s.busy());
+        let mut yields = 0;
+        while busy() && yields < SETTLE_AGENT_YIELDS {
+            YieldOnce(false).await;
+            yields += 1;
+        }
+        let mut waited = Duration::ZERO;
+        while busy() && waited < SETTLE_AGENT_WAIT {
+            tokio::time::sleep(Duration::from_millis(1)).await;
+            waited += Duration::from_millis(1);
+        }
+        let quiet = !busy();
+        if let Some(began) = began {
+            self.settle.waited += began.elapsed();
+        }
+        quiet
     }
 
     /// Whether a property this module watches was written since its step began (or since

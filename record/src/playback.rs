@@ -1,7 +1,8 @@
 //! `record.replay`: OpenRDK's playback module. Publishes the recorded outputs of the modules
 //! it names (`params/modules`) in their place, with the recorded timing scaled by
-//! `params/rate`. Those modules must not run: `petrel replay --replace` does not start them;
-//! in a config of your own, set their `enabled` to false.
+//! `params/rate`, one recorded instant at a time, each taken by the modules downstream before
+//! the next (`Context::settle_agent`). Those modules must not run: `petrel replay --replace`
+//! does not start them; in a config of your own, set their `enabled` to false.
 
 use std::time::Duration;
 
@@ -13,8 +14,11 @@ use tokio::time::Instant;
 use crate::read::Recording;
 use crate::replay::{plan, Rate, ReplayPlan};
 
-/// Messages published per step at most at `rate: 0`, so consumers get turns in between.
-const MAX_BATCH: usize = 64;
+/// Recorded instants published per step at most, and the longest a step goes on publishing
+/// (on a clock that moves): then the module waits for its next wake-up, so the agent's timers
+/// and its stop path get their turns however far behind the replay is.
+const MAX_INSTANTS: usize = 512;
+const SLICE: Duration = Duration::from_millis(5);
 
 /// The `record.replay` module.
 pub struct Playback {
@@ -90,35 +94,45 @@ impl Module for Playback {
     }
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
-        self.publish_due(ctx)
+        self.publish_due(ctx).await
     }
 }
 
 impl Playback {
-    fn publish_due(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
+    /// Publishes the instants that are due, one at a time: after each, the agent's modules
+    /// downstream take it (`settle_agent`) before the next is published, as they did live
+    /// when the replayed module wrote one step's outputs and then waited for its next period.
+    /// Without that, a fast replay wrote several steps' values over one another before their
+    /// readers ran: a localizer saw only the last odometry of a batch, and a mapper put
+    /// scans at the wrong poses.
+    async fn publish_due(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let Some(run) = self.run.as_mut() else {
             return Ok(());
         };
-        let now = ctx.now();
-        run.start.get_or_insert(now);
-        let mut sent = 0;
+        run.start.get_or_insert(ctx.now());
+        let began = Instant::now();
+        let mut instants = 0;
         while let Some(due) = run.due(run.next) {
-            if due > now || (run.rate == Rate::Max && sent == MAX_BATCH) {
+            let now = Instant::now();
+            if due > now || instants == MAX_INSTANTS || now.duration_since(began) >= SLICE {
                 break;
             }
-            let (_, track, index) = run.plan.schedule[run.next];
-            let t = &run.plan.tracks[track];
-            let feed = &run.feeds[track];
-            let data = &run.recording.messages[index].data;
-            match t.codec.decode(&feed.type_info(), data) {
-                Ok(value) => match feed {
-                    RemoteFeed::Value(v) => v.write(value, now),
-                    RemoteFeed::Queue(q) => q.push(value, now),
-                },
-                Err(e) => bail!("message {index} of channel `{}`: {e}", t.topic),
+            let end = run.plan.instant_end(run.next);
+            for &(_, track, index) in &run.plan.schedule[run.next..end] {
+                let t = &run.plan.tracks[track];
+                let feed = &run.feeds[track];
+                let data = &run.recording.messages[index].data;
+                match t.codec.decode(&feed.type_info(), data) {
+                    Ok(value) => match feed {
+                        RemoteFeed::Value(v) => v.write(value, now),
+                        RemoteFeed::Queue(q) => q.push(value, now),
+                    },
+                    Err(e) => bail!("message {index} of channel `{}`: {e}", t.topic),
+                }
             }
-            run.next += 1;
-            sent += 1;
+            run.next = end;
+            instants += 1;
+            ctx.settle_agent().await;
         }
         self.published.set(run.next as i64);
         if run.next == run.plan.schedule.len() {

@@ -22,6 +22,8 @@ pub struct Track {
     pub codec: Codec,
     /// The recorded channel id.
     pub channel: u16,
+    /// Whether it feeds a value (else a queue).
+    pub value: bool,
 }
 
 /// What a replay publishes, in order.
@@ -32,6 +34,19 @@ pub struct ReplayPlan {
     /// (publish time ns, track, index of the message in the recording), by publish time
     /// (file order among equal times).
     pub schedule: Vec<(u64, usize, usize)>,
+}
+
+impl ReplayPlan {
+    /// The end of the instant that begins at `start` in the schedule: the index past the last
+    /// message published at the same time. A module writes its outputs of one step with one
+    /// time, so an instant is what a replayed module wrote together.
+    pub fn instant_end(&self, start: usize) -> usize {
+        let Some(&(ns, _, _)) = self.schedule.get(start) else {
+            return start;
+        };
+        let rest = &self.schedule[start..];
+        start + rest.iter().take_while(|&&(t, _, _)| t == ns).count()
+    }
 }
 
 /// How fast a replay goes.
@@ -121,6 +136,7 @@ pub fn plan(
         if !outputs.iter().any(|o| o == kind) {
             continue;
         }
+        let value = kind == outputs[0];
         let recorded = ch.petrel_type().unwrap_or("?");
         if recorded != type_name {
             problems.push(format!(
@@ -143,6 +159,7 @@ pub fn plan(
             key: key.to_string(),
             codec,
             channel: id,
+            value,
         });
     }
     // Every input reading a replayed output needs its channel.
@@ -172,11 +189,18 @@ pub fn plan(
         .enumerate()
         .map(|(i, t)| (t.channel, i))
         .collect();
+    // A value's version 0 is its declared default, recorded as it stood when the recorder
+    // attached: not something the module wrote, so not replayed (a pose at the origin before
+    // the first real one).
     let mut schedule: Vec<(u64, usize, usize)> = rec
         .messages
         .iter()
         .enumerate()
-        .filter_map(|(i, m)| Some((m.publish_ns, *track_of.get(&m.channel)?, i)))
+        .filter_map(|(i, m)| {
+            let track = *track_of.get(&m.channel)?;
+            let default = tracks[track].value && m.sequence == 0;
+            (!default).then_some((m.publish_ns, track, i))
+        })
         .collect();
     schedule.sort_by_key(|&(ns, _, i)| (ns, i));
     Ok(ReplayPlan { tracks, schedule })
@@ -195,6 +219,89 @@ mod tests {
         assert_eq!(Rate::from_param(0.0).unwrap().due(5), Duration::ZERO);
         assert!(Rate::from_param(-1.0).unwrap_err().contains("params/rate"));
         assert!(Rate::from_param(f64::INFINITY).is_err());
+    }
+
+    #[test]
+    fn an_instant_is_what_was_published_at_one_time() {
+        let plan = ReplayPlan {
+            tracks: Vec::new(),
+            schedule: vec![
+                (5, 0, 0),
+                (5, 1, 1),
+                (7, 0, 2),
+                (9, 0, 3),
+                (9, 1, 4),
+                (9, 2, 5),
+            ],
+        };
+        assert_eq!(plan.instant_end(0), 2);
+        assert_eq!(plan.instant_end(1), 2);
+        assert_eq!(plan.instant_end(2), 3);
+        assert_eq!(plan.instant_end(3), 6);
+        assert_eq!(plan.instant_end(6), 6);
+        assert_eq!(ReplayPlan::default().instant_end(0), 0);
+    }
+
+    /// A recording of `robot`'s value output `out/speed` and queue output `out/ticks`.
+    fn recording(messages: &[(u16, u32, u64)]) -> (Recording, AgentListing) {
+        use crate::read::{ChannelInfo, RecordedMessage};
+        let channel = |path: &str| ChannelInfo {
+            topic: format!("/r1/robot/{path}"),
+            schema: "f64".into(),
+            schema_encoding: "jsonschema".into(),
+            message_encoding: "json".into(),
+            metadata: [
+                (meta::URL.to_string(), format!("petrel://r1/robot/{path}")),
+                (meta::TYPE.to_string(), "f64".to_string()),
+            ]
+            .into(),
+        };
+        let rec = Recording {
+            channels: [(1, channel("out/speed")), (2, channel("out/ticks"))].into(),
+            messages: messages
+                .iter()
+                .map(|&(channel, sequence, publish_ns)| RecordedMessage {
+                    channel,
+                    sequence,
+                    log_ns: publish_ns,
+                    publish_ns,
+                    data: b"1.0".to_vec(),
+                })
+                .collect(),
+            ..Recording::default()
+        };
+        let property = |path: &str, kind: PropertyKind| petrel_actors::PropertyListing {
+            key: format!("robot/{path}"),
+            kind: kind.to_string(),
+            type_name: "f64".into(),
+            link: None,
+        };
+        let listing = AgentListing {
+            modules: vec![petrel_actors::ModuleListing {
+                name: "robot".into(),
+                type_name: "sim.world".into(),
+            }],
+            properties: vec![
+                property("out/speed", PropertyKind::Output),
+                property("out/ticks", PropertyKind::QueueOut),
+            ],
+        };
+        (rec, listing)
+    }
+
+    #[test]
+    fn declared_defaults_are_not_replayed() {
+        // The value's version 0 (recorded as it stood when the recorder attached) is left
+        // out; its later versions and every queue item, the first (sequence 0) too, are kept.
+        let (rec, listing) = recording(&[(1, 0, 10), (2, 0, 20), (1, 1, 20), (2, 1, 30)]);
+        let plan = plan(&rec, &["robot".into()], &listing).unwrap();
+        let kept: Vec<usize> = plan.schedule.iter().map(|&(_, _, i)| i).collect();
+        assert_eq!(kept, [1, 2, 3]);
+        assert_eq!(
+            plan.instant_end(0),
+            2,
+            "the item and the value written at 20"
+        );
     }
 
     #[test]

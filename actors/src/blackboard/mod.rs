@@ -58,6 +58,7 @@ pub(crate) enum BlackboardMsg {
         RpcReplyPort<Result<(), String>>,
     ),
     RemoveModule(String, Reply<()>),
+    Signals(Reply<Vec<Arc<Signal>>>),
     Team(team::TeamRequest),
 }
 
@@ -161,6 +162,9 @@ impl Actor for BlackboardActor {
                     .map(|key| reg.link_of(&key).map(str::to_string));
                 let _ = reply.send(result);
             }
+            BlackboardMsg::Signals(reply) => {
+                let _ = reply.send(Ok(reg.signals()));
+            }
             BlackboardMsg::Team(request) => team::handle(reg, request),
             BlackboardMsg::FeedbackCycle(module, reply) => {
                 let _ = reply.send(Ok(reg.feedback_cycle(&module)));
@@ -244,6 +248,11 @@ impl Blackboard {
     pub(crate) async fn bind(&self, module: &str) -> Result<Binding, BlackboardError> {
         self.call(|r| BlackboardMsg::Bind(module.to_string(), r))
             .await
+    }
+
+    /// The wake-up signals of the agent's modules (see [`Context::settle_agent`]).
+    pub(crate) async fn signals(&self) -> Result<Vec<Arc<Signal>>, BlackboardError> {
+        self.call(BlackboardMsg::Signals).await
     }
 
     /// Links `from` to `to` while running; readers of `from` see `to` from their next read.

@@ -40,6 +40,10 @@ pub(crate) struct Signal {
     /// wakes only the modules that will step, and the recorded causes make the module step
     /// when it is enabled again.
     quiet: AtomicBool,
+    /// Set while a module's step loop waits on this signal (see [`Signal::busy`]): the
+    /// signals of modules not running (stopped, replaced, never started) are raised too, and
+    /// their causes are never taken.
+    live: AtomicBool,
     /// The longest chain of steps that led to the data raised since the last step, and whose
     /// write ended it: a packed [`Hop`] (see [`loop_watch`](crate::loop_watch)).
     hops: AtomicU64,
@@ -58,6 +62,7 @@ impl Default for Signal {
             waker: AtomicWaker::new(),
             causes: AtomicU8::new(0),
             quiet: AtomicBool::new(false),
+            live: AtomicBool::new(false),
             hops: AtomicU64::new(0),
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             ready: None,
@@ -102,6 +107,19 @@ impl Signal {
     /// Whether step causes should wait, recorded, instead of waking the module.
     pub fn set_quiet(&self, quiet: bool) {
         self.quiet.store(quiet, Ordering::Release);
+    }
+
+    /// Marks the signal's module as running (its step loop takes the causes) or not.
+    pub fn set_live(&self, live: bool) {
+        self.live.store(live, Ordering::Release);
+    }
+
+    /// Whether a running, enabled module has a step waiting: raised for data it watches and
+    /// not yet woken to take it (see [`Context::settle_agent`](crate::Context::settle_agent)).
+    pub fn busy(&self) -> bool {
+        self.live.load(Ordering::Acquire)
+            && !self.quiet.load(Ordering::Acquire)
+            && self.causes.load(Ordering::Acquire) & (cause::CHANGE | cause::ITEMS) != 0
     }
 
     /// Waits for the next raise and returns the causes gathered since the last call.

@@ -14,6 +14,22 @@ use crate::cell::cause;
 use crate::loop_watch;
 use crate::module::{Cause, Module, Schedule, WatchTarget};
 
+/// Marks a module's signal as taken by its step loop, until dropped.
+struct Live(std::sync::Arc<crate::cell::Signal>);
+
+impl Live {
+    fn mark(signal: &std::sync::Arc<crate::cell::Signal>) -> Live {
+        signal.set_live(true);
+        Live(signal.clone())
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        self.0.set_live(false);
+    }
+}
+
 impl<M: Module> Running<M> {
     /// Waits for events and steps until asked to stop; an error is the module's failure.
     pub(super) async fn run(&mut self) -> anyhow::Result<()> {
@@ -22,6 +38,8 @@ impl<M: Module> Running<M> {
             .ep
             .subscribe_with(&self.signal, cause::ENABLED);
         self.stop.attach(&self.signal);
+        // Taken as running while this loop lives, however it ends (an error, a panic, a kill).
+        let _live = Live::mark(&self.signal);
         let (mut ticker, mut timeout) = self.arm();
         let mut enabled = self.builtins.enabled.value();
         self.signal.set_quiet(!enabled);

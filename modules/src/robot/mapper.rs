@@ -104,9 +104,11 @@ impl Module for MapperModule {
         let mut changed = 0;
         // A scan is mapped with the first pose written at or after it: the pose estimated
         // from the same simulation step, not the previous one (which would smear the map
-        // while turning).
+        // while turning). The declared default (version 0) is no pose yet: on a paused clock
+        // it bears the very time of the first scan, which was then mapped at the origin.
+        let no_pose = pose.version == 0;
         while let Some(scan) = self.pending.front() {
-            if pose.written < scan.stamp && self.pending.len() <= MAX_PENDING {
+            if (no_pose || pose.written < scan.stamp) && self.pending.len() <= MAX_PENDING {
                 break;
             }
             changed += core.update(*pose.value, &scan.value);

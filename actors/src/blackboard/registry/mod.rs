@@ -122,6 +122,11 @@ impl Registry {
         &self.order
     }
 
+    /// The wake-up signals of every module, running or not.
+    pub(crate) fn signals(&self) -> Vec<Arc<Signal>> {
+        self.modules.values().map(|m| m.signal.clone()).collect()
+    }
+
     pub(crate) fn module(&self, name: &str) -> Option<&ModuleEntry> {
         self.modules.get(name)
     }
