@@ -188,7 +188,8 @@ impl Module for Recorder {
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let t = self.sim_time.value();
         self.record.contexts.update(t, &self.contexts.get());
-        let p = self.pose.get().position();
+        let pose = self.pose.read();
+        let p = pose.value.position();
         let estimate = self.estimate.read();
         if estimate.version > 0 && !ctx.cause().first() {
             let e = (estimate.value.position().0 - p.0).norm();
@@ -198,8 +199,10 @@ impl Module for Recorder {
                 self.pose_error_max.set(e);
             }
         }
-        // The first pose read may be an unlinked default; the first real one is the start.
-        if self.record.last.is_none() && ctx.cause().first() {
+        // A pose never written is the declared default, not where the robot is (a replay
+        // writes the first one after the recorder's first steps): the first real one is the
+        // start.
+        if self.record.last.is_none() && (pose.version == 0 || ctx.cause().first()) {
             return Ok(());
         }
         let colour = self.colour();
@@ -296,7 +299,11 @@ impl Module for Recorder {
             sim / wall.max(1e-9)
         );
         let png = self.png.get();
-        if !png.is_empty() {
+        // A run that ended before any pose (a replay refused at its start) has no picture to
+        // draw: an empty one would replace the last run's.
+        if !png.is_empty() && self.record.last.is_none() {
+            petrel_actors::outln!("no pose recorded: {} not written", png.as_str());
+        } else if !png.is_empty() {
             let path = self.path.get();
             let rects = |flat: &[f64], tint: [u8; 3]| -> Vec<(Rect, [u8; 3])> {
                 flat.chunks_exact(4)

@@ -310,3 +310,21 @@ async fn a_restarted_world_goes_on_where_it_was() {
     );
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_recorder_that_saw_no_pose_leaves_the_last_picture_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("run.png");
+    std::fs::write(&png, b"the last run's picture").unwrap();
+    // `in/pose` linked to a pose nobody writes (a replay refused at its start).
+    let agent = start(&format!(
+        r#"(name: "robot", type: "sim.world", values: {{"params/world": "{WORLD}", "enabled": false}}),
+           (name: "recorder", type: "sim.recorder", values: {{"params/png": {:?}}},
+            links: {{"in/pose": "robot/out/pose", "in/simTime": "robot/out/simTime"}})"#,
+        png.display().to_string()
+    ))
+    .await;
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(std::fs::read(&png).unwrap(), b"the last run's picture");
+}
