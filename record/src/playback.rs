@@ -8,7 +8,9 @@ use std::time::Duration;
 
 use anyhow::{bail, Context as _};
 use petrel_actors::team::RemoteFeed;
-use petrel_actors::{Context, FilePath, Input, Module, Output, Ports, Range, Schedule};
+use petrel_actors::{
+    CheckProblem, Context, FilePath, Input, Module, Output, Ports, Range, Schedule,
+};
 use tokio::time::Instant;
 
 use crate::read::Recording;
@@ -83,6 +85,29 @@ impl Module for Playback {
         }
     }
 
+    /// What `prepare` would refuse without reading the recording: `petrel check` says it at
+    /// the property's line. (Whether the recording fits the config is known only once it is
+    /// read, at the start of the run.)
+    fn check(&self) -> Vec<CheckProblem> {
+        let mut problems = Vec::new();
+        if let Err(e) = Rate::from_param(self.rate.value()) {
+            problems.push(CheckProblem::new("params/rate", e));
+        }
+        if self.replayed().is_empty() {
+            problems.push(CheckProblem::new("params/modules", NO_MODULES));
+        }
+        let file = self.file.get();
+        if file.is_empty() {
+            problems.push(CheckProblem::new("params/file", NO_FILE));
+        } else if let Err(e) = std::fs::File::open(file.as_path()) {
+            problems.push(CheckProblem::new(
+                "params/file",
+                format!("cannot open the recording {file}: {e}"),
+            ));
+        }
+        problems
+    }
+
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         // A recording that does not fit the config is bad input, not a fault a restart
         // mends: the run ends, saying why.
@@ -98,7 +123,19 @@ impl Module for Playback {
     }
 }
 
+const NO_FILE: &str = "empty; expected the path of an MCAP recording";
+const NO_MODULES: &str = "empty; expected the modules to replay, e.g. \"robot\"";
+
 impl Playback {
+    /// `params/modules`, split at commas.
+    fn replayed(&self) -> Vec<String> {
+        (self.modules.get().split(','))
+            .map(str::trim)
+            .filter(|m| !m.is_empty())
+            .map(String::from)
+            .collect()
+    }
+
     /// Publishes the instants that are due, one at a time: after each, the agent's modules
     /// downstream take it (`settle_agent`) before the next is published, as they did live
     /// when the replayed module wrote one step's outputs and then waited for its next period.
@@ -148,19 +185,13 @@ impl Playback {
     async fn prepare(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let file = self.file.get();
         if file.is_empty() {
-            bail!("params/file is empty; expected the path of an MCAP recording");
+            bail!("params/file: {NO_FILE}");
         }
-        let rate = Rate::from_param(self.rate.value()).map_err(anyhow::Error::msg)?;
-        let modules: Vec<String> = self
-            .modules
-            .get()
-            .split(',')
-            .map(str::trim)
-            .filter(|m| !m.is_empty())
-            .map(String::from)
-            .collect();
+        let rate = (Rate::from_param(self.rate.value()))
+            .map_err(|e| anyhow::anyhow!("invalid parameter `params/rate`: {e}"))?;
+        let modules = self.replayed();
         if modules.is_empty() {
-            bail!("params/modules is empty; expected the modules to replay, e.g. \"robot\"");
+            bail!("params/modules: {NO_MODULES}");
         }
         let recording =
             Recording::open(file.as_path(), self.salvage.value()).map_err(anyhow::Error::msg)?;

@@ -65,7 +65,7 @@ impl Rate {
             0.0 => Ok(Rate::Max),
             r if r.is_finite() && (1e-3..=1e3).contains(&r) => Ok(Rate::Scaled(r)),
             r => Err(format!(
-                "invalid parameter `params/rate`: expected a factor in [0.001, 1000] or 0 (as fast as possible), got {r}"
+                "expected a factor in [0.001, 1000] or 0 (as fast as possible), got {r}"
             )),
         }
     }
@@ -217,7 +217,8 @@ mod tests {
             Duration::from_millis(500)
         );
         assert_eq!(Rate::from_param(0.0).unwrap().due(5), Duration::ZERO);
-        assert!(Rate::from_param(-1.0).unwrap_err().contains("params/rate"));
+        assert!(Rate::from_param(-1.0).unwrap_err().contains("got -1"));
+        assert!(Rate::from_param(0.0005).is_err(), "below 0.001");
         assert!(Rate::from_param(f64::INFINITY).is_err());
     }
 
