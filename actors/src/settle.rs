@@ -25,6 +25,9 @@ pub(crate) struct Settle {
     pub waited: Duration,
     /// The other modules' signals, looked up at the first [`Context::settle_agent`].
     pub others: Option<Vec<Arc<Signal>>>,
+    /// The last [`Context::settle_agent`] gave up with modules still busy: the next one only
+    /// yields, so that a module that never goes quiet costs the millisecond waits once.
+    pub gave_up: bool,
 }
 
 /// The most yields one [`Context::settle_agent`] makes: enough for chains of modules on the
@@ -33,7 +36,8 @@ const SETTLE_AGENT_YIELDS: usize = 256;
 
 /// Then, for modules still busy (one moved off the agent's thread, whose step runs beside),
 /// it checks again every millisecond for at most this long, so that a module that never goes
-/// quiet (one woken by its own writes) holds it up for a bounded time.
+/// quiet (one woken by its own writes) holds it up for a bounded time; once it gave up, the
+/// next call only yields until one goes quiet again.
 const SETTLE_AGENT_WAIT: Duration = Duration::from_millis(20);
 
 impl Context {
@@ -93,12 +97,16 @@ impl Context {
             YieldOnce(false).await;
             yields += 1;
         }
-        let mut waited = Duration::ZERO;
+        let mut waited = match self.settle.gave_up {
+            true => SETTLE_AGENT_WAIT,
+            false => Duration::ZERO,
+        };
         while busy() && waited < SETTLE_AGENT_WAIT {
             tokio::time::sleep(Duration::from_millis(1)).await;
             waited += Duration::from_millis(1);
         }
         let quiet = !busy();
+        self.settle.gave_up = !quiet;
         if let Some(began) = began {
             self.settle.waited += began.elapsed();
         }

@@ -57,6 +57,7 @@ pub struct Feeder {
     settle: Input<String>,
     value: Output<f64>,
     answered: Output<i64>,
+    quiet: Output<i64>,
 }
 
 impl Module for Feeder {
@@ -69,6 +70,7 @@ impl Module for Feeder {
             settle: ports.param("params/settle", "agent".to_string(), "agent or one"),
             value: ports.output("out/value", 0.0, "the value fed"),
             answered: ports.output("out/answered", 0, "values back before the next"),
+            quiet: ports.output("out/quiet", 0, "settles after which the agent was quiet"),
         }
     }
     fn schedule(&self) -> Schedule {
@@ -78,20 +80,45 @@ impl Module for Feeder {
         if ctx.cause().first() {
             return Ok(());
         }
-        let mut answered = 0;
+        let (mut answered, mut quiet) = (0, 0);
         for k in 1..=FED {
             self.value.set(k as f64);
             match self.settle.get().as_str() {
                 "one" => {
                     ctx.settle().await;
                 }
-                _ => assert!(ctx.settle_agent().await, "the agent went quiet"),
+                _ => quiet += i64::from(ctx.settle_agent().await),
             }
             if self.back.value() == k as f64 {
                 answered += 1;
             }
         }
+        self.quiet.set(quiet);
         self.answered.set(answered);
+        Ok(())
+    }
+}
+
+/// `test.looper`: wakes itself after every step (its input is its own output): never quiet.
+pub struct Looper {
+    input: Input<f64>,
+    out: Output<f64>,
+}
+
+impl Module for Looper {
+    const TYPE: &'static str = "test.looper";
+    const DESCRIPTION: &'static str = "Wakes itself after every step.";
+    fn declare(ports: &mut Ports) -> Self {
+        Looper {
+            input: ports.input("in/value", 0.0, "its own output"),
+            out: ports.output("out/value", 0.0, "steps so far"),
+        }
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::new().on_change(&self.input)
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        self.out.set(self.input.value() + 1.0);
         Ok(())
     }
 }
@@ -100,13 +127,19 @@ fn registry() -> ModuleRegistry {
     let mut r = crate::support::registry();
     r.register::<Asker>();
     r.register::<Feeder>();
+    r.register::<Looper>();
     r
 }
 
-/// A feeder and a chain of three echoes back to it, settled as `settle` says.
+/// A feeder and a chain of three echoes back to it, settled as `settle` says (and `more`
+/// modules beside).
 fn chain(scheduler: &str, settle: &str) -> String {
+    chain_with(scheduler, settle, "")
+}
+
+fn chain_with(scheduler: &str, settle: &str, more: &str) -> String {
     format!(
-        r#"Agent(name: "r1", scheduler: {scheduler}, modules: [
+        r#"Agent(name: "r1", scheduler: {scheduler}, modules: [{more}
         (name: "feeder", type: "test.feeder", values: {{"params/settle": "{settle}"}},
          links: {{"in/back": "e3/out/value"}}),
         (name: "e1", type: "test.echo", links: {{"in/value": "feeder/out/value"}}),
@@ -116,8 +149,9 @@ fn chain(scheduler: &str, settle: &str) -> String {
     )
 }
 
-/// Starts a burst and returns how many of its values came back before the next.
-async fn burst(text: &str) -> i64 {
+/// Starts a burst and returns how many of its values came back before the next, and after
+/// how many settles the agent was quiet.
+async fn burst(text: &str) -> (i64, i64) {
     let agent = Agent::start(&crate::support::config(text), &registry())
         .await
         .unwrap();
@@ -132,21 +166,33 @@ async fn burst(text: &str) -> i64 {
     })
     .await;
     assert!(waited.is_ok(), "the burst should end");
+    let quiet = *bb.get::<i64>("feeder/out/quiet").await.unwrap();
     let summary = agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
     assert_eq!(summary.failures(), 0, "{summary}");
-    *answered.get()
+    (*answered.get(), quiet)
 }
 
 #[tokio::test(start_paused = true)]
 async fn settling_the_agent_lets_a_chain_downstream_answer_every_value() {
-    assert_eq!(burst(&chain("shared", "agent")).await, FED);
+    assert_eq!(burst(&chain("shared", "agent")).await, (FED, FED));
     // One yield lets the first echo run, not the chain: the measure can fail.
-    assert!(burst(&chain("shared", "one")).await < FED);
+    assert!(burst(&chain("shared", "one")).await.0 < FED);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn settling_the_agent_on_its_own_thread_lets_a_chain_answer_every_value() {
-    assert_eq!(burst(&chain("agent_thread", "agent")).await, FED);
+    assert_eq!(burst(&chain("agent_thread", "agent")).await, (FED, FED));
+}
+
+/// A module that is never quiet: each settle gives up (after its yields, then once after its
+/// millisecond waits), and the chain still answered every value meanwhile. On the wall clock:
+/// a paused one never advances while a module is always runnable.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn settling_beside_a_module_that_is_never_quiet_gives_up_and_the_chain_still_answers() {
+    let looper =
+        r#"(name: "looper", type: "test.looper", links: {"in/value": "looper/out/value"}),"#;
+    let text = chain_with("agent_thread", "agent", looper);
+    assert_eq!(burst(&text).await, (FED, 0));
 }
 
 const CONFIG: &str = r#"Agent(name: "r1", modules: [
