@@ -99,35 +99,10 @@ impl Module for Feeder {
     }
 }
 
-/// `test.looper`: wakes itself after every step (its input is its own output): never quiet.
-pub struct Looper {
-    input: Input<f64>,
-    out: Output<f64>,
-}
-
-impl Module for Looper {
-    const TYPE: &'static str = "test.looper";
-    const DESCRIPTION: &'static str = "Wakes itself after every step.";
-    fn declare(ports: &mut Ports) -> Self {
-        Looper {
-            input: ports.input("in/value", 0.0, "its own output"),
-            out: ports.output("out/value", 0.0, "steps so far"),
-        }
-    }
-    fn schedule(&self) -> Schedule {
-        Schedule::new().on_change(&self.input)
-    }
-    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        self.out.set(self.input.value() + 1.0);
-        Ok(())
-    }
-}
-
 fn registry() -> ModuleRegistry {
     let mut r = crate::support::registry();
     r.register::<Asker>();
     r.register::<Feeder>();
-    r.register::<Looper>();
     r
 }
 
@@ -189,8 +164,8 @@ async fn settling_the_agent_on_its_own_thread_lets_a_chain_answer_every_value() 
 /// a paused one never advances while a module is always runnable.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn settling_beside_a_module_that_is_never_quiet_gives_up_and_the_chain_still_answers() {
-    let looper =
-        r#"(name: "looper", type: "test.looper", links: {"in/value": "looper/out/value"}),"#;
+    // An echo of its own output writes at every step, so it wakes itself for ever.
+    let looper = r#"(name: "looper", type: "test.echo", links: {"in/value": "looper/out/value"}),"#;
     let text = chain_with("agent_thread", "agent", looper);
     assert_eq!(burst(&text).await, (FED, 0));
 }
