@@ -136,6 +136,7 @@ pub fn plan(
         if !outputs.iter().any(|o| o == kind) {
             continue;
         }
+        // `outputs` lists the value output kind first, then the queue output.
         let value = kind == outputs[0];
         let recorded = ch.petrel_type().unwrap_or("?");
         if recorded != type_name {
