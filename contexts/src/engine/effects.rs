@@ -8,7 +8,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::memory::SavedEffect;
+use super::memory::{fill_in_place, SavedEffect};
 use super::Action;
 
 /// An effect: the context responsible, the value, and whether it outlives its context.
@@ -55,12 +55,15 @@ impl<V: Clone + PartialEq> Effects<V> {
 
     /// Writes what is applied, in target order, into `out`.
     pub fn save_into(&self, out: &mut Vec<SavedEffect<V>>) {
-        out.clear();
-        for (name, applied) in self.targets.iter().zip(&self.applied) {
-            if let Some(applied) = applied {
-                out.push(SavedEffect::of(name, applied));
-            }
-        }
+        let applied = (self.targets.iter().zip(&self.applied))
+            .filter_map(|(name, applied)| Some((name, applied.as_ref()?)));
+        fill_in_place(
+            out,
+            applied,
+            |saved, (name, applied)| saved.is(name, applied),
+            |_, _| {},
+            |(name, applied)| SavedEffect::of(name, applied),
+        );
     }
 
     /// Takes over what was applied (a reload or a restart); targets these rules do not

@@ -35,7 +35,15 @@ pub struct SavedEffect<V> {
     pub sticky: bool,
 }
 
-impl<V: Clone> SavedEffect<V> {
+impl<V: Clone + PartialEq> SavedEffect<V> {
+    /// Whether this is `applied` on `target` already.
+    pub(super) fn is(&self, target: &Arc<str>, applied: &Applied<V>) -> bool {
+        same_name(&self.target, target)
+            && same_name(&self.context, &applied.context)
+            && self.sticky == applied.sticky
+            && self.value == applied.value
+    }
+
     pub(super) fn of(target: &Arc<str>, applied: &Applied<V>) -> Self {
         SavedEffect {
             target: target.clone(),
@@ -58,11 +66,14 @@ impl Engine {
     /// Writes what this engine has switched on and applied into `memory` (its vectors are
     /// reused).
     pub fn save_into(&self, memory: &mut EngineMemory) {
-        memory.active.clear();
-        memory.active.extend(self.active.iter().map(|&i| {
-            let rule = &self.rules[i];
-            (rule.name.clone(), rule.since.map_or(0.0, Clock::secs_of))
-        }));
+        let active = self.active.iter().map(|&i| &self.rules[i]);
+        fill_in_place(
+            &mut memory.active,
+            active,
+            |(name, _), rule| same_name(name, &rule.name),
+            |slot, rule| slot.1 = rule.since.map_or(0.0, Clock::secs_of),
+            |rule| (rule.name.clone(), rule.since.map_or(0.0, Clock::secs_of)),
+        );
         self.values.save_into(&mut memory.values);
         self.links.save_into(&mut memory.links);
         self.runs.save_into(&mut memory.runs);
@@ -91,5 +102,71 @@ impl Engine {
         self.links.resume(&memory.links);
         self.runs.resume(&memory.runs);
         self.resolve = true;
+    }
+}
+
+/// Whether two names are equal, by pointer first: they are usually the same `Arc`, and
+/// `Arc<str>`'s `==` compares the text (the standard library's pointer shortcut needs a
+/// sized type).
+#[inline]
+pub(crate) fn same_name(a: &Arc<str>, b: &Arc<str>) -> bool {
+    Arc::ptr_eq(a, b) || a == b
+}
+
+/// Makes `out` hold one entry per item, in order, changing only what differs: an entry that
+/// is `same` as its item is kept (and `refresh`ed), any other is made anew, the rest dropped.
+///
+/// A manager saves its memory after every switch into the buffer it published two saves
+/// ago, which usually holds the very same names: kept, they cost no reference counting,
+/// which cost more than the rest of a save.
+#[inline]
+pub(crate) fn fill_in_place<T, S>(
+    out: &mut Vec<T>,
+    items: impl IntoIterator<Item = S>,
+    same: impl Fn(&T, &S) -> bool,
+    refresh: impl Fn(&mut T, &S),
+    make: impl Fn(S) -> T,
+) {
+    let mut n = 0;
+    for item in items {
+        match out.get_mut(n) {
+            Some(slot) if same(slot, &item) => refresh(slot, &item),
+            Some(slot) => *slot = make(item),
+            None => out.push(make(item)),
+        }
+        n += 1;
+    }
+    out.truncate(n);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn filling_in_place_keeps_what_is_the_same_and_remakes_the_rest() {
+        let (a, b, c): (Arc<str>, Arc<str>, Arc<str>) = ("a".into(), "b".into(), "c".into());
+        let mut out = vec![(a.clone(), 0), (c.clone(), 0), (c.clone(), 0)];
+        let fill = |out: &mut Vec<(Arc<str>, i32)>, items: &[(Arc<str>, i32)]| {
+            fill_in_place(
+                out,
+                items,
+                |(name, _), (item, _)| same_name(name, item),
+                |slot, (_, n)| slot.1 = *n,
+                |(item, n)| (item.clone(), *n),
+            )
+        };
+        fill(&mut out, &[(a.clone(), 1), (b.clone(), 2)]);
+        assert_eq!(out, [(a.clone(), 1), (b.clone(), 2)]);
+        // The kept entry is the same allocation; a name of the same text counts as the same.
+        assert!(Arc::ptr_eq(&out[0].0, &a));
+        fill(
+            &mut out,
+            &[(Arc::from("a"), 3), (b.clone(), 4), (c.clone(), 5)],
+        );
+        assert_eq!(out, [(a.clone(), 3), (b, 4), (c, 5)]);
+        assert!(Arc::ptr_eq(&out[0].0, &a));
+        fill(&mut out, &[]);
+        assert!(out.is_empty());
     }
 }

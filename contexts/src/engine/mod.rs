@@ -13,6 +13,7 @@ mod build;
 mod effects;
 mod memory;
 
+pub(crate) use memory::{fill_in_place, same_name};
 pub use memory::{EngineMemory, SavedEffect};
 
 use effects::{Actions, Effects};

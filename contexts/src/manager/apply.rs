@@ -1,13 +1,13 @@
 //! Carrying out the engine's actions: writing values, relinking, starting and stopping
 //! modules, saving what was there first and putting it back; and the traces that say so.
 
-use std::collections::btree_map::Entry;
-
 use anyhow::{anyhow, Context as _};
+use petrel_actors::expr::Value;
 use petrel_actors::{status, AnyHandle, Context};
 
+use super::targets::Target;
 use super::{ContextChange, ContextManager};
-use crate::engine::{to_property, Action};
+use crate::engine::Action;
 
 impl ContextManager {
     /// Carries out `action`; a failure is logged and shown in `out/errors`, and the rest goes on.
@@ -47,34 +47,27 @@ impl ContextManager {
                 value,
                 context,
             } => {
-                // Borrowed from its field, so the originals below can be written meanwhile.
-                let handle = (self.handles.get(target))
-                    .with_context(|| format!("`{target}` is not in the blackboard"))?;
-                let info = handle.type_info();
-                let old = handle.value();
-                let new = to_property(value, info).map_err(|e| anyhow!("{target}: {e}"))?;
-                let first = match self.original_values.entry(target.clone()) {
-                    Entry::Vacant(slot) => {
-                        slot.insert(old.clone());
-                        true
-                    }
-                    Entry::Occupied(_) => false,
+                let entry = self.targets.entry(target);
+                let handle = match entry.handle.take() {
+                    Some(handle) => handle,
+                    None => (self.handles.get(target))
+                        .with_context(|| format!("`{target}` is not in the blackboard"))?
+                        .clone(),
                 };
-                // Continuous expressions update often: the first change is news, the rest detail.
-                // Values are formatted only when someone listens.
-                if first && tracing::enabled!(tracing::Level::INFO) && !ctx.in_a_loop() {
-                    let (old, new) = (info.short(&old), info.short(&new));
-                    tracing::info!(%context, %target, %old, %new, "context sets");
-                } else if tracing::enabled!(tracing::Level::DEBUG) {
-                    let (old, new) = (info.short(&old), info.short(&new));
-                    tracing::debug!(%context, %target, %old, %new, "context updates");
-                }
-                // Stamped with the step's time, like the manager's own outputs: no clock read.
-                handle.set_at(new, ctx.now())?;
+                let set = set(ctx, entry, &handle, value, context);
+                entry.handle = Some(handle);
+                set?;
             }
             Action::Restore(target) => {
-                if let Some(original) = self.original_values.remove(target) {
-                    let handle = self.handle(target)?;
+                let Some(entry) = self.targets.get_mut(target) else {
+                    return Ok(());
+                };
+                if let Some(original) = entry.original.take() {
+                    let handle = match &entry.handle {
+                        Some(handle) => handle,
+                        None => (self.handles.get(target))
+                            .with_context(|| format!("`{target}` is not in the blackboard"))?,
+                    };
                     if !ctx.in_a_loop() {
                         tracing::info!(%target, value = %handle.type_info().short(&original), "context restores");
                     }
@@ -82,7 +75,9 @@ impl ContextManager {
                 }
             }
             Action::Release(target) => {
-                self.original_values.remove(target);
+                if let Some(entry) = self.targets.get_mut(target) {
+                    entry.original = None;
+                }
             }
             Action::Link {
                 input,
@@ -135,12 +130,6 @@ impl ContextManager {
         Ok(())
     }
 
-    fn handle(&self, address: &str) -> anyhow::Result<&AnyHandle> {
-        self.handles
-            .get(address)
-            .with_context(|| format!("`{address}` is not in the blackboard"))
-    }
-
     /// The current values of the properties `context`'s conditions read, for traces.
     fn trigger_values(&self, context: &str) -> String {
         let Some(engine) = &self.engine else {
@@ -157,6 +146,36 @@ impl ContextManager {
             .collect();
         shown.join(" ")
     }
+}
+
+/// Writes `value` to `target` (its entry and handle), saving the original first if no
+/// context has set it yet.
+fn set(
+    ctx: &Context,
+    target: &mut Target,
+    handle: &AnyHandle,
+    value: &Value,
+    context: &str,
+) -> anyhow::Result<()> {
+    let info = handle.type_info();
+    let new = (target.convert(value, info)).map_err(|e| anyhow!("{}: {e}", target.address))?;
+    let address = &target.address;
+    let first = target.original.is_none();
+    if first {
+        target.original = Some(handle.value());
+    }
+    // Continuous expressions update often: the first change is news, the rest detail.
+    // Values are formatted only when someone listens.
+    if first && tracing::enabled!(tracing::Level::INFO) && !ctx.in_a_loop() {
+        let (old, new) = (info.short(&handle.value()), info.short(&new));
+        tracing::info!(%context, target = %address, %old, %new, "context sets");
+    } else if tracing::enabled!(tracing::Level::DEBUG) {
+        let (old, new) = (info.short(&handle.value()), info.short(&new));
+        tracing::debug!(%context, target = %address, %old, %new, "context updates");
+    }
+    // Stamped with the step's time, like the manager's own outputs: no clock read.
+    handle.set_at(new, ctx.now())?;
+    Ok(())
 }
 
 /// Starts or stops a module; one already in that state is left as it is.

@@ -11,7 +11,7 @@ use petrel_actors::{Context, FilePath, PropertyType};
 use serde::{Deserialize, Serialize};
 
 use super::ContextManager;
-use crate::engine::EngineMemory;
+use crate::engine::{fill_in_place, same_name, EngineMemory};
 
 /// `state/memory` of a `context.manager`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -56,52 +56,40 @@ impl ContextManager {
         if let Some(engine) = &self.engine {
             engine.save_into(&mut memory.engine);
         }
-        memory.original_values.clear();
-        for (target, value) in &self.original_values {
-            // Converted by `show_originals`; one that cannot be is left out.
-            if let Some((_, dynamic)) = self
-                .originals_shown
-                .get(target)
-                .filter(|(shown, _)| Arc::ptr_eq(shown, value))
-            {
-                memory
-                    .original_values
-                    .push((target.clone(), dynamic.clone()));
-            }
-        }
-        memory.original_links.clear();
-        memory.original_links.extend(
-            (self.original_links.iter()).map(|(input, link)| (input.clone(), link.clone())),
+        // What the contexts changed, in address order; one whose config form could not be
+        // made (see `show_originals`) is left out.
+        fill_in_place(
+            &mut memory.original_values,
+            self.targets.shown(),
+            |(t, v), (target, dynamic)| same_name(t, target) && v == *dynamic,
+            |_, _| {},
+            |(target, dynamic)| (target.clone(), dynamic.clone()),
         );
-        memory.original_runs.clear();
-        memory
-            .original_runs
-            .extend((self.original_runs.iter()).map(|(module, ran)| (module.clone(), *ran)));
+        fill_in_place(
+            &mut memory.original_links,
+            &self.original_links,
+            |(i, l), (input, link)| same_name(i, input) && l == *link,
+            |_, _| {},
+            |(input, link)| (input.clone(), link.clone()),
+        );
+        fill_in_place(
+            &mut memory.original_runs,
+            &self.original_runs,
+            |(m, r), (module, ran)| same_name(m, module) && r == *ran,
+            |_, _| {},
+            |(module, ran)| (module.clone(), *ran),
+        );
     }
 
     /// Brings the config form of each original up to date: converting a value (through RON
     /// text) costs more than the rest of a save, and an original that a context puts back
     /// and takes again is the same value.
     fn show_originals(&mut self) {
-        for (target, value) in &self.original_values {
-            let shown = self.originals_shown.get(target);
-            if shown.is_some_and(|(shown, _)| Arc::ptr_eq(shown, value)) {
-                continue;
-            }
-            let dynamic = self
-                .handles
-                .get(target)
-                .and_then(|h| h.type_info().to_dynamic(value).ok());
-            match dynamic {
-                Some(dynamic) => {
-                    self.originals_shown
-                        .insert(target.clone(), (value.clone(), dynamic));
-                }
-                None => {
-                    self.originals_shown.remove(target);
-                }
-            }
-        }
+        let handles = &self.handles;
+        self.targets.show(|target, value| {
+            let handle = handles.get(target)?;
+            handle.type_info().to_dynamic(value).ok()
+        });
     }
 
     /// Goes on from `state/memory` if it is about the same rules file: the engine takes over
@@ -125,7 +113,7 @@ impl ContextManager {
                 .map(|h| h.type_info().from_ron(value.clone()));
             match restored {
                 Some(Ok(value)) => {
-                    self.original_values.insert(target.clone(), value);
+                    self.targets.entry(target).original = Some(value);
                 }
                 _ => {
                     tracing::warn!(%target, "state/memory: the value from before the context cannot be restored here")

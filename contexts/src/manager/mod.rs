@@ -21,10 +21,12 @@ use tokio::time::Instant;
 
 use crate::engine::{Action, Engine, Schema};
 use crate::rules::{LoadedRules, RuleError};
+use targets::Targets;
 
 mod apply;
 mod check;
 mod memory;
+mod targets;
 
 pub use check::check_rules;
 pub use memory::ContextMemory;
@@ -81,16 +83,14 @@ pub struct ContextManager {
     watched: Vec<Watched>,
     /// Every property the rules mention, by address.
     handles: Handles,
-    /// What the rules changed, as it was before: values, links, running states.
-    /// In address order, so `state/memory` lists them the same way at every save.
-    original_values: BTreeMap<Arc<str>, AnyValue>,
+    /// The properties the rules set, with their values from before (see `targets.rs`).
+    targets: Targets,
+    /// What the rules relinked and started or stopped, as it was before. In address order,
+    /// so `state/memory` lists them the same way at every save.
     original_links: BTreeMap<Arc<str>, Option<String>>,
     original_runs: BTreeMap<Arc<str>, bool>,
     /// `state/memory`: what a restarted manager goes on from.
     memory: Output<ContextMemory>,
-    /// The originals' config form, kept by target with the value it was made from: an
-    /// original put back and taken again is the same value, converted once.
-    originals_shown: foldhash::HashMap<Arc<str>, (AnyValue, ron::Value)>,
     /// The `out/active` text published two switches ago, to fill in place.
     active_spare: Option<Arc<String>>,
     /// The `out/active` text published last, with the version of the output it left.
@@ -152,7 +152,7 @@ impl Module for ContextManager {
             engine: None,
             watched: Vec::new(),
             handles: Handles::default(),
-            original_values: BTreeMap::new(),
+            targets: Targets::default(),
             original_links: BTreeMap::new(),
             original_runs: BTreeMap::new(),
             memory: ports.state(
@@ -161,7 +161,6 @@ impl Module for ContextManager {
                 "the active contexts, what they changed and what was there before: a restarted manager goes on from here",
             ),
             spare: None,
-            originals_shown: Default::default(),
             active_spare: None,
             active_shown: None,
             actions: Vec::new(),
@@ -331,6 +330,7 @@ impl ContextManager {
                     engine.adopt(old);
                 }
                 // Targets the old rules changed must stay reachable for restoring.
+                self.targets.forget_handles();
                 for (k, h) in previous_handles {
                     self.handles.entry(k).or_insert(h);
                 }
