@@ -73,7 +73,8 @@ impl Context {
     ///
     /// For a module that feeds an agent from outside at its own pace, a replay above all:
     /// published one recorded instant at a time with this in between, each instant reaches
-    /// the modules downstream as it did live, however fast the replay goes. Only steps woken
+    /// the modules downstream as it did live, however fast the replay goes. A simulator that
+    /// catches up several steps with the wall clock hands them over the same way. Only steps woken
     /// by data are waited for (not periodic ticks or timeouts), only on the agent's own
     /// thread is every such step sure to have run, and modules added after the first call
     /// are not seen. The time spent is left out of the step's duration, as with

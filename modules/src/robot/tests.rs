@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use petrel_actors::{status, Agent, ConfigFile, Twist2, DEFAULT_STOP_TIMEOUT};
+use petrel_actors::{status, Agent, ConfigFile, Pose2, Twist2, DEFAULT_STOP_TIMEOUT};
 
 /// The cluttered world, from this crate's directory (where `cargo test` runs unit tests).
 const WORLD: &str = "../configs/worlds/cluttered.txt";
@@ -256,6 +256,41 @@ async fn time_scale_sets_the_pace_of_simulated_time_in_both_modes() {
             "deterministic {deterministic}: {t} s"
         );
     }
+}
+
+/// A host that stalled: following the wall clock, the world catches up several simulation
+/// steps at its next tick, and each reaches the localizer on its own, as if it had come on
+/// time. Before, the localizer got the whole batch at once and published one pose for it, so
+/// a mapper put every scan of the batch at that last pose.
+#[tokio::test(start_paused = true)]
+async fn catching_up_with_the_wall_clock_hands_over_one_simulation_step_at_a_time() {
+    let agent = start(&format!(
+        r#"(name: "robot", type: "sim.world", values: {{"params/world": "{WORLD}",
+            "params/deterministic": false, "in/controlSpeed": (v: 0.2, omega: 0.1)}}),
+           (name: "localizer", type: "nav.localizer",
+            links: {{"in/odometry": "robot/out/odometry", "in/simTime": "robot/out/simTime"}})"#
+    ))
+    .await;
+    let bb = agent.blackboard();
+    let sim_time = bb.handle::<f64>("robot/out/simTime").await.unwrap();
+    let pose = bb
+        .handle::<Pose2>("localizer/out/estimatedPose")
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(205)).await;
+    let (t0, v0) = (sim_time.value(), pose.version());
+    // The host stalls for 5.5 steps (10 ms each): no tick runs meanwhile.
+    tokio::time::advance(Duration::from_micros(55_000)).await;
+    let mut yields = 0;
+    while sim_time.value() < t0 + 0.045 && yields < 1000 {
+        tokio::task::yield_now().await;
+        yields += 1;
+    }
+    let steps = ((sim_time.value() - t0) / 0.01).round() as u64;
+    let poses = pose.version() - v0;
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert!(steps >= 5, "the world caught up {steps} steps");
+    assert_eq!(poses, steps, "one pose per simulation step caught up");
 }
 
 #[tokio::test(start_paused = true)]

@@ -7,6 +7,7 @@ use petrel_actors::{
     CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Point2, Ports, Pose2,
     QueueWriter, Range, Schedule, Twist2, Unrecoverable,
 };
+use tokio::time::Instant;
 
 mod config;
 mod sim;
@@ -340,8 +341,19 @@ impl Module for SimWorld {
         sim.note_departures();
         sim.take_commands(timeout)?;
         let multi_robot = !self.bodies.get().0.is_empty();
-        for _ in 0..steps {
-            sim.step(ctx.now(), camera.as_ref())?;
+        for k in 0..steps {
+            // Catching up with the wall clock: each simulation step reaches the modules that
+            // read it before the next, stamped later than what they wrote meanwhile, as if
+            // the steps had come on time (a localizer or mapper pairing a scan with its
+            // step's odometry or pose goes by these stamps).
+            let stamp = match k {
+                0 => ctx.now(),
+                _ => {
+                    ctx.settle_agent().await;
+                    Instant::now()
+                }
+            };
+            sim.step(stamp, camera.as_ref())?;
             if multi_robot {
                 // The world's own clock, for tools and evaluators of a multi-robot world.
                 self.sim_time.set(sim.world.time());
