@@ -96,7 +96,7 @@ enum Command {
     },
     /// Prints a property of a running agent (its JSON and type).
     Get {
-        /// The property, `petrel://agent/module/path`.
+        /// The property, `petrel://agent/module/path` (or `agent/module/path`).
         url: String,
         #[command(flatten)]
         reach: remote::Reach,
@@ -105,7 +105,7 @@ enum Command {
     /// (an agent in a team: its `remote_write` patterns; an agent without a `team:` section:
     /// any). The value is RON, as in a config (`2.5`, `(x: 1.0, y: 2.0, theta: 0.0)`).
     Set {
-        /// The property, `petrel://agent/module/path`.
+        /// The property, `petrel://agent/module/path` (or `agent/module/path`).
         url: String,
         /// The new value (RON); a negative number is taken as it is (`-0.5`).
         #[arg(allow_negative_numbers = true)]
@@ -116,7 +116,7 @@ enum Command {
     /// Prints a property's values (the current one first) or a queue's items as they come,
     /// until Ctrl-C or `--count`.
     Echo {
-        /// The property, `petrel://agent/module/path`.
+        /// The property, `petrel://agent/module/path` (or `agent/module/path`).
         url: String,
         /// Stop after this many.
         #[arg(short = 'n', long)]
@@ -130,7 +130,7 @@ enum Command {
     /// Measures how often a property changes (rate, interval mean/min/max, jitter), from its
     /// owner's write stamps: once a second until Ctrl-C, or once after `--count` changes.
     Hz {
-        /// The property, `petrel://agent/module/path`.
+        /// The property, `petrel://agent/module/path` (or `agent/module/path`).
         url: String,
         /// Figures over the last this many changes.
         #[arg(short, long, default_value_t = follow::DEFAULT_WINDOW)]

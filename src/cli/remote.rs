@@ -51,21 +51,30 @@ pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
     })
 }
 
-/// The property `url` names (which must name its agent) and the team to reach it on.
+/// The property `url` names and the team to reach it on.
 pub(crate) fn target(reach: &Reach, url: &str) -> Result<(PropertyUrl, TeamConfig), ExitCode> {
-    let url = match PropertyUrl::parse(url) {
-        Ok(u) if u.agent().is_some() => u,
-        Ok(_) => {
-            eprintln!("error: `{url}` names no agent: write it `petrel://agent/module/path`");
-            return Err(ExitCode::from(EXIT_BAD_INPUT));
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Err(ExitCode::from(EXIT_BAD_INPUT));
-        }
-    };
+    let url = tool_url(url).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(EXIT_BAD_INPUT)
+    })?;
     let team = team_of(reach, url.agent().unwrap_or_default())?;
     Ok((url, team))
+}
+
+/// The property a tool names: `petrel://agent/module/path`, or the same without the scheme.
+/// A tool always addresses a running agent, so there the first segment is the agent (`petrel
+/// ls` lists it so: `agent robot1`, then its modules and their properties).
+fn tool_url(text: &str) -> Result<PropertyUrl, String> {
+    let full = match text.contains("://") {
+        true => text.to_string(),
+        false => format!("petrel://{text}"),
+    };
+    PropertyUrl::parse(&full).map_err(|e| {
+        format!(
+            "`{text}` is not a property of an agent: {}; expected `agent/module/path` or `petrel://agent/module/path`",
+            e.reason
+        )
+    })
 }
 
 /// `petrel ls`: the agents running on this machine, or with `agent`, its modules and
@@ -149,4 +158,34 @@ where
 pub(crate) fn failed(e: TeamError) -> ExitCode {
     eprintln!("error: {e}");
     ExitCode::from(EXIT_REFUSED)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tool_url;
+
+    #[test]
+    fn a_tool_takes_an_address_with_or_without_the_scheme_and_the_agent_first() {
+        for text in ["petrel://robot1/mapper/out/map", "robot1/mapper/out/map"] {
+            let url = tool_url(text).unwrap();
+            assert_eq!(
+                (url.agent(), url.module(), url.path()),
+                (Some("robot1"), "mapper", "out/map"),
+                "{text}"
+            );
+        }
+        for (text, reason) in [
+            ("mapper/out", "missing property path"),
+            ("robot1", "missing module"),
+            ("ros://robot1/mapper/out/map", "unknown scheme"),
+        ] {
+            let error = tool_url(text).unwrap_err();
+            assert!(
+                error.starts_with(&format!(
+                    "`{text}` is not a property of an agent: {reason};"
+                )),
+                "{error}"
+            );
+        }
+    }
 }

@@ -113,16 +113,18 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
     );
 
     // The running rules still act: `fast` is still the active context.
-    let active = || {
+    // Tools take the address with or without its scheme.
+    let active = |address: &str| {
         let out = bounded::output_within_deadline(
             Command::new(env!("CARGO_BIN_EXE_petrel"))
-                .args(["get", "petrel://r1/contexts/out/active"])
+                .args(["get", address])
                 .env("PETREL_RUNTIME_DIR", dir.path()),
         );
         assert!(out.status.success(), "{}", text(&out.stderr));
         text(&out.stdout)
     };
-    assert!(active().contains("fast"), "{}", active());
+    let now = active("petrel://r1/contexts/out/active");
+    assert!(now.contains("fast"), "{now}");
 
     // The new rules are in force: `fast` ends (its setting restored), `slow` is active.
     std::fs::write(&rules, rule("slow", "s/out/value > -1000", false)).unwrap();
@@ -134,7 +136,7 @@ fn sighup_reloads_context_rules_and_a_broken_file_keeps_the_running_ones() {
             "{needle}: {before:#?}"
         );
     }
-    let now = active();
+    let now = active("r1/contexts/out/active");
     assert!(now.contains("slow") && !now.contains("fast"), "{now}");
 
     petrel.signal("INT");
