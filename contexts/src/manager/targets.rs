@@ -87,10 +87,12 @@ impl Targets {
         }
     }
 
-    /// Forgets every handle (the rules were reloaded: they are looked up again).
+    /// Forgets every handle and the values converted for it (the rules were reloaded: the
+    /// properties are looked up again, and may since belong to another module).
     pub fn forget_handles(&mut self) {
         for e in &mut self.entries {
             e.handle = None;
+            e.set = None;
         }
     }
 
