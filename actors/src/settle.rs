@@ -23,8 +23,9 @@ pub(crate) struct Settle {
     /// Time the running step spent settling, measured on a timed step only: left out of its
     /// duration, so that the modules it let run do not count against it (`step_budget`).
     pub waited: Duration,
-    /// The other modules' signals, looked up at the first [`Context::settle_agent`].
-    pub others: Option<Vec<Arc<Signal>>>,
+    /// The other modules' signals, looked up at the first [`Context::settle_agent`] and
+    /// again after modules were added or removed, with the count of those changes then.
+    pub others: Option<(Vec<Arc<Signal>>, u64)>,
     /// The last [`Context::settle_agent`] gave up with modules still busy: the next one only
     /// yields, so that a module that never goes quiet costs the millisecond waits once.
     pub gave_up: bool,
@@ -75,23 +76,30 @@ impl Context {
     /// published one recorded instant at a time with this in between, each instant reaches
     /// the modules downstream as it did live, however fast the replay goes. A simulator that
     /// catches up several steps with the wall clock hands them over the same way. Only steps woken
-    /// by data are waited for (not periodic ticks or timeouts), only on the agent's own
-    /// thread is every such step sure to have run, and modules added after the first call
-    /// are not seen. The time spent is left out of the step's duration, as with
-    /// [`settle`](Self::settle).
+    /// by data are waited for (not periodic ticks or timeouts), and only on the agent's own
+    /// thread is every such step sure to have run; modules added while the agent runs are
+    /// waited for from the next call. The time spent is left out of the step's duration, as
+    /// with [`settle`](Self::settle).
     pub async fn settle_agent(&mut self) -> bool {
         let Some(me) = self.settle.signal.clone() else {
             return false;
         };
-        if self.settle.others.is_none() {
+        // Read before the lookup: a module added meanwhile is looked up at the next call.
+        let changed = self.blackboard.modules_changed();
+        if self
+            .settle
+            .others
+            .as_ref()
+            .is_none_or(|(_, at)| *at != changed)
+        {
             let Ok(signals) = self.blackboard.signals().await else {
                 return false;
             };
             let others = signals.into_iter().filter(|s| !Arc::ptr_eq(s, &me));
-            self.settle.others = Some(others.collect());
+            self.settle.others = Some((others.collect(), changed));
         }
         let began = self.settle.timed.then(Instant::now);
-        let others = self.settle.others.as_deref().unwrap_or_default();
+        let others = self.settle.others.as_ref().map_or(&[][..], |(s, _)| s);
         let busy = || others.iter().any(|s| s.busy());
         let mut yields = 0;
         while busy() && yields < SETTLE_AGENT_YIELDS {

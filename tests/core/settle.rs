@@ -170,6 +170,53 @@ async fn settling_beside_a_module_that_is_never_quiet_gives_up_and_the_chain_sti
     assert_eq!(burst(&text).await, (FED, 0));
 }
 
+/// Modules added while the agent runs are waited for too: the feeder's first burst goes
+/// through one echo; then two more join the chain, and the second burst through all three
+/// comes back whole (with the modules of the first call alone, none came back in time).
+#[tokio::test(start_paused = true)]
+async fn settling_the_agent_waits_for_modules_added_while_it_runs() {
+    use petrel::actors::ModuleConfig;
+    let text = r#"Agent(name: "r1", modules: [
+        (name: "feeder", type: "test.feeder", links: {"in/back": "e1/out/value"}),
+        (name: "e1", type: "test.echo", links: {"in/value": "feeder/out/value"}),
+    ])"#;
+    let agent = Agent::start(&crate::support::config(text), &registry())
+        .await
+        .unwrap();
+    let bb = agent.blackboard();
+    let answered = bb.handle::<i64>("feeder/out/answered").await.unwrap();
+    let go = bb.handle::<f64>("feeder/in/go").await.unwrap();
+    let burst = |n: f64| {
+        let before = answered.read().version;
+        go.set(n);
+        let answered = &answered;
+        async move {
+            let waited = tokio::time::timeout(std::time::Duration::from_secs(20), async {
+                while answered.read().version == before {
+                    answered.changed().await;
+                }
+            })
+            .await;
+            assert!(waited.is_ok(), "the burst should end");
+            *answered.get()
+        }
+    };
+    assert_eq!(burst(1.0).await, FED, "through one echo");
+    for (name, source) in [("e2", "e1/out/value"), ("e3", "e2/out/value")] {
+        let echo = ModuleConfig {
+            name: name.into(),
+            type_name: "test.echo".into(),
+            links: [("in/value".to_string(), source.into())].into(),
+            ..Default::default()
+        };
+        agent.modules().add(echo).await.unwrap();
+    }
+    bb.link("feeder/in/back", "e3/out/value").await.unwrap();
+    assert_eq!(burst(2.0).await, FED, "through three echoes, two added");
+    let summary = agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(summary.failures(), 0, "{summary}");
+}
+
 const CONFIG: &str = r#"Agent(name: "r1", modules: [
     (name: "asker", type: "test.asker", links: {"in/answer": "echo/out/value"}),
     (name: "echo", type: "test.echo", links: {"in/value": "asker/out/question"}),

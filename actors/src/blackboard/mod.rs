@@ -190,6 +190,8 @@ pub struct Blackboard {
     /// The runtime the blackboard actor was started on: the agent's own thread, if it has one
     /// (see [`spawn_beside`](Blackboard::spawn_beside)).
     runtime: tokio::runtime::Handle,
+    /// Counts the modules added and removed (see [`modules_changed`](Blackboard::modules_changed)).
+    modules_changed: Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl Blackboard {
@@ -198,6 +200,7 @@ impl Blackboard {
         registry: Registry,
     ) -> Result<(Blackboard, tokio::task::JoinHandle<()>), BlackboardError> {
         let remote = registry.remote_links();
+        let modules_changed = registry.modules_changed();
         let agent = Arc::from(registry.agent());
         let (actor, join) = Actor::spawn(None, BlackboardActor, registry)
             .await
@@ -210,6 +213,7 @@ impl Blackboard {
                 remote,
                 writer,
                 runtime: tokio::runtime::Handle::current(),
+                modules_changed,
             },
             join,
         ))
@@ -228,6 +232,13 @@ impl Blackboard {
         F::Output: Send + 'static,
     {
         self.runtime.spawn(future)
+    }
+
+    /// How many times a module was added or removed (including the runtime's own): one
+    /// atomic load, for a caller that keeps something per module to know when to look again.
+    pub(crate) fn modules_changed(&self) -> u64 {
+        self.modules_changed
+            .load(std::sync::atomic::Ordering::Acquire)
     }
 
     async fn call<T: Send + 'static>(

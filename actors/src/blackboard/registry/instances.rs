@@ -107,6 +107,8 @@ impl Registry {
         self.forget_outbox(module);
         self.order.retain(|m| m != module);
         self.modules.remove(module);
+        self.modules_changed
+            .fetch_add(1, std::sync::atomic::Ordering::Release);
         self.settings.remove_module(module);
         Ok(())
     }
@@ -139,7 +141,7 @@ impl Registry {
             type_name: "runtime.supervisor".into(),
             signal: Arc::default(),
         };
-        self.modules.insert(EVENTS_MODULE.to_string(), entry);
+        self.insert_module(EVENTS_MODULE, entry);
     }
 
     /// The writer of `_supervisor/events`.

@@ -4,6 +4,7 @@
 //! actor owns one at run time and applies structure changes to it one at a time.
 
 use std::collections::{BTreeMap, HashMap};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use crate::cell::{Cell, Signal};
@@ -72,6 +73,9 @@ pub struct Registry {
     tapped_outboxes: std::collections::HashSet<String>,
     /// Recorders' watches: properties to tap as they are declared.
     tap_watches: Vec<watch::TapWatch>,
+    /// Counts the modules added and removed, shared with the [`Blackboard`](crate::Blackboard)
+    /// handle: a step that settles the agent looks the modules up again when it moved.
+    modules_changed: Arc<AtomicU64>,
 }
 
 /// The most items an output queue may be configured to hold (items are shared, so this
@@ -93,6 +97,7 @@ impl Registry {
             pending_outboxes: Vec::new(),
             tapped_outboxes: Default::default(),
             tap_watches: Vec::new(),
+            modules_changed: Arc::default(),
         }
     }
 
@@ -125,6 +130,17 @@ impl Registry {
     /// The wake-up signals of every module, running or not.
     pub(crate) fn signals(&self) -> Vec<Arc<Signal>> {
         self.modules.values().map(|m| m.signal.clone()).collect()
+    }
+
+    /// The count of modules added and removed so far, read without asking the blackboard.
+    pub(crate) fn modules_changed(&self) -> Arc<AtomicU64> {
+        self.modules_changed.clone()
+    }
+
+    /// Adds or replaces a module's entry.
+    fn insert_module(&mut self, module: &str, entry: ModuleEntry) {
+        self.modules.insert(module.to_string(), entry);
+        self.modules_changed.fetch_add(1, Ordering::Release);
     }
 
     pub(crate) fn module(&self, name: &str) -> Option<&ModuleEntry> {
@@ -186,7 +202,7 @@ impl Registry {
             type_name: type_name.to_string(),
             signal: Arc::default(),
         };
-        self.modules.insert(module.to_string(), entry);
+        self.insert_module(module, entry);
         if self.team.is_some() {
             self.tap_outbox(module);
         }

@@ -281,7 +281,7 @@ impl Registry {
             type_name: "runtime.team".into(),
             signal: Arc::default(),
         };
-        self.modules.insert(TEAM_MODULE.to_string(), entry);
+        self.insert_module(TEAM_MODULE, entry);
     }
 
     fn insert_runtime(&mut self, key: String, decl: PropertyDecl, handle: Handle) {
