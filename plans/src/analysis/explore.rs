@@ -14,7 +14,7 @@
 //!   shortest path from the initial marking: the witness of a livelock.
 
 use std::collections::HashMap;
-use std::hash::{Hash, Hasher};
+use std::hash::BuildHasher;
 
 use petgraph::graph::{Graph, NodeIndex};
 
@@ -40,17 +40,18 @@ pub(super) enum Kind {
     Open,
 }
 
-/// Interned marking keys: an arena of words and a hash table from key to id.
+/// Interned marking keys: an arena of words, and a table of their ids hashed by key.
+///
+/// The table holds ids only (4 bytes and a control byte each), the keys staying in the arena:
+/// a long plan's check looks a successor up at every step, and a table of 200,000 markings
+/// then stays within a core's cache, where one holding keys or their hashes did not.
 #[derive(Default)]
 pub(super) struct Markings {
     words: Vec<u32>,
     start: Vec<usize>,
-    /// Key hash to the last id with that hash; `same_hash` chains to the earlier ones.
-    table: HashMap<u64, u32>,
-    same_hash: Vec<u32>,
+    table: hashbrown::HashTable<u32>,
+    hasher: foldhash::fast::FixedState,
 }
-
-const NONE: u32 = u32::MAX;
 
 impl Markings {
     pub fn len(&self) -> usize {
@@ -67,30 +68,33 @@ impl Markings {
         &self.words[from..to]
     }
 
-    fn hash(key: &[u32]) -> u64 {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        key.hash(&mut h);
-        h.finish()
+    fn hash(&self, key: &[u32]) -> u64 {
+        self.hasher.hash_one(key)
     }
 
     pub fn find(&self, key: &[u32]) -> Option<u32> {
-        let mut id = self.table.get(&Self::hash(key)).copied().unwrap_or(NONE);
-        while id != NONE {
-            if self.get(id) == key {
-                return Some(id);
-            }
-            id = self.same_hash[id as usize];
-        }
-        None
+        let hash = self.hash(key);
+        self.table.find(hash, |&id| self.get(id) == key).copied()
     }
 
     /// Adds a key not yet present; returns its id.
     pub fn add(&mut self, key: &[u32]) -> u32 {
         let id = self.len() as u32;
-        let prev = self.table.insert(Self::hash(key), id).unwrap_or(NONE);
-        self.same_hash.push(prev);
+        let hash = self.hash(key);
         self.start.push(self.words.len());
         self.words.extend_from_slice(key);
+        let Markings {
+            words,
+            start,
+            table,
+            hasher,
+        } = self;
+        let key_of = |id: &u32| {
+            let from = start[*id as usize];
+            let to = start.get(*id as usize + 1).copied().unwrap_or(words.len());
+            hasher.hash_one(&words[from..to])
+        };
+        table.insert_unique(hash, id, key_of);
         id
     }
 }
