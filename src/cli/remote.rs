@@ -63,10 +63,22 @@ pub(crate) fn target(reach: &Reach, url: &str) -> Result<(PropertyUrl, TeamConfi
 
 /// The property a tool names: `petrel://agent/module/path`, or the same without the scheme.
 /// A tool always addresses a running agent, so there the first segment is the agent (`petrel
-/// ls` lists it so: `agent robot1`, then its modules and their properties).
+/// ls` lists it so: `agent robot1`, then its modules and their properties). An address whose
+/// second segment is a property kind (`scale/params/factor`) is a module's property without
+/// its agent, and is refused as such.
 fn tool_url(text: &str) -> Result<PropertyUrl, String> {
     let full = match text.contains("://") {
         true => text.to_string(),
+        false
+            if text
+                .split('/')
+                .nth(1)
+                .is_some_and(|s| PROPERTY_KINDS.contains(&s)) =>
+        {
+            return Err(format!(
+                "`{text}` names no agent: write `AGENT/{text}` or `petrel://AGENT/{text}`"
+            ));
+        }
         false => format!("petrel://{text}"),
     };
     PropertyUrl::parse(&full).map_err(|e| {
@@ -76,6 +88,9 @@ fn tool_url(text: &str) -> Result<PropertyUrl, String> {
         )
     })
 }
+
+/// The first segment of a property's path: what a module/path address has second.
+const PROPERTY_KINDS: [&str; 6] = ["in", "out", "params", "state", "stats", "control"];
 
 /// `petrel ls`: the agents running on this machine, or with `agent`, its modules and
 /// properties.
@@ -174,8 +189,13 @@ mod tests {
                 "{text}"
             );
         }
+        let error = tool_url("scale/params/factor").unwrap_err();
+        assert_eq!(
+            error,
+            "`scale/params/factor` names no agent: write `AGENT/scale/params/factor` or `petrel://AGENT/scale/params/factor`"
+        );
         for (text, reason) in [
-            ("mapper/out", "missing property path"),
+            ("mapper/enabled", "missing property path"),
             ("robot1", "missing module"),
             ("ros://robot1/mapper/out/map", "unknown scheme"),
         ] {
