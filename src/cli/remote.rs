@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use petrel_actors::team::TeamConfig;
-use petrel_actors::{ConfigFile, PropertyUrl};
+use petrel_actors::{ConfigFile, PropertyKind, PropertyUrl};
 use petrel_team::discovery;
 use petrel_team::{Client, TeamError};
 
@@ -67,18 +67,19 @@ pub(crate) fn target(reach: &Reach, url: &str) -> Result<(PropertyUrl, TeamConfi
 /// second segment is a property kind (`scale/params/factor`) is a module's property without
 /// its agent, and is refused as such.
 fn tool_url(text: &str) -> Result<PropertyUrl, String> {
+    let kind_second = text.split('/').nth(1).is_some_and(|second| {
+        use PropertyKind::*;
+        [Input, Output, Param, State, Stats, Control]
+            .iter()
+            .any(|k| k.prefix().strip_suffix('/') == Some(second))
+    });
+    if !text.contains("://") && kind_second {
+        return Err(format!(
+            "`{text}` names no agent: write `AGENT/{text}` or `petrel://AGENT/{text}`"
+        ));
+    }
     let full = match text.contains("://") {
         true => text.to_string(),
-        false
-            if text
-                .split('/')
-                .nth(1)
-                .is_some_and(|s| PROPERTY_KINDS.contains(&s)) =>
-        {
-            return Err(format!(
-                "`{text}` names no agent: write `AGENT/{text}` or `petrel://AGENT/{text}`"
-            ));
-        }
         false => format!("petrel://{text}"),
     };
     PropertyUrl::parse(&full).map_err(|e| {
@@ -88,9 +89,6 @@ fn tool_url(text: &str) -> Result<PropertyUrl, String> {
         )
     })
 }
-
-/// The first segment of a property's path: what a module/path address has second.
-const PROPERTY_KINDS: [&str; 6] = ["in", "out", "params", "state", "stats", "control"];
 
 /// `petrel ls`: the agents running on this machine, or with `agent`, its modules and
 /// properties.

@@ -130,10 +130,24 @@ async fn burst(text: &str) -> (i64, i64) {
     let agent = Agent::start(&crate::support::config(text), &registry())
         .await
         .unwrap();
+    let answered = fire(&agent, 1.0).await;
+    let quiet = *agent
+        .blackboard()
+        .get::<i64>("feeder/out/quiet")
+        .await
+        .unwrap();
+    let summary = agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
+    assert_eq!(summary.failures(), 0, "{summary}");
+    (answered, quiet)
+}
+
+/// Starts a burst of the feeder with `go` = `n` (a change) and returns how many of its
+/// values came back before the next, once it ended (within 20 s).
+async fn fire(agent: &Agent, n: f64) -> i64 {
     let bb = agent.blackboard();
     let answered = bb.handle::<i64>("feeder/out/answered").await.unwrap();
     let before = answered.read().version;
-    bb.handle::<f64>("feeder/in/go").await.unwrap().set(1.0);
+    bb.handle::<f64>("feeder/in/go").await.unwrap().set(n);
     let waited = tokio::time::timeout(std::time::Duration::from_secs(20), async {
         while answered.read().version == before {
             answered.changed().await;
@@ -141,10 +155,7 @@ async fn burst(text: &str) -> (i64, i64) {
     })
     .await;
     assert!(waited.is_ok(), "the burst should end");
-    let quiet = *bb.get::<i64>("feeder/out/quiet").await.unwrap();
-    let summary = agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
-    assert_eq!(summary.failures(), 0, "{summary}");
-    (*answered.get(), quiet)
+    *answered.get()
 }
 
 #[tokio::test(start_paused = true)]
@@ -183,25 +194,7 @@ async fn settling_the_agent_waits_for_modules_added_while_it_runs() {
     let agent = Agent::start(&crate::support::config(text), &registry())
         .await
         .unwrap();
-    let bb = agent.blackboard();
-    let answered = bb.handle::<i64>("feeder/out/answered").await.unwrap();
-    let go = bb.handle::<f64>("feeder/in/go").await.unwrap();
-    let burst = |n: f64| {
-        let before = answered.read().version;
-        go.set(n);
-        let answered = &answered;
-        async move {
-            let waited = tokio::time::timeout(std::time::Duration::from_secs(20), async {
-                while answered.read().version == before {
-                    answered.changed().await;
-                }
-            })
-            .await;
-            assert!(waited.is_ok(), "the burst should end");
-            *answered.get()
-        }
-    };
-    assert_eq!(burst(1.0).await, FED, "through one echo");
+    assert_eq!(fire(&agent, 1.0).await, FED, "through one echo");
     for (name, source) in [("e2", "e1/out/value"), ("e3", "e2/out/value")] {
         let echo = ModuleConfig {
             name: name.into(),
@@ -211,8 +204,13 @@ async fn settling_the_agent_waits_for_modules_added_while_it_runs() {
         };
         agent.modules().add(echo).await.unwrap();
     }
+    let bb = agent.blackboard();
     bb.link("feeder/in/back", "e3/out/value").await.unwrap();
-    assert_eq!(burst(2.0).await, FED, "through three echoes, two added");
+    assert_eq!(
+        fire(&agent, 2.0).await,
+        FED,
+        "through three echoes, two added"
+    );
     let summary = agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
     assert_eq!(summary.failures(), 0, "{summary}");
 }

@@ -58,27 +58,9 @@ impl ContextManager {
         }
         // What the contexts changed, in address order; one whose config form could not be
         // made (see `show_originals`) is left out.
-        fill_in_place(
-            &mut memory.original_values,
-            self.targets.shown(),
-            |(t, v), (target, dynamic)| same_name(t, target) && v == *dynamic,
-            |_, _| {},
-            |(target, dynamic)| (target.clone(), dynamic.clone()),
-        );
-        fill_in_place(
-            &mut memory.original_links,
-            &self.original_links,
-            |(i, l), (input, link)| same_name(i, input) && l == *link,
-            |_, _| {},
-            |(input, link)| (input.clone(), link.clone()),
-        );
-        fill_in_place(
-            &mut memory.original_runs,
-            &self.original_runs,
-            |(m, r), (module, ran)| same_name(m, module) && r == *ran,
-            |_, _| {},
-            |(module, ran)| (module.clone(), *ran),
-        );
+        fill_named(&mut memory.original_values, self.targets.shown());
+        fill_named(&mut memory.original_links, &self.original_links);
+        fill_named(&mut memory.original_runs, &self.original_runs);
     }
 
     /// Brings the config form of each original up to date: converting a value (through RON
@@ -130,4 +112,18 @@ impl ContextManager {
         let active: Vec<&str> = memory.engine.active.iter().map(|(c, _)| &**c).collect();
         tracing::info!(?active, "context manager resumed from state/memory");
     }
+}
+
+/// Makes `out` list `items` (name, value), keeping the entries it already holds alike.
+fn fill_named<'a, V: Clone + PartialEq + 'a>(
+    out: &mut Vec<(Arc<str>, V)>,
+    items: impl IntoIterator<Item = (&'a Arc<str>, &'a V)>,
+) {
+    fill_in_place(
+        out,
+        items,
+        |(name, value), (item, v)| same_name(name, item) && value == *v,
+        |_, _| {},
+        |(item, v)| (item.clone(), v.clone()),
+    );
 }

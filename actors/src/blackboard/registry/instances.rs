@@ -106,9 +106,7 @@ impl Registry {
         self.remote.remove_module(module);
         self.forget_outbox(module);
         self.order.retain(|m| m != module);
-        self.modules.remove(module);
-        self.modules_changed
-            .fetch_add(1, std::sync::atomic::Ordering::Release);
+        self.remove_module_entry(module);
         self.settings.remove_module(module);
         Ok(())
     }

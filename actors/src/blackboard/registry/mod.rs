@@ -143,6 +143,12 @@ impl Registry {
         self.modules_changed.fetch_add(1, Ordering::Release);
     }
 
+    /// Removes a module's entry.
+    fn remove_module_entry(&mut self, module: &str) {
+        self.modules.remove(module);
+        self.modules_changed.fetch_add(1, Ordering::Release);
+    }
+
     pub(crate) fn module(&self, name: &str) -> Option<&ModuleEntry> {
         self.modules.get(name)
     }
