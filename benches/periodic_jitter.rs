@@ -7,7 +7,8 @@
 //! the alone row being the in-run baseline. Run with `cargo bench --bench periodic_jitter`;
 //! `PETREL_JITTER_SECS` sets each run's length (default 3 s).
 //!
-//! On an agent thread (the default scheduler) both rows are run again with
+//! On an agent thread (the default scheduler) the busy row is run again with the busy modules'
+//! threads below the agent's (`long_steps_nice`, any process may), and both rows with
 //! `realtime_priority: 50` (the agent's and the fine timer's threads under `SCHED_FIFO`), last,
 //! since the timer thread keeps its priority for the rest of the process; where the OS refuses
 //! it, those rows say so.
@@ -23,6 +24,10 @@ use petrel::actors::{Agent, ConfigFile, Context, Input, Module, Output, Ports, S
 static STEPS: Mutex<Vec<Instant>> = Mutex::new(Vec::new());
 
 const PERIOD: Duration = Duration::from_millis(1);
+
+/// The `long_steps_nice` of the `with_20_busy_nice` row: the busy modules' threads that many
+/// nice levels below the agent's (no privilege needed, unlike the real-time rows).
+const LONG_STEPS_NICE: u8 = 10;
 
 /// `bench.periodic`: steps every millisecond and notes when.
 struct Periodic;
@@ -75,7 +80,7 @@ impl Module for Busy {
     }
 }
 
-fn config(busy: usize, realtime: Option<u8>) -> String {
+fn config(busy: usize, realtime: Option<u8>, nice: Option<u8>) -> String {
     let mut modules = String::from(r#"(name: "p", type: "bench.periodic"),"#);
     // On an agent thread (the default), busy modules are what `long_steps` is for: off the
     // agent's thread.
@@ -89,7 +94,8 @@ fn config(busy: usize, realtime: Option<u8>) -> String {
         ));
     }
     let realtime = realtime.map_or(String::new(), |p| format!("realtime_priority: {p}, "));
-    format!(r#"Agent(name: "bench", {realtime}modules: [{modules}])"#)
+    let nice = nice.map_or(String::new(), |n| format!("long_steps_nice: {n}, "));
+    format!(r#"Agent(name: "bench", {realtime}{nice}modules: [{modules}])"#)
 }
 
 /// What one run measured.
@@ -108,12 +114,12 @@ struct Run {
 fn run(
     rt: &tokio::runtime::Runtime,
     busy: usize,
-    realtime: Option<u8>,
+    (realtime, nice): (Option<u8>, Option<u8>),
     length: Duration,
 ) -> Result<Run, String> {
     let mut registry = common::registry();
     registry.register::<Periodic>().register::<Busy>();
-    let text = common::scheduled(&config(busy, realtime));
+    let text = common::scheduled(&config(busy, realtime, nice));
     let file = ConfigFile::parse("jitter.ron", &text).unwrap();
     let agent = rt
         .block_on(Agent::start(&file, &registry))
@@ -169,17 +175,21 @@ fn main() {
         .unwrap_or(3.0);
     let length = Duration::from_secs_f64(secs);
     let rt = common::runtime();
-    let mut rows = vec![("alone", 0, None), ("with_20_busy", 20, None)];
+    let mut rows = vec![
+        ("alone", 0, (None, None)),
+        ("with_20_busy", 20, (None, None)),
+    ];
     if common::scheduler() != "shared" {
-        rows.push(("alone_realtime", 0, Some(50)));
-        rows.push(("with_20_busy_realtime", 20, Some(50)));
+        rows.push(("with_20_busy_nice", 20, (None, Some(LONG_STEPS_NICE))));
+        rows.push(("alone_realtime", 0, (Some(50), None)));
+        rows.push(("with_20_busy_realtime", 20, (Some(50), None)));
     }
-    for (name, busy, realtime) in rows {
+    for (name, busy, priorities) in rows {
         let Run {
             jitter,
             busy_steps,
             stop,
-        } = match run(&rt, busy, realtime, length) {
+        } = match run(&rt, busy, priorities, length) {
             Ok(run) => run,
             Err(e) => {
                 println!("periodic_jitter/{name}: not run: {e}");

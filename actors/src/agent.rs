@@ -166,6 +166,15 @@ impl Agent {
         let (blackboard, bb_join) = spawned
             .map_err(StartError::Spawn)?
             .map_err(|e| StartError::Spawn(e.to_string()))?;
+        // Where its long-step modules run: the shared runtime, or threads below the agent's.
+        let long_steps_runtime = match (&thread, cfg.long_steps_nice) {
+            (Some(thread), Some(offset)) => Some(
+                crate::long_step_threads::runtime(offset, &thread.shared())
+                    .map_err(StartError::Spawn)?,
+            ),
+            (Some(thread), None) => Some(thread.shared()),
+            (None, _) => None,
+        };
         // Only an agent's own thread can be held by one module for all the others.
         let hold_watcher = match (&thread, cfg.step_budget.held_ms) {
             (Some(_), held_ms) if held_ms > 0 => Some(HoldWatcher {
@@ -189,7 +198,7 @@ impl Agent {
             events,
             probe: probe.clone(),
             scheduler: cfg.scheduler,
-            shared: thread.as_ref().map(AgentThread::shared),
+            shared: long_steps_runtime,
             step_budget: cfg.step_budget,
             hold: hold_watcher.as_ref().map(|w| w.hold.clone()),
         };

@@ -67,7 +67,8 @@ impl AgentThread {
         Ok(Some(agent))
     }
 
-    /// The shared runtime, where modules with `long_steps` run.
+    /// The shared runtime, where modules with `long_steps` run (unless `long_steps_nice` gives
+    /// them threads of their own).
     pub fn shared(&self) -> Handle {
         self.shared.clone()
     }

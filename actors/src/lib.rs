@@ -17,6 +17,7 @@ pub mod expr;
 pub mod files;
 mod fine_timer;
 mod handle;
+mod long_step_threads;
 mod loop_watch;
 mod module;
 mod module_actor;

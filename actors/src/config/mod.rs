@@ -73,6 +73,12 @@ pub struct AgentConfig {
     /// keep the CPUs busy; `agent_thread` only (see [`Scheduler`]). None: ordinary threads.
     #[serde(default)]
     pub realtime_priority: Option<u8>,
+    /// How many nice levels below the agent's own thread the threads of its long-step modules
+    /// run (1..=19, at most at nice 19), so that beside modules keeping the CPUs busy the
+    /// agent's thread gets a CPU first; `agent_thread` only. Needs no privilege. None: those
+    /// modules run on the shared runtime, at the process's priority.
+    #[serde(default)]
+    pub long_steps_nice: Option<u8>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -182,6 +188,7 @@ impl ConfigFile {
         errors.extend(self.check_scheduler());
         errors.extend(self.check_step_budget());
         errors.extend(self.check_realtime_priority());
+        errors.extend(self.check_long_steps_nice());
         if !crate::url::valid_segment(&self.config.name) {
             errors.push(self.locate(
                 &format!("\"{}\"", self.config.name),

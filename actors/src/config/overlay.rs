@@ -5,7 +5,7 @@ use super::ConfigFile;
 impl ConfigFile {
     /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
     /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
-    /// `realtime_priority`; per module
+    /// `realtime_priority`, `long_steps_nice`; per module
     /// `type` if given, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
     /// and their `values`, `links` and `capacities` are merged key by key (a value the overlay
     /// gives replaces the base's link of that property, a link it gives the base's value);
@@ -36,6 +36,9 @@ impl ConfigFile {
         }
         if wrote("realtime_priority") {
             self.config.realtime_priority = overlay.config.realtime_priority;
+        }
+        if wrote("long_steps_nice") {
+            self.config.long_steps_nice = overlay.config.long_steps_nice;
         }
         if wrote("name") && !overlay.config.name.is_empty() {
             self.config.name = overlay.config.name.clone();

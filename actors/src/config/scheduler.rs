@@ -152,6 +152,25 @@ impl ConfigFile {
         vec![self.locate("realtime_priority", message)]
     }
 
+    /// `long_steps_nice` out of 1..=19, or on an agent without a thread of its own (under
+    /// `shared` every module runs on the shared runtime, and none would run below another).
+    pub(super) fn check_long_steps_nice(&self) -> Vec<ConfigError> {
+        let Some(offset) = self.config.long_steps_nice else {
+            return Vec::new();
+        };
+        let message = if !(1..=19).contains(&offset) {
+            format!("long_steps_nice is {offset}; expected how many nice levels below the agent's thread its long-step modules run, 1..=19")
+        } else if self.config.scheduler != Scheduler::AgentThread {
+            format!(
+                "long_steps_nice puts long-step modules below the agent's own thread, which only `scheduler: agent_thread` gives it; this agent's scheduler is `{}`: remove `long_steps_nice` or use `scheduler: agent_thread`",
+                self.config.scheduler.name()
+            )
+        } else {
+            return Vec::new();
+        };
+        vec![self.locate("long_steps_nice", message)]
+    }
+
     /// `long_steps: true` asks for the shared runtime, where a `shared` agent runs every
     /// module already: refused there, so that a config never says something that does nothing.
     pub(super) fn check_scheduler(&self) -> Vec<ConfigError> {

@@ -61,7 +61,7 @@ impl SupervisorState {
             return;
         };
         let reason = format!(
-            "its steps took {:.2} ms on average over {} steps, above the agent's step_budget of {} µs: moved off the agent's thread to the shared runtime, as `long_steps: true` would",
+            "its steps took {:.2} ms on average over {} steps, above the agent's step_budget of {} µs: moved off the agent's thread to where `long_steps: true` modules run",
             mean.as_secs_f64() * 1e3,
             self.step_budget.steps,
             self.step_budget.mean_us
@@ -80,7 +80,7 @@ impl SupervisorState {
             return;
         }
         let reason = format!(
-            "one of its steps held the agent's thread for over {} ms without yielding (the agent's step_budget allows {} ms): moved off the agent's thread to the shared runtime, as `long_steps: true` would",
+            "one of its steps held the agent's thread for over {} ms without yielding (the agent's step_budget allows {} ms): moved off the agent's thread to where `long_steps: true` modules run",
             held.as_millis(),
             self.step_budget.held_ms
         );

@@ -112,8 +112,8 @@ pub(crate) struct SupervisorArgs {
     pub events: QueueWriter<SupervisorEvent>,
     pub probe: StepProbe,
     pub scheduler: Scheduler,
-    /// The shared runtime, when the agent's actors run on a thread of their own: modules with
-    /// `long_steps` are spawned there.
+    /// Where modules with `long_steps` are spawned, when the agent's actors run on a thread of
+    /// their own: the shared runtime, or the threads `long_steps_nice` puts below the agent's.
     pub shared: Option<tokio::runtime::Handle>,
     /// Modules on the agent's thread whose steps exceed it are moved to `shared`.
     pub step_budget: StepBudget,

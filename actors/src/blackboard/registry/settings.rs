@@ -1,5 +1,5 @@
 //! What a config says beyond properties — supervision, groups, recording, the scheduler,
-//! step budget and real-time priority, and each module's group, restart policy, watchdog, stop timeout and
+//! step budget, real-time priority and the long-step threads' nice offset, and each module's group, restart policy, watchdog, stop timeout and
 //! `long_steps` — kept with the registry so that a snapshot writes it back and a snapshot run
 //! behaves like the run it froze.
 
@@ -17,6 +17,7 @@ pub(crate) struct Settings {
     scheduler: Scheduler,
     step_budget: StepBudget,
     realtime_priority: Option<u8>,
+    long_steps_nice: Option<u8>,
     modules: HashMap<String, ModuleSettings>,
 }
 
@@ -39,6 +40,7 @@ impl Settings {
             scheduler: config.scheduler,
             step_budget: config.step_budget,
             realtime_priority: config.realtime_priority,
+            long_steps_nice: config.long_steps_nice,
             modules: config
                 .modules
                 .iter()
@@ -73,6 +75,9 @@ impl Settings {
         }
         if let Some(priority) = self.realtime_priority {
             fields.push(format!("realtime_priority: {priority}"));
+        }
+        if let Some(offset) = self.long_steps_nice {
+            fields.push(format!("long_steps_nice: {offset}"));
         }
         fields
     }
