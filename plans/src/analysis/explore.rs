@@ -45,7 +45,6 @@ pub(super) enum Kind {
 /// The table holds ids only (4 bytes and a control byte each), the keys staying in the arena:
 /// a long plan's check looks a successor up at every step, and a table of 200,000 markings
 /// then stays within a core's cache, where one holding keys or their hashes did not.
-#[derive(Default)]
 pub(super) struct Markings {
     words: Vec<u32>,
     start: Vec<usize>,
@@ -54,6 +53,17 @@ pub(super) struct Markings {
 }
 
 impl Markings {
+    /// Room for `markings` keys of about one marked place each, so that a check reaching about
+    /// that many does not copy its tables as they grow.
+    fn with_capacity(markings: usize) -> Self {
+        Markings {
+            words: Vec::with_capacity(3 * markings),
+            start: Vec::with_capacity(markings),
+            table: hashbrown::HashTable::with_capacity(markings),
+            hasher: Default::default(),
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.start.len()
     }
@@ -126,8 +136,9 @@ pub(super) type Outcomes = HashMap<String, (bool, bool)>;
 /// The [`Environment`] of the exploration: answers atoms from a list of decisions.
 struct Decisions<'p> {
     plan: &'p Plan,
-    /// Executable and condition names to numbers.
-    names: HashMap<&'p str, u32>,
+    /// Executable and condition names to numbers (a fast hasher: a long plan has a name per
+    /// action, all hashed when its check starts).
+    names: foldhash::HashMap<&'p str, u32>,
     /// The atoms of the plan's conditions and executables (kind 0), by position: the step asks
     /// by position, and a long plan's check looked a name up in a table of every name at
     /// every marking, which cost more in cache misses than the rest of its step.
@@ -142,7 +153,11 @@ struct Decisions<'p> {
 
 impl<'p> Decisions<'p> {
     fn new(plan: &'p Plan, outcomes: &Outcomes) -> Self {
-        let mut names = HashMap::new();
+        let count = plan.conditions().len() + plan.executables().len();
+        let mut names = foldhash::HashMap::with_capacity_and_hasher(
+            count,
+            foldhash::fast::RandomState::default(),
+        );
         for name in plan
             .conditions()
             .iter()
@@ -197,7 +212,7 @@ impl<'p> Decisions<'p> {
 
 /// The atoms of `name` are its base plus 0, 1 and 2; a name the plan does not have gets atoms
 /// of its own, beyond every name's.
-fn atom_base(names: &HashMap<&str, u32>, name: &str) -> u32 {
+fn atom_base(names: &foldhash::HashMap<&str, u32>, name: &str) -> u32 {
     names.get(name).map_or(u32::MAX - 3, |n| n * 3)
 }
 
@@ -243,24 +258,29 @@ pub(super) struct Stepper<'p> {
     next: Vec<u32>,
     /// Reused from run to run: a check runs the step once per marking and answer.
     report: StepReport,
+    /// The initial marking's key, encoded from `state` when it was made (a long plan's state
+    /// is as long as the plan: made once).
+    initial: Vec<u32>,
 }
 
 impl<'p> Stepper<'p> {
     pub fn new(plan: &'p Plan, outcomes: &Outcomes) -> Self {
+        let state = PlanState::new(plan).for_analysis();
+        let mut initial = Vec::new();
+        state.encode(&mut initial);
         Stepper {
             plan,
-            state: PlanState::new(plan).for_analysis(),
+            state,
             env: Decisions::new(plan, outcomes),
             next: Vec::new(),
             report: StepReport::default(),
+            initial,
         }
     }
 
     /// The initial marking's key.
-    pub fn initial(&self) -> Vec<u32> {
-        let mut key = Vec::new();
-        PlanState::new(self.plan).encode(&mut key);
-        key
+    pub fn initial(&self) -> &[u32] {
+        &self.initial
     }
 
     /// What marking `key` is, before expanding it.
@@ -336,15 +356,21 @@ pub(super) struct Explored {
 /// marking beyond.
 pub(super) fn explore(plan: &Plan, outcomes: &Outcomes, max_states: usize) -> Explored {
     let mut stepper = Stepper::new(plan, outcomes);
+    // A plan usually reaches about as many markings as it has places (a sequence of actions:
+    // two places and two markings each); room for that many, within the budget, spares the
+    // copies of tables growing while a long plan is checked (and their peak memory).
+    let expected = plan.places().len().min(max_states);
+    let mut parent = Vec::with_capacity(expected);
+    parent.push(u32::MAX);
     let mut ex = Explored {
-        markings: Markings::default(),
-        graph: Graph::default(),
-        kinds: Vec::new(),
-        parent: vec![u32::MAX],
+        markings: Markings::with_capacity(expected),
+        graph: Graph::with_capacity(expected, expected),
+        kinds: Vec::with_capacity(expected),
+        parent,
         fired: vec![false; plan.transitions().len()],
         budget_hit: false,
     };
-    ex.markings.add(&stepper.initial());
+    ex.markings.add(stepper.initial());
     ex.graph.add_node(());
     let (mut key, mut succ) = (Vec::new(), Vec::new());
     let mut id = 0u32;

@@ -3,11 +3,15 @@
 //!
 //! On a complete exploration these are exactly the bottom strongly connected components of
 //! the reachability graph (no step leaves them) holding no goal, fail or deadlocked marking:
-//! whatever the environment answers, the plan stays inside forever. Components come from
-//! petgraph's Kosaraju (iterative: a 200,000-marking chain must not recurse). The witness is
-//! the shortest path from the initial marking to the trap, replayed with the real step.
+//! whatever the environment answers, the plan stays inside forever. Whether there is one is
+//! found first by walking the steps backwards from the other markings (one pass); only then
+//! are the components computed, with petgraph's Kosaraju (iterative: a 200,000-marking chain
+//! must not recurse). The witness is the shortest path from the initial marking to the trap,
+//! replayed with the real step.
 
 use petgraph::algo::kosaraju_scc;
+use petgraph::graph::NodeIndex;
+use petgraph::Direction;
 
 use super::explore::{witness, Explored, Kind, Outcomes};
 use super::{finding, show_marking, Finding};
@@ -20,6 +24,9 @@ const SHOWN_STEPS: usize = 6;
 pub(super) fn find(plan: &Plan, outcomes: &Outcomes, ex: &Explored) -> Option<Finding> {
     if plan.goal_places().is_empty() {
         return None; // no goal to miss: the plan is reported unusable already
+    }
+    if !has_trap(ex) {
+        return None;
     }
     let sccs = kosaraju_scc(&ex.graph);
     let mut component = vec![0usize; ex.markings.len()];
@@ -61,6 +68,30 @@ pub(super) fn find(plan: &Plan, outcomes: &Outcomes, ex: &Explored) -> Option<Fi
             show_steps(plan, &steps)
         ),
     ))
+}
+
+/// Whether some marking can reach no goal, fail, deadlocked or unexpanded one: exactly when a
+/// trap exists (all that such a marking reaches is running, so it reaches a bottom component
+/// of running markings). Found walking the steps backwards from those markings, which costs a
+/// pass over the graph; the components, which cost several and an allocation each, are only
+/// computed for a plan that has a trap to report.
+fn has_trap(ex: &Explored) -> bool {
+    // Markings never classified (none on a complete exploration) are not traps either.
+    let mut reaches_an_end: Vec<bool> = (0..ex.markings.len())
+        .map(|id| ex.kinds.get(id).is_none_or(|k| *k != Kind::Running))
+        .collect();
+    let mut queue: Vec<NodeIndex<u32>> = (reaches_an_end.iter().enumerate())
+        .filter(|(_, end)| **end)
+        .map(|(id, _)| NodeIndex::new(id))
+        .collect();
+    while let Some(n) = queue.pop() {
+        for m in ex.graph.neighbors_directed(n, Direction::Incoming) {
+            if !std::mem::replace(&mut reaches_an_end[m.index()], true) {
+                queue.push(m);
+            }
+        }
+    }
+    reaches_an_end.contains(&false)
 }
 
 /// `step 1: t0 ('a.start'); step 2: ...`, the middle elided when long.

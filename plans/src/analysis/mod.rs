@@ -140,9 +140,13 @@ pub fn check(plan: &Plan) -> CheckReport {
 
 /// [`check`] with explicit options.
 pub fn check_with(plan: &Plan, options: &CheckOptions) -> CheckReport {
-    check_once(plan, options, &mut HashMap::new())
-        .report
-        .clone()
+    let checked = check_once(plan, options, &mut HashMap::new());
+    // The top plan's report is held only here (sub-plans' are in `done`, dropped by now), so
+    // it is taken rather than copied: a long plan's lists every action.
+    match Rc::try_unwrap(checked) {
+        Ok(checked) => checked.report,
+        Err(shared) => shared.report.clone(),
+    }
 }
 
 /// A plan's report, and what its parents may assume of it as a sub-plan.
