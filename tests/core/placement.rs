@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use petrel::actors::{Agent, ConfigFile, Context, Module, Output, Ports, Schedule};
 
-use crate::support::{config, registry};
+use crate::support::{config, refused, registry};
 
 /// `test.where`: its first step writes the name of the thread it ran on to `out/thread`, and
 /// that thread's nice value to `out/nice`.
@@ -182,14 +182,6 @@ async fn a_snapshot_keeps_the_scheduler_and_long_steps() {
 
 #[test]
 fn a_long_steps_nice_out_of_range_or_without_an_agent_thread_is_refused_where_it_is_written() {
-    let refused = |text: &str| -> String {
-        let file = ConfigFile::parse("bad.ron", text).unwrap();
-        let Err(errors) = file.build(&registry()) else {
-            panic!("should be refused: {text}");
-        };
-        let errors: Vec<String> = errors.0.iter().map(ToString::to_string).collect();
-        errors.join("\n")
-    };
     let e = refused("Agent(name: \"r\",\n    long_steps_nice: 20, modules: [])");
     assert!(e.starts_with("bad.ron:2:5:"), "{e}");
     assert!(

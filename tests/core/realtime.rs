@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use petrel::actors::{Agent, ConfigFile};
 
-use crate::support::{config, registry};
+use crate::support::{config, refused, registry};
 
 /// The scheduling policy and priority of this process's thread named `comm` (a thread's name
 /// as the kernel keeps it: its first 15 bytes).
@@ -77,18 +77,6 @@ async fn a_realtime_priority_runs_the_agent_and_timer_threads_under_sched_fifo_o
 
 #[test]
 fn a_realtime_priority_out_of_range_or_without_an_agent_thread_is_refused_where_it_is_written() {
-    let refused = |text: &str| -> String {
-        let file = ConfigFile::parse("bad.ron", text).unwrap();
-        let Err(errors) = file.build(&registry()) else {
-            panic!("should be refused: {text}");
-        };
-        errors
-            .0
-            .iter()
-            .map(ToString::to_string)
-            .collect::<Vec<_>>()
-            .join("\n")
-    };
     let e = refused("Agent(name: \"r\",\n    realtime_priority: 100, modules: [])");
     assert!(e.starts_with("bad.ron:2:5:"), "{e}");
     assert!(

@@ -26,6 +26,17 @@ pub fn config(text: &str) -> ConfigFile {
     ConfigFile::parse("test.ron", text).unwrap_or_else(|e| panic!("config should parse:\n{e}"))
 }
 
+/// The errors `ConfigFile::build` gives for config `text` (as `bad.ron`), one per line; panics
+/// if it is accepted.
+pub fn refused(text: &str) -> String {
+    let file = ConfigFile::parse("bad.ron", text).unwrap();
+    let Err(errors) = file.build(&registry()) else {
+        panic!("should be refused: {text}");
+    };
+    let errors: Vec<String> = errors.0.iter().map(ToString::to_string).collect();
+    errors.join("\n")
+}
+
 /// Starts an agent from config text with the test registry.
 pub async fn start(text: &str) -> Agent {
     Agent::start(&config(text), &registry())

@@ -1,5 +1,6 @@
 //! Where an agent's module actors run: the `scheduler:` field of an agent config, its
-//! `step_budget:`, its `realtime_priority:` and each module's `long_steps:` (see
+//! `step_budget:`, its `realtime_priority:` and `long_steps_nice:`, and each module's
+//! `long_steps:` (see
 //! ARCHITECTURE.md, "Scheduler").
 
 use serde::{Deserialize, Serialize};
@@ -136,39 +137,52 @@ impl ConfigFile {
 
     /// `realtime_priority` out of 1..=99, or on an agent without a thread of its own.
     pub(super) fn check_realtime_priority(&self) -> Vec<ConfigError> {
-        let Some(priority) = self.config.realtime_priority else {
-            return Vec::new();
-        };
-        let message = if !(1..=99).contains(&priority) {
-            format!("realtime_priority is {priority}; expected a SCHED_FIFO priority, 1..=99")
-        } else if self.config.scheduler != Scheduler::AgentThread {
-            format!(
-                "realtime_priority is for the agent's own thread, which only `scheduler: agent_thread` gives it; this agent's scheduler is `{}`: remove `realtime_priority` or use `scheduler: agent_thread`",
-                self.config.scheduler.name()
-            )
-        } else {
-            return Vec::new();
-        };
-        vec![self.locate("realtime_priority", message)]
+        self.check_agent_thread_field(
+            "realtime_priority",
+            self.config.realtime_priority,
+            (1, 99),
+            "a SCHED_FIFO priority",
+            "is for the agent's own thread",
+        )
     }
 
     /// `long_steps_nice` out of 1..=19, or on an agent without a thread of its own (under
     /// `shared` every module runs on the shared runtime, and none would run below another).
     pub(super) fn check_long_steps_nice(&self) -> Vec<ConfigError> {
-        let Some(offset) = self.config.long_steps_nice else {
+        self.check_agent_thread_field(
+            "long_steps_nice",
+            self.config.long_steps_nice,
+            (1, 19),
+            "how many nice levels below the agent's thread its long-step modules run",
+            "puts long-step modules below the agent's own thread",
+        )
+    }
+
+    /// A setting `field` of the agent's own thread, `value` if given: refused outside
+    /// `low..=high` (`expected` says what the number is) or without such a thread (`does`
+    /// says what the setting needs it for), where it is written.
+    fn check_agent_thread_field(
+        &self,
+        field: &str,
+        value: Option<u8>,
+        (low, high): (u8, u8),
+        expected: &str,
+        does: &str,
+    ) -> Vec<ConfigError> {
+        let Some(value) = value else {
             return Vec::new();
         };
-        let message = if !(1..=19).contains(&offset) {
-            format!("long_steps_nice is {offset}; expected how many nice levels below the agent's thread its long-step modules run, 1..=19")
+        let message = if !(low..=high).contains(&value) {
+            format!("{field} is {value}; expected {expected}, {low}..={high}")
         } else if self.config.scheduler != Scheduler::AgentThread {
             format!(
-                "long_steps_nice puts long-step modules below the agent's own thread, which only `scheduler: agent_thread` gives it; this agent's scheduler is `{}`: remove `long_steps_nice` or use `scheduler: agent_thread`",
+                "{field} {does}, which only `scheduler: agent_thread` gives it; this agent's scheduler is `{}`: remove `{field}` or use `scheduler: agent_thread`",
                 self.config.scheduler.name()
             )
         } else {
             return Vec::new();
         };
-        vec![self.locate("long_steps_nice", message)]
+        vec![self.locate(field, message)]
     }
 
     /// `long_steps: true` asks for the shared runtime, where a `shared` agent runs every
