@@ -6,8 +6,8 @@
 //! the step budget) so that it never holds the others up inside the process. On a machine whose
 //! CPUs it keeps busy, it still competes with the agent's thread for them: a periodic module's
 //! tick waits until the OS gives the agent's thread a CPU, up to a time slice (a 1 kHz
-//! module's p99 rose from about 0.1 ms alone to 0.3–0.9 ms beside 20 busy modules on the CI's
-//! VM; BENCHMARKS.md, "Long steps below the agent's thread"). Threads with a higher nice value
+//! module's p99 rose from about 0.1 ms alone to up to 0.9 ms beside 20 busy modules on the
+//! CI's VM; BENCHMARKS.md, "Long steps below the agent's thread"). Threads with a higher nice value
 //! lose such contests and keep only what is left of the CPUs. Unlike `realtime_priority`, any
 //! process may raise its own threads' nice values: no root, no `CAP_SYS_NICE`.
 
@@ -47,9 +47,9 @@ pub(crate) fn runtime(offset: u8, shared: &Handle) -> Result<Handle, String> {
 }
 
 /// The calling thread's nice value (Linux keeps one per thread).
-pub(crate) fn current_nice() -> i32 {
-    // SAFETY: a plain query of the calling thread (`who` 0); -1 is also a valid nice value,
-    // which is what errno 0 tells apart, and the query cannot fail for the calling thread.
+fn current_nice() -> i32 {
+    // SAFETY: a query of the calling thread's own nice value (`who` 0): no pointer is passed,
+    // and it cannot fail for the calling thread.
     unsafe { libc::getpriority(libc::PRIO_PROCESS, 0) }
 }
 
