@@ -134,3 +134,28 @@ fn show_steps(plan: &Plan, steps: &[Vec<usize>]) -> String {
         tail.join("; ")
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::explore::explore;
+
+    /// The explored graph of text plan `src`, its sub-plans left out.
+    fn explored(src: &str) -> Explored {
+        let plan = crate::compile_text(src, "t.plan", "t", None).unwrap();
+        explore(&plan, &Outcomes::new(), 10_000)
+    }
+
+    #[test]
+    fn a_trap_is_found_exactly_where_some_marking_can_reach_no_end() {
+        // The y branch loops on b forever.
+        assert!(has_trap(&explored(
+            "a; <x ? c : y ? LABEL_l; b; GOTO_LABEL_l>"
+        )));
+        // A loop with a way out is no trap; nor is a plain sequence.
+        assert!(!has_trap(&explored(
+            "LABEL_l; a; <x ? GOTO_LABEL_l : y ? b>"
+        )));
+        assert!(!has_trap(&explored("a; <x ? c : y ? b>")));
+    }
+}
