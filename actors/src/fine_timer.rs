@@ -81,6 +81,13 @@ fn timer() -> &'static Timer {
     })
 }
 
+/// Starts the timer thread now, if it is not running yet. A thread inherits its creator's nice
+/// value, and a lowered one cannot be raised back without a privilege: the timer must not be
+/// started first by a tick of a module on threads set below the agent's (`long_step_threads`).
+pub(crate) fn start() {
+    timer();
+}
+
 /// Runs the timer thread under `SCHED_FIFO` at `priority`, unless it runs at a higher one
 /// already (agents of one process may ask for different ones: the timer serves them all).
 pub(crate) fn raise_priority(priority: u8) -> std::io::Result<()> {

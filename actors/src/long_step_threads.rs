@@ -33,6 +33,9 @@ pub(crate) fn runtime(offset: u8, shared: &Handle) -> Result<Handle, String> {
     if let Some(runtime) = runtimes.get(&offset) {
         return Ok(runtime.handle().clone());
     }
+    // Process-wide threads started later by these threads would inherit their nice value:
+    // the fine timer, which the agent's periodic modules tick on, is started here first.
+    crate::fine_timer::start();
     let nice = (current_nice() + i32::from(offset)).min(MAX_NICE);
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(shared.metrics().num_workers().max(1))
