@@ -37,6 +37,9 @@ impl AgentThread {
         }
         let runtime = tokio::runtime::Builder::new_current_thread()
             .enable_all()
+            // A short spin before parking while work comes back quickly (see `park_spin.rs`).
+            .on_thread_park(crate::park_spin::before_park)
+            .on_thread_unpark(crate::park_spin::after_unpark)
             .build()
             .map_err(|e| e.to_string())?;
         let handle = runtime.handle().clone();

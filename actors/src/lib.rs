@@ -23,6 +23,7 @@ mod module;
 mod module_actor;
 mod module_types;
 mod panic_report;
+mod park_spin;
 mod ports;
 mod property_kind;
 mod queue;
