@@ -69,7 +69,9 @@ pub(crate) fn in_poll<R>(hops: u32, me: u32, poll: impl FnOnce() -> R) -> R {
 /// One module's loop state: when it was last reported, and how many looping steps since.
 #[derive(Debug, Default)]
 pub(crate) struct LoopWatch {
-    last_report: Option<Instant>,
+    /// When the next report may come (a deadline rather than the last report's time: a
+    /// comparison at each looping step, not a subtraction).
+    next_report: Option<Instant>,
     looping_steps: u64,
 }
 
@@ -83,11 +85,9 @@ impl LoopWatch {
         }
         let now = now();
         self.looping_steps += 1;
-        let due = self
-            .last_report
-            .is_none_or(|last| now.duration_since(last) >= REPORT_EVERY);
+        let due = self.next_report.is_none_or(|next| now >= next);
         due.then(|| {
-            self.last_report = Some(now);
+            self.next_report = now.checked_add(REPORT_EVERY);
             std::mem::take(&mut self.looping_steps)
         })
     }

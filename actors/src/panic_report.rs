@@ -52,7 +52,7 @@ fn report(info: &PanicHookInfo<'_>) {
     LAST.with(|last| *last.borrow_mut() = Some(format!("panicked at {location}: {message}")));
 }
 
-fn message_of(payload: &(dyn std::any::Any + Send)) -> String {
+pub(crate) fn message_of(payload: &(dyn std::any::Any + Send)) -> String {
     if let Some(s) = payload.downcast_ref::<&str>() {
         (*s).to_string()
     } else if let Some(s) = payload.downcast_ref::<String>() {

@@ -1,9 +1,11 @@
 //! The actor shell around one module instance: binds it to its cells, runs init, then waits
 //! for its schedule's events and steps it, publishing its stats.
 //!
-//! The step loop runs inside one actor message handler, so a step is a plain function call
-//! after a wake-up (no mailbox hop on the hot path). ractor still supervises it: a panic or an
-//! error ends the actor and reaches the supervisor, and a kill drops the running step.
+//! The step loop is a task of its own that one actor message handler starts and awaits, so a
+//! step is a plain function call after a wake-up (no mailbox hop, nor the actor's own layers,
+//! on the hot path). ractor still supervises it: a panic or an error ends the actor and reaches
+//! the supervisor, and a kill drops the handler, which aborts the task (the running step is
+//! dropped at its next poll).
 
 use std::marker::PhantomData;
 use std::sync::Arc;
@@ -17,7 +19,7 @@ use crate::blackboard::Blackboard;
 use crate::cell::Signal;
 use crate::loop_watch::LoopWatch;
 use crate::module::{Context, Module, Unrecoverable};
-use crate::panic_report::catching;
+use crate::panic_report::{self, catching};
 use crate::ports::{Handle, Ports};
 use crate::queue::ReaderEndpoint;
 use crate::step_probe::StepMark;
@@ -109,14 +111,15 @@ pub(crate) struct RunLoop;
 
 impl<M: Module> Actor for ModuleActor<M> {
     type Msg = RunLoop;
-    type State = Running<M>;
+    /// Taken by the step loop's task when it starts (see `handle`).
+    type State = Option<Running<M>>;
     type Arguments = ModuleArgs;
 
     async fn pre_start(
         &self,
         me: ActorRef<RunLoop>,
         args: ModuleArgs,
-    ) -> Result<Running<M>, ActorProcessingErr> {
+    ) -> Result<Option<Running<M>>, ActorProcessingErr> {
         let span = tracing::info_span!(parent: None, "module", agent = %args.agent, module = %args.name, r#type = M::TYPE);
         let binding = args.blackboard.bind(&args.name).await?;
         // A restarted instance is given again what its predecessor took but did not acknowledge.
@@ -171,7 +174,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             _ => 0,
         };
         let steps_before = u64::try_from(*builtins.steps.get()).unwrap_or(0);
-        Ok(Running {
+        Ok(Some(Running {
             module,
             readers,
             watchdog: args.watchdog,
@@ -192,13 +195,13 @@ impl<M: Module> Actor for ModuleActor<M> {
             me: me.get_id(),
             status_shown: None,
             status_values: Default::default(),
-        })
+        }))
     }
 
     async fn post_start(
         &self,
         me: ActorRef<RunLoop>,
-        _state: &mut Running<M>,
+        _state: &mut Option<Running<M>>,
     ) -> Result<(), ActorProcessingErr> {
         me.send_message(RunLoop)?;
         Ok(())
@@ -208,26 +211,58 @@ impl<M: Module> Actor for ModuleActor<M> {
         &self,
         me: ActorRef<RunLoop>,
         _msg: RunLoop,
-        state: &mut Running<M>,
+        state: &mut Option<Running<M>>,
     ) -> Result<(), ActorProcessingErr> {
-        let span = state.span.clone();
-        match failure(catching(state.run().instrument(span.clone())).await) {
+        let Some(running) = state.take() else {
+            return Ok(()); // one `RunLoop` is sent; a second would find the loop gone
+        };
+        // The loop is a task of its own on the actor's runtime (the agent's thread, or where
+        // `long_steps` put it) rather than polled inside this handler: every wake-up of the
+        // module then polls the loop directly, not through the actor's own layers (its select
+        // over the kill signal, its `catch_unwind`), a fifth of a hand-over between modules.
+        // A kill drops this handler, whose guard aborts the task: as before, the running
+        // step is dropped at its next poll.
+        let task = tokio::spawn(running.live(me));
+        let _abort = AbortOnDrop(task.abort_handle());
+        match task.await {
+            Ok(outcome) => outcome.map_err(Into::into),
+            Err(e) if e.is_panic() => Err(panic_report::message_of(&*e.into_panic()).into()),
+            Err(_) => Err("the module's step loop was cancelled".into()),
+        }
+    }
+}
+
+impl<M: Module> Running<M> {
+    /// The instance's life after init: its step loop, then (stopped with the agent) its
+    /// cleanup in its turn; the failure that ends the actor, if any.
+    async fn live(mut self, me: ActorRef<RunLoop>) -> Result<(), String> {
+        let span = self.span.clone();
+        match failure(catching(self.run().instrument(span.clone())).await) {
             None => {
                 // Stopped with the whole agent: clean up in reverse start order, when told.
-                state.stop.cleanup_turn().await;
-                state.ctx.restarting = state.stop.is_restart();
-                let cleanup = catching(state.module.cleanup(&mut state.ctx).instrument(span)).await;
-                state.publish(status::STOPPED);
+                self.stop.cleanup_turn().await;
+                self.ctx.restarting = self.stop.is_restart();
+                let cleanup = catching(self.module.cleanup(&mut self.ctx).instrument(span)).await;
+                self.publish(status::STOPPED);
                 me.stop(None);
                 match failure(cleanup) {
                     None => Ok(()),
-                    Some(reason) => Err(format!("cleanup failed: {reason}").into()),
+                    Some(reason) => Err(format!("cleanup failed: {reason}")),
                 }
             }
             Some(reason) => {
-                state.publish(status::FAILED);
-                Err(reason.into())
+                self.publish(status::FAILED);
+                Err(reason)
             }
         }
+    }
+}
+
+/// Aborts a task when dropped: the step loop's task ends with its actor, killed or not.
+struct AbortOnDrop(tokio::task::AbortHandle);
+
+impl Drop for AbortOnDrop {
+    fn drop(&mut self) {
+        self.0.abort();
     }
 }
