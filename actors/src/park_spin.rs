@@ -100,7 +100,11 @@ pub(crate) fn before_park() {
 /// lets another thread run, after which the spin ends (its time would come out of other work,
 /// and a parked thread is woken sooner than a yielded one is run again).
 fn spin() -> bool {
-    let metrics = tokio::runtime::Handle::current().metrics();
+    // tokio runs the hook inside the runtime's context; without one there is nothing to watch.
+    let Ok(handle) = tokio::runtime::Handle::try_current() else {
+        return false;
+    };
+    let metrics = handle.metrics();
     let start = Instant::now();
     let mut last = start;
     loop {
