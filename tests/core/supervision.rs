@@ -276,6 +276,40 @@ async fn a_hanging_step_is_dropped_by_the_watchdog_and_the_module_restarted() {
     );
 }
 
+/// A kill must end the killed instance, not only its actor: its step loop runs as a task of
+/// its own, which the kill aborts. Were it left running, the stuck step would hold the module
+/// for ever (and a module's loop that went on would step beside its next instance).
+#[tokio::test(start_paused = true)]
+async fn a_module_killed_at_the_stop_timeout_is_dropped_with_its_stuck_step() {
+    use std::sync::atomic::Ordering;
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "stuck", type: "test.drop_count"),
+        ])"#,
+    )
+    .await;
+    advance(10).await;
+    inject(&agent, "stuck", "hang").await;
+    advance(10).await;
+    let before = crate::support::DROPS.load(Ordering::SeqCst);
+    let summary = agent
+        .stop_modules(std::time::Duration::from_millis(100))
+        .await;
+    assert_eq!(
+        summary.module("stuck").unwrap().status,
+        "killed",
+        "{summary:?}"
+    );
+    // The abort takes effect at the task's next poll: let the ready tasks run.
+    advance(1).await;
+    assert_eq!(
+        crate::support::DROPS.load(Ordering::SeqCst),
+        before + 1,
+        "the killed instance (and its stuck step) should be dropped"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
 #[tokio::test(start_paused = true)]
 async fn modules_stop_in_reverse_start_order() {
     let agent = start(

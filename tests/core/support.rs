@@ -14,6 +14,7 @@ pub fn registry() -> ModuleRegistry {
         .register::<Faulty>()
         .register::<EventLog>()
         .register::<StopOrder>()
+        .register::<DropCount>()
         .register::<CleanupLog>()
         .register::<FlakyConsumer>()
         .register::<ImageSource>()
@@ -263,6 +264,33 @@ impl Module for StopOrder {
         self.stopped
             .set(STOP_SEQUENCE.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1);
         Ok(())
+    }
+}
+
+/// Instances of `test.drop_count` dropped so far (only `a_killed_module_is_dropped...` uses it).
+pub static DROPS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// `test.drop_count`: a module that steps every 10 ms and counts, in [`DROPS`], its instances
+/// dropped.
+pub struct DropCount;
+
+impl Module for DropCount {
+    const TYPE: &'static str = "test.drop_count";
+    const DESCRIPTION: &'static str = "Steps every 10 ms; counts its instances dropped.";
+    fn declare(_ports: &mut Ports) -> Self {
+        DropCount
+    }
+    fn schedule(&self) -> Schedule {
+        Schedule::every(Duration::from_millis(10))
+    }
+    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        Ok(())
+    }
+}
+
+impl Drop for DropCount {
+    fn drop(&mut self) {
+        DROPS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
     }
 }
 
