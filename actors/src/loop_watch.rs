@@ -8,9 +8,11 @@
 //! without end. Past [`LOOP_HOPS`] the module is reported, then again at most every
 //! [`REPORT_EVERY`] while it goes on, so a runaway loop costs one log line, not one per step.
 //!
-//! The count travels in a task-local around each step (steps are async, and a task may move
-//! between threads) and in the module's [`Signal`](crate::cell::Signal).
+//! The count travels in a thread-local set around each poll of a step (steps are async, and a
+//! task may move between threads between polls) and in the module's
+//! [`Signal`](crate::cell::Signal).
 
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 /// Hops after which a chain of steps counts as a loop. A real pipeline is tens of modules
@@ -44,26 +46,40 @@ impl Hop {
     }
 }
 
-tokio::task_local! {
-    static STEP: Hop;
+thread_local! {
+    /// The hop of the step being polled on this thread. A plain thread-local set around each
+    /// poll rather than a task-local: the step is polled in place, so the two are the same,
+    /// and a task-local's scope cost a few percent of a hand-over between modules.
+    static STEP: Cell<Option<Hop>> = const { Cell::new(None) };
 }
 
 /// The hop the writes of the step running on this task pass on, or `None` outside any step.
 pub(crate) fn current() -> Option<Hop> {
-    STEP.try_with(|h| *h).ok()
+    STEP.with(Cell::get)
 }
 
-/// Runs the step of the module whose signal is `me`, `hops` steps down a chain.
+/// Runs `step` (of the module whose signal is `me`, `hops` steps down a chain) with that hop
+/// current during each of its polls.
 #[cfg(test)]
 pub(crate) async fn in_step<F: std::future::Future>(hops: u32, me: u32, step: F) -> F::Output {
-    STEP.scope(Hop { hops, waker: me }, step).await
+    let mut step = std::pin::pin!(step);
+    std::future::poll_fn(|cx| in_poll(hops, me, || step.as_mut().poll(cx))).await
 }
 
 /// Runs `poll` (one poll of the step of the module whose signal is `me`, `hops` steps down a
-/// chain) with that hop current: for a step future polled in place rather than wrapped.
+/// chain) with that hop current: for a step future polled in place rather than wrapped. What
+/// was current before comes back afterwards, also when `poll` panics.
 #[inline]
 pub(crate) fn in_poll<R>(hops: u32, me: u32, poll: impl FnOnce() -> R) -> R {
-    STEP.sync_scope(Hop { hops, waker: me }, poll)
+    struct Restore(Option<Hop>);
+    impl Drop for Restore {
+        #[inline]
+        fn drop(&mut self) {
+            STEP.with(|s| s.set(self.0));
+        }
+    }
+    let _restore = Restore(STEP.with(|s| s.replace(Some(Hop { hops, waker: me }))));
+    poll()
 }
 
 /// One module's loop state: when it was last reported, and how many looping steps since.
@@ -126,6 +142,18 @@ mod tests {
         })
         .await;
         assert_eq!(inside, Some(Hop { hops: 7, waker: 3 }));
+        assert_eq!(current(), None);
+    }
+
+    #[test]
+    fn the_hop_before_a_poll_comes_back_after_it_even_when_it_panics() {
+        let inner = in_poll(1, 2, || in_poll(5, 6, current));
+        assert_eq!(inner, Some(Hop { hops: 5, waker: 6 }));
+        let outer = in_poll(1, 2, || {
+            let _ = std::panic::catch_unwind(|| in_poll(5, 6, || panic!("a step panics")));
+            current()
+        });
+        assert_eq!(outer, Some(Hop { hops: 1, waker: 2 }));
         assert_eq!(current(), None);
     }
 
