@@ -16,7 +16,8 @@ const FLAG_GRACE_S: f64 = 0.5;
 /// mission that sent the robot elsewhere): its target then starts afresh, without blame.
 const PAUSE_S: f64 = 1.0;
 
-/// `nav.explorer`: wraps [`explore`].
+/// `nav.explorer`: wraps the frontier search
+/// ([`explore_searched`](crate::nav::frontier::explore_searched)).
 pub struct ExplorerModule {
     map: Input<OccupancyGrid>,
     searched: Input<OccupancyGrid>,

@@ -53,9 +53,9 @@ impl Registry {
         self.write_key(key, type_info, value)
     }
 
-    /// Whether [`set`](Registry::set) would take `value` for the property at `address` (its
-    /// kind and range; the type is the caller's): for checks made before a run, such as a
-    /// context rule's constant `set`. Returns the property's key.
+    /// Whether a checked write (a person's `petrel set`, a rule's) would take `value` for the
+    /// property at `address` (its kind and range; the type is the caller's): for checks made
+    /// before a run, such as a context rule's constant `set`. Returns the property's key.
     pub fn check_set(&self, address: &str, value: &AnyValue) -> Result<String, BlackboardError> {
         let key = self.key_of(address)?;
         let decl = &self.entries[&key].decl;
@@ -186,7 +186,7 @@ impl Registry {
         }
     }
 
-    /// Sets the capacity of an output queue: 1 to [`MAX_QUEUE_CAPACITY`] items.
+    /// Sets the capacity of an output queue: 1 to 2^20 (1,048,576) items.
     pub fn set_capacity(&mut self, address: &str, capacity: usize) -> Result<(), BlackboardError> {
         let key = self.key_of(address)?;
         let entry = &self.entries[&key];
