@@ -53,7 +53,8 @@ thread_local! {
     static STEP: Cell<Option<Hop>> = const { Cell::new(None) };
 }
 
-/// The hop the writes of the step running on this task pass on, or `None` outside any step.
+/// The hop the writes of the step being polled on this thread pass on, or `None` outside any
+/// step.
 pub(crate) fn current() -> Option<Hop> {
     STEP.with(Cell::get)
 }

@@ -267,7 +267,8 @@ impl Module for StopOrder {
     }
 }
 
-/// Instances of `test.drop_count` dropped so far (only `a_killed_module_is_dropped...` uses it).
+/// Instances of `test.drop_count` dropped so far (only
+/// `supervision::a_module_killed_at_the_stop_timeout_is_dropped_with_its_stuck_step` uses it).
 pub static DROPS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 /// `test.drop_count`: a module that steps every 10 ms and counts, in [`DROPS`], its instances
