@@ -137,6 +137,23 @@ impl<T: PropertyType> Output<T> {
     /// current time.
     #[inline]
     pub fn set(&self, value: T) {
+        self.trace_write(&value);
+        self.ep.write_at(Arc::new(value), self.clock.now())
+    }
+
+    /// Publishes a value that describes the world at `stamp`, earlier than the step's time:
+    /// a result computed from a queue item keeps the item's [`stamp`](Item::stamp), as a ROS
+    /// node copies its input's header stamp, so that readers can pair it with what held then
+    /// (where the robot was when the camera took the frame). A `stamp` later than the step's
+    /// time is written as the step's time: nothing is measured after it is published.
+    pub fn set_at(&self, value: T, stamp: Instant) {
+        self.trace_write(&value);
+        self.ep
+            .write_at(Arc::new(value), stamp.min(self.clock.now()))
+    }
+
+    #[inline]
+    fn trace_write(&self, value: &T) {
         if tracing::enabled!(tracing::Level::TRACE) {
             let shown = self
                 .ep
@@ -144,7 +161,6 @@ impl<T: PropertyType> Output<T> {
                 .short(&(Arc::new(value.clone()) as AnyValue));
             tracing::trace!(property = %self.ep.key, value = %shown, "write");
         }
-        self.ep.write_at(Arc::new(value), self.clock.now())
     }
 
     /// Publishes an already shared value like [`set`](Self::set) and returns the value it
@@ -458,5 +474,31 @@ fn convert<T: PropertyType>(item: QueueItem) -> Item<T> {
         seq: item.seq,
         stamp: item.stamp,
         value: downcast(item.value),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use super::*;
+    use crate::TypeInfo;
+
+    #[tokio::test(start_paused = true)]
+    async fn a_value_written_at_an_earlier_time_keeps_it_and_a_later_one_gets_the_steps() {
+        let ep = Endpoint::new("m/out/x", TypeInfo::of::<f64>(), Arc::new(0.0));
+        let clock = Arc::new(StepClock::default());
+        let out = Output::<f64>::new(ep, clock.clone());
+        let taken = Instant::now();
+        tokio::time::advance(Duration::from_millis(70)).await;
+        clock.begin();
+        let step = clock.now();
+        out.set_at(1.0, taken);
+        assert_eq!((*out.read().value, out.read().written), (1.0, taken));
+        out.set_at(2.0, step + Duration::from_millis(5));
+        assert_eq!(out.read().written, step, "not after the step's time");
+        out.set(3.0);
+        assert_eq!(out.read().written, step);
+        clock.end();
     }
 }

@@ -5,7 +5,7 @@ use petrel_actors::{
 };
 
 use super::{count, param_error};
-use crate::nav::{SearchParams, SearchedMap};
+use crate::nav::{PoseHistory, SearchParams, SearchedMap};
 
 /// `nav.searched`: wraps [`SearchedMap`].
 pub struct SearchedModule {
@@ -27,6 +27,10 @@ pub struct SearchedModule {
     skipped: Output<i64>,
     /// The frame count last looked at: a step without a new frame (the first) looks at nothing.
     last_frame: i64,
+    /// The poses since the frames began, to look from where the camera was when it took one.
+    poses: PoseHistory,
+    /// The pose version last added to `poses` (0: the declared default, no estimate yet).
+    pose_seen: u64,
     core: Option<SearchedMap>,
 }
 
@@ -39,7 +43,7 @@ impl Module for SearchedModule {
         SearchedModule {
             frames: ports.input("in/frames", 0, "frames the detector processed (link to its out/frames): each new value is one frame looked at"),
             map: ports.input("in/map", OccupancyGrid::default(), "the navigation map (walls and unknown space hide what lies behind them)"),
-            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead)"),
+            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead); a frame is looked from the first pose written at or after its stamp (in/frames' write time: the detector stamps it with the frame's)"),
             brightness: ports.input("in/brightness", 0.5, "mean grey level of the frame, 0..1 (link to the detector's out/brightness)"),
             fov_deg: ports.param_in("params/fov_deg", 60.0, Range::new(1.0, 179.0), "the camera's horizontal field of view, degrees"),
             victim_radius: ports.param_in("params/victim_radius", 0.25, Range::new(0.0, 5.0), "radius of a victim, m: a cell counts only where a victim standing on it would be whole in view (the detector leaves one cut by the image's border); 0: the whole field of view"),
@@ -54,12 +58,18 @@ impl Module for SearchedModule {
             counted: ports.output("out/frames", 0, "frames that searched (bright enough)"),
             skipped: ports.output("out/skipped", 0, "frames too dark or too bright to search anything"),
             last_frame: 0,
+            poses: PoseHistory::default(),
+            pose_seen: 0,
             core: None,
         }
     }
 
     fn schedule(&self) -> Schedule {
-        Schedule::new().on_change(&self.frames)
+        // Every pose, not only the one current at a frame: a frame reaches this module after
+        // the robot has moved on.
+        Schedule::new()
+            .on_change(&self.frames)
+            .on_change(&self.robot)
     }
 
     fn check(&self) -> Vec<CheckProblem> {
@@ -73,11 +83,16 @@ impl Module for SearchedModule {
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let core = super::initialized(&mut self.core);
-        let frame = self.frames.value();
-        if frame == self.last_frame {
+        let pose = self.robot.read();
+        if pose.version != self.pose_seen {
+            self.pose_seen = pose.version;
+            self.poses.record(pose.written, *pose.value);
+        }
+        let frame = self.frames.read();
+        if *frame.value == self.last_frame {
             return Ok(());
         }
-        self.last_frame = frame;
+        self.last_frame = *frame.value;
         let brightness = self.brightness.value();
         // A frame too dark (or washed out) holds too little contrast for a victim's pattern:
         // looking through it searched nothing.
@@ -86,11 +101,11 @@ impl Module for SearchedModule {
             return Ok(());
         }
         // Before the localizer's first estimate the pose reads (0, 0, 0): not where it looked.
-        if self.robot.version() == 0 {
+        let Some(looked_from) = self.poses.at(frame.written) else {
             return Ok(());
-        }
+        };
         self.counted.set(self.counted.value() + 1);
-        if core.look(self.robot.value(), &self.map.get()) > 0 {
+        if core.look(looked_from, &self.map.get()) > 0 {
             self.searched.set(core.grid());
             self.area.set(core.area());
         }

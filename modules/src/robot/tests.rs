@@ -5,7 +5,7 @@ use std::time::Duration;
 use petrel_actors::{status, Agent, ConfigFile, Pose2, Twist2, DEFAULT_STOP_TIMEOUT};
 
 /// The cluttered world, from this crate's directory (where `cargo test` runs unit tests).
-const WORLD: &str = "../configs/worlds/cluttered.txt";
+pub(super) const WORLD: &str = "../configs/worlds/cluttered.txt";
 
 pub(super) async fn start(modules: &str) -> Agent {
     let text = format!(r#"Agent(name: "r", modules: [{modules}])"#);

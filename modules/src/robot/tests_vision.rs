@@ -144,3 +144,126 @@ async fn frames_before_the_first_pose_place_nothing() {
     assert!(*bb.get::<f64>("searched/out/area").await.unwrap() > 0.0);
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+/// Writes `value` to `address` stamped `taken`, as the detector writes a frame's results.
+async fn set_taken_at<T: petrel_actors::PropertyType>(
+    agent: &Agent,
+    address: &str,
+    value: T,
+    taken: tokio::time::Instant,
+) {
+    let handle = agent.blackboard().any_handle(address).await.unwrap();
+    handle
+        .set_at(std::sync::Arc::new(value), taken)
+        .unwrap_or_else(|e| panic!("{address}: {e}"));
+}
+
+/// A frame reaches the modules that place it after the robot has moved on: the floor it shows is
+/// the floor ahead of the pose the robot had when the camera took it, not of the current one.
+#[tokio::test(start_paused = true)]
+async fn the_searched_floor_is_the_floor_ahead_of_the_pose_when_the_frame_was_taken() {
+    use petrel_actors::{OccupancyGrid, Pose2};
+    let agent = start(
+        r#"(name: "searched", type: "nav.searched",
+            values: {"params/min_views": 1, "params/min_range": 1.0, "params/max_range": 2.5,
+                     "params/fov_deg": 102.0, "params/victim_radius": 0.0})"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    bb.set("searched/in/map", free_map()).await.unwrap();
+    // Facing +x when the frame is taken; facing +y 100 ms later, when it has been processed.
+    bb.set("searched/in/robotPose", Pose2::new(0.5, 5.5, 0.0))
+        .await
+        .unwrap();
+    let taken = tokio::time::Instant::now();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    bb.set(
+        "searched/in/robotPose",
+        Pose2::new(0.5, 5.5, std::f64::consts::FRAC_PI_2),
+    )
+    .await
+    .unwrap();
+    set_taken_at(&agent, "searched/in/brightness", 0.5, taken).await;
+    set_taken_at(&agent, "searched/in/frames", 1i64, taken).await;
+    wait_for(&agent, "searched/out/frames", 1).await;
+    let grid = bb
+        .get::<OccupancyGrid>("searched/out/searched")
+        .await
+        .unwrap();
+    assert_eq!(grid.get(1, 5), Some(0), "ahead along +x: searched");
+    assert_eq!(grid.get(0, 7), Some(-1), "ahead along +y: not seen");
+    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 6.0);
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+/// Likewise a sighting: 2 m straight ahead of where the camera looked when it took the frame.
+#[tokio::test(start_paused = true)]
+async fn a_sighting_is_placed_from_the_pose_when_the_frame_was_taken() {
+    use crate::vision::{Detection, Detections};
+    use petrel_actors::types::Path2;
+    use petrel_actors::Pose2;
+    let agent = start(
+        r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 1})"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    bb.set("victims/in/robotPose", Pose2::new(1.0, 1.0, 0.0))
+        .await
+        .unwrap();
+    let taken = tokio::time::Instant::now();
+    // The robot turns left and drives on while the frame is processed.
+    for i in 1..=3 {
+        tokio::time::sleep(Duration::from_millis(30)).await;
+        let turned = Pose2::new(1.0, 1.0 + 0.1 * i as f64, 0.5 * i as f64);
+        bb.set("victims/in/robotPose", turned).await.unwrap();
+    }
+    let sighting = Detections(vec![Detection {
+        bearing: 0.0,
+        range: 2.0,
+        confidence: 1.0,
+    }]);
+    set_taken_at(&agent, "victims/in/detections", sighting, taken).await;
+    wait_for(&agent, "victims/out/pending", 1).await;
+    let seen = bb.get::<Path2>("victims/out/seen").await.unwrap();
+    let victim = seen.points()[0];
+    assert!(
+        (victim.0.x - 3.0).abs() < 0.05 && (victim.0.y - 1.0).abs() < 0.05,
+        "placed at {victim:?}, expected (3, 1)"
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+/// The detector stamps what it found in a frame with the time the frame was taken: here frames
+/// wait in its queue while it is disabled, and the one it processes when enabled keeps its time.
+#[tokio::test(start_paused = true)]
+async fn the_detector_stamps_its_results_with_the_frame_time() {
+    let agent = start(&format!(
+        r#"(name: "robot", type: "sim.world",
+            values: {{"params/world": "{}", "params/camera/enabled": true, "params/deterministic": true}}),
+           (name: "detector", type: "vision.victim_detector", values: {{"enabled": false}},
+            links: {{"in/image": "robot/out/image"}})"#,
+        super::tests::WORLD
+    ))
+    .await;
+    let bb = agent.blackboard();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    bb.set("robot/enabled", false).await.unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let enabled_at = tokio::time::Instant::now();
+    bb.set("detector/enabled", true).await.unwrap();
+    wait_for(&agent, "detector/out/frames", 1).await;
+    for output in ["frames", "detections", "brightness"] {
+        let written = bb
+            .any_handle(&format!("detector/out/{output}"))
+            .await
+            .unwrap()
+            .read()
+            .written;
+        assert!(
+            written + Duration::from_millis(100) <= enabled_at,
+            "out/{output} is stamped {:?} before it was written: the frame's time, taken before the world stopped",
+            enabled_at - written
+        );
+    }
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

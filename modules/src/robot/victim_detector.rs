@@ -38,7 +38,7 @@ impl Module for VictimDetector {
             // only reads the images).
             _exposure: ports.param_in("params/camera/exposure_ms", 10.0, Range::new(0.01, 200.0), "the camera exposure this detector asks of the driver, ms (0, 200] (context rules raise it in the dark)"),
             _gain: ports.param_in("params/camera/gain", 1.0, Range::new(1.0, 16.0), "the camera gain this detector asks of the driver, [1, 16]"),
-            detections: ports.output("out/detections", Detections::default(), "victims in the latest frame: bearing (rad, left positive), range (m), confidence"),
+            detections: ports.output("out/detections", Detections::default(), "victims in the latest frame: bearing (rad, left positive), range (m), confidence (this and the other frame outputs are stamped with the frame's time)"),
             seen: ports.output("out/victimSeen", false, "the latest frame holds a victim"),
             brightness: ports.output("out/brightness", 0.5, "mean grey level of the latest frame, 0..1"),
             sharpness: ports.output("out/sharpness", 0.0, "mean absolute Laplacian of the latest frame, grey levels"),
@@ -74,15 +74,18 @@ impl Module for VictimDetector {
                 )
             },
         )?;
-        self.brightness.set(out.brightness);
-        self.sharpness.set(out.sharpness);
+        // Everything below describes the frame: stamped when it was taken, not when it was
+        // processed, so readers place it from the robot's pose of that moment.
+        let taken = image.stamp;
+        self.brightness.set_at(out.brightness, taken);
+        self.sharpness.set_at(out.sharpness, taken);
         let seen = !out.detections.is_empty();
         if seen != self.seen.value() {
-            self.seen.set(seen);
+            self.seen.set_at(seen, taken);
         }
-        self.detections.set(Detections(out.detections));
+        self.detections.set_at(Detections(out.detections), taken);
         // Last: a module woken by a new frame count finds this frame's quality already there.
-        self.frames.set(self.frames.value() + 1);
+        self.frames.set_at(self.frames.value() + 1, taken);
         Ok(())
     }
 }

@@ -7,6 +7,7 @@ use petrel_actors::types::Path2;
 use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, QueueWriter, Range, Schedule};
 
 use super::count;
+use crate::nav::PoseHistory;
 use crate::vision::{Detections, VictimMap, VictimMapParams};
 
 /// `targetDistance` when there is no target: farther than any map.
@@ -41,6 +42,11 @@ pub struct VictimMapper {
     saved: Output<MapperMemory>,
     /// The detections version last added (a step may be for a command only).
     frame_version: Option<u64>,
+    /// The poses since the frames began, to place a sighting from where the camera was when
+    /// it took the frame.
+    poses: PoseHistory,
+    /// The pose version last added to `poses` (0: the declared default, no estimate yet).
+    pose_seen: u64,
     core: Option<VictimMap>,
 }
 
@@ -65,7 +71,7 @@ impl Module for VictimMapper {
     fn declare(ports: &mut Ports) -> Self {
         VictimMapper {
             detections: ports.input("in/detections", Detections::default(), "detections of the latest frame"),
-            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead)"),
+            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead); a frame's sightings are placed from the first pose written at or after its stamp (in/detections' write time: the detector stamps it with the frame's)"),
             report: ports.input("in/report", false, "while true: the target is reported (joins out/victims), then out/reportDone is true"),
             dismiss: ports.input("in/dismiss", false, "while true: the target is dismissed (not a victim), then out/dismissDone is true"),
             merge_radius: ports.param_in("params/merge_radius", 1.5, Range::new(0.01, 100.0), "sightings this close are one victim, m"),
@@ -90,15 +96,20 @@ impl Module for VictimMapper {
             outbox: ports.queue_out("out/outbox", 64, "victims seen, as messages to params/report_to (`x y id`; the same id again: a better estimate)"),
             saved: ports.state("state/map", MapperMemory::default(), "candidates, seen and reported victims: a restarted module goes on from them"),
             frame_version: None,
+            poses: PoseHistory::default(),
+            pose_seen: 0,
             core: None,
         }
     }
 
     fn schedule(&self) -> Schedule {
+        // Every pose, not only the one current at a frame: a frame reaches this module after
+        // the robot has moved on.
         Schedule::new()
             .on_change(&self.detections)
             .on_change(&self.report)
             .on_change(&self.dismiss)
+            .on_change(&self.robot)
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
@@ -125,16 +136,28 @@ impl Module for VictimMapper {
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let core = super::initialized(&mut self.core);
-        let pose = self.robot.value();
+        let current = self.robot.read();
+        if current.version != self.pose_seen {
+            self.pose_seen = current.version;
+            self.poses.record(current.written, *current.value);
+        }
+        let pose = *current.value;
         let frame = self.detections.read();
-        if self.frame_version != Some(frame.version) {
+        let new_frame = self.frame_version != Some(frame.version);
+        let commands = self.report.value() != self.report_done.value()
+            || self.dismiss.value() != self.dismiss_done.value();
+        // A pose alone changes nothing else: what follows runs at frames and commands.
+        if !(new_frame || commands || ctx.cause().first()) {
+            return Ok(());
+        }
+        if new_frame {
             self.frame_version = Some(frame.version);
             core.next_frame();
             // Before the localizer's first estimate the pose reads (0, 0, 0): a sighting placed
             // from there lands metres from its victim (seen at start in the rescue team).
-            let placed = match self.robot.version() {
-                0 => &[][..],
-                _ => &frame.value.0[..],
+            let (placed, pose) = match self.poses.at(frame.written) {
+                None => (&[][..], pose),
+                Some(taken_from) => (&frame.value.0[..], taken_from),
             };
             for d in placed {
                 // Why a victim was, or was not, confirmed: each sighting and the pose it is
