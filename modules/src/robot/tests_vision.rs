@@ -30,9 +30,29 @@ async fn wait_for(agent: &Agent, path: &str, want: i64) {
     panic!("{path} never became {want} (it is {got})");
 }
 
-#[tokio::test(start_paused = true)]
-async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
-    use petrel_actors::{OccupancyGrid, Pose2};
+/// One victim straight ahead, 2 m away, surely seen.
+fn straight_ahead() -> crate::vision::Detections {
+    crate::vision::Detections(vec![crate::vision::Detection {
+        bearing: 0.0,
+        range: 2.0,
+        confidence: 1.0,
+    }])
+}
+
+/// `vision.victim_mapper` seeing a victim in `confirm_hits` sightings.
+async fn victim_mapper(confirm_hits: i64) -> Agent {
+    start(&format!(
+        r#"(name: "victims", type: "vision.victim_mapper", values: {{"params/confirm_hits": {confirm_hits}}})"#
+    ))
+    .await
+}
+
+/// What `nav.searched` searched.
+const SEARCHED: &str = "searched/out/searched";
+
+/// `nav.searched` searching from 1 to 2.5 m in one frame, on [`free_map`], the camera in cell
+/// (0, 5) facing +x.
+async fn searched_facing_x() -> Agent {
     let agent = start(
         r#"(name: "searched", type: "nav.searched",
             values: {"params/min_views": 1, "params/min_range": 1.0, "params/max_range": 2.5,
@@ -40,11 +60,21 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     )
     .await;
     let bb = agent.blackboard();
-    // The camera in cell (0, 5) facing +x.
     bb.set("searched/in/map", free_map()).await.unwrap();
-    bb.set("searched/in/robotPose", Pose2::new(0.5, 5.5, 0.0))
-        .await
-        .unwrap();
+    bb.set(
+        "searched/in/robotPose",
+        petrel_actors::Pose2::new(0.5, 5.5, 0.0),
+    )
+    .await
+    .unwrap();
+    agent
+}
+
+#[tokio::test(start_paused = true)]
+async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
+    use petrel_actors::OccupancyGrid;
+    let agent = searched_facing_x().await;
+    let bb = agent.blackboard();
     // Too dark: nothing searched.
     bb.set("searched/in/brightness", 0.05).await.unwrap();
     bb.set("searched/in/frames", 1i64).await.unwrap();
@@ -55,10 +85,7 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     bb.set("searched/in/frames", 2i64).await.unwrap();
     wait_for(&agent, "searched/out/frames", 1).await;
     assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 6.0);
-    let grid = bb
-        .get::<OccupancyGrid>("searched/out/searched")
-        .await
-        .unwrap();
+    let grid = bb.get::<OccupancyGrid>(SEARCHED).await.unwrap();
     assert_eq!(grid.get(1, 5), Some(0));
     assert_eq!(grid.get(0, 5), Some(-1));
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
@@ -67,19 +94,9 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
 #[tokio::test(start_paused = true)]
 async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
     use crate::robot::victim_mapper::MapperMemory;
-    use crate::vision::{Detection, Detections};
-    let agent = start(
-        r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 2})"#,
-    )
-    .await;
+    let agent = victim_mapper(2).await;
     let bb = agent.blackboard();
-    let sighting = || {
-        Detections(vec![Detection {
-            bearing: 0.0,
-            range: 2.0,
-            confidence: 1.0,
-        }])
-    };
+    let sighting = straight_ahead;
     // Sightings are placed only once the localizer gave a pose.
     bb.set(
         "victims/in/robotPose",
@@ -110,7 +127,6 @@ async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
 /// metres off from there at start).
 #[tokio::test(start_paused = true)]
 async fn frames_before_the_first_pose_place_nothing() {
-    use crate::vision::{Detection, Detections};
     use petrel_actors::Pose2;
     let agent = start(
         r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 1}),
@@ -119,11 +135,7 @@ async fn frames_before_the_first_pose_place_nothing() {
     .await;
     let bb = agent.blackboard();
     bb.set("searched/in/map", free_map()).await.unwrap();
-    let sighting = Detections(vec![Detection {
-        bearing: 0.0,
-        range: 2.0,
-        confidence: 1.0,
-    }]);
+    let sighting = straight_ahead();
     bb.set("victims/in/detections", sighting.clone())
         .await
         .unwrap();
@@ -163,18 +175,9 @@ async fn set_taken_at<T: petrel_actors::PropertyType>(
 #[tokio::test(start_paused = true)]
 async fn the_searched_floor_is_the_floor_ahead_of_the_pose_when_the_frame_was_taken() {
     use petrel_actors::{OccupancyGrid, Pose2};
-    let agent = start(
-        r#"(name: "searched", type: "nav.searched",
-            values: {"params/min_views": 1, "params/min_range": 1.0, "params/max_range": 2.5,
-                     "params/fov_deg": 102.0, "params/victim_radius": 0.0})"#,
-    )
-    .await;
+    let agent = searched_facing_x().await;
     let bb = agent.blackboard();
-    bb.set("searched/in/map", free_map()).await.unwrap();
     // Facing +x when the frame is taken; facing +y 100 ms later, when it has been processed.
-    bb.set("searched/in/robotPose", Pose2::new(0.5, 5.5, 0.0))
-        .await
-        .unwrap();
     let taken = tokio::time::Instant::now();
     tokio::time::sleep(Duration::from_millis(100)).await;
     bb.set(
@@ -186,10 +189,7 @@ async fn the_searched_floor_is_the_floor_ahead_of_the_pose_when_the_frame_was_ta
     set_taken_at(&agent, "searched/in/brightness", 0.5, taken).await;
     set_taken_at(&agent, "searched/in/frames", 1i64, taken).await;
     wait_for(&agent, "searched/out/frames", 1).await;
-    let grid = bb
-        .get::<OccupancyGrid>("searched/out/searched")
-        .await
-        .unwrap();
+    let grid = bb.get::<OccupancyGrid>(SEARCHED).await.unwrap();
     assert_eq!(grid.get(1, 5), Some(0), "ahead along +x: searched");
     assert_eq!(grid.get(0, 7), Some(-1), "ahead along +y: not seen");
     assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 6.0);
@@ -199,13 +199,9 @@ async fn the_searched_floor_is_the_floor_ahead_of_the_pose_when_the_frame_was_ta
 /// Likewise a sighting: 2 m straight ahead of where the camera looked when it took the frame.
 #[tokio::test(start_paused = true)]
 async fn a_sighting_is_placed_from_the_pose_when_the_frame_was_taken() {
-    use crate::vision::{Detection, Detections};
     use petrel_actors::types::Path2;
     use petrel_actors::Pose2;
-    let agent = start(
-        r#"(name: "victims", type: "vision.victim_mapper", values: {"params/confirm_hits": 1})"#,
-    )
-    .await;
+    let agent = victim_mapper(1).await;
     let bb = agent.blackboard();
     bb.set("victims/in/robotPose", Pose2::new(1.0, 1.0, 0.0))
         .await
@@ -217,12 +213,7 @@ async fn a_sighting_is_placed_from_the_pose_when_the_frame_was_taken() {
         let turned = Pose2::new(1.0, 1.0 + 0.1 * i as f64, 0.5 * i as f64);
         bb.set("victims/in/robotPose", turned).await.unwrap();
     }
-    let sighting = Detections(vec![Detection {
-        bearing: 0.0,
-        range: 2.0,
-        confidence: 1.0,
-    }]);
-    set_taken_at(&agent, "victims/in/detections", sighting, taken).await;
+    set_taken_at(&agent, "victims/in/detections", straight_ahead(), taken).await;
     wait_for(&agent, "victims/out/pending", 1).await;
     let seen = bb.get::<Path2>("victims/out/seen").await.unwrap();
     let victim = seen.points()[0];
