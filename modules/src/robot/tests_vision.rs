@@ -225,9 +225,10 @@ async fn a_sighting_is_placed_from_the_pose_when_the_frame_was_taken() {
 }
 
 /// The detector stamps what it found in a frame with the time the frame was taken: here frames
-/// wait in its queue while it is disabled, and the one it processes when enabled keeps its time.
+/// wait in its queue while it is disabled, and the one it processes when enabled keeps its time;
+/// `out/latency` says how long it waited.
 #[tokio::test(start_paused = true)]
-async fn the_detector_stamps_its_results_with_the_frame_time() {
+async fn the_detector_stamps_its_results_with_the_frame_time_and_says_how_late_it_is() {
     let agent = start(&format!(
         r#"(name: "robot", type: "sim.world",
             values: {{"params/world": "{}", "params/camera/enabled": true, "params/deterministic": true}}),
@@ -243,6 +244,11 @@ async fn the_detector_stamps_its_results_with_the_frame_time() {
     let enabled_at = tokio::time::Instant::now();
     bb.set("detector/enabled", true).await.unwrap();
     wait_for(&agent, "detector/out/frames", 1).await;
+    let latency = *bb.get::<f64>("detector/out/latency").await.unwrap();
+    assert!(
+        latency >= 0.1,
+        "the frame waited 100 ms or more, out/latency says {latency} s"
+    );
     for output in ["frames", "detections", "brightness"] {
         let written = bb
             .any_handle(&format!("detector/out/{output}"))

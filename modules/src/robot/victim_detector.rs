@@ -19,6 +19,7 @@ pub struct VictimDetector {
     brightness: Output<f64>,
     sharpness: Output<f64>,
     frames: Output<i64>,
+    latency: Output<f64>,
 }
 
 impl Module for VictimDetector {
@@ -43,6 +44,7 @@ impl Module for VictimDetector {
             brightness: ports.output("out/brightness", 0.5, "mean grey level of the latest frame, 0..1"),
             sharpness: ports.output("out/sharpness", 0.0, "mean absolute Laplacian of the latest frame, grey levels"),
             frames: ports.output("out/frames", 0, "frames processed"),
+            latency: ports.output("out/latency", 0.0, "age of the latest frame when its results were published, s (wall time: how far behind the camera the detector runs)"),
         }
     }
 
@@ -55,7 +57,7 @@ impl Module for VictimDetector {
         Ok(())
     }
 
-    async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+    async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         // Only the newest frame matters: a detector that falls behind skips, never lags.
         let latest = self.images.drain().pop();
         let Some(image) = latest else {
@@ -74,9 +76,11 @@ impl Module for VictimDetector {
                 )
             },
         )?;
-        // Everything below describes the frame: stamped when it was taken, not when it was
-        // processed, so readers place it from the robot's pose of that moment.
         let taken = image.stamp;
+        let age = ctx.now().saturating_duration_since(taken);
+        self.latency.set(age.as_secs_f64());
+        // The rest describes the frame: stamped when it was taken, not when it was processed,
+        // so readers place it from the robot's pose of that moment.
         self.brightness.set_at(out.brightness, taken);
         self.sharpness.set_at(out.sharpness, taken);
         let seen = !out.detections.is_empty();
