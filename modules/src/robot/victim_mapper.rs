@@ -159,10 +159,15 @@ impl Module for VictimMapper {
                 None => (&[][..], pose),
                 Some(taken_from) => (&frame.value.0[..], taken_from),
             };
+            let age_ms = ctx
+                .now()
+                .saturating_duration_since(frame.written)
+                .as_millis() as u64;
             for d in placed {
-                // Why a victim was, or was not, confirmed: each sighting and the pose it is
-                // placed from.
+                // Why a victim was, or was not, confirmed: each sighting, the pose it is placed
+                // from and how old its frame was by then.
                 tracing::debug!(
+                    age_ms,
                     x = pose.x(),
                     y = pose.y(),
                     theta = pose.theta(),
