@@ -43,7 +43,7 @@ impl Module for SearchedModule {
         SearchedModule {
             frames: ports.input("in/frames", 0, "frames the detector processed (link to its out/frames): each new value is one frame looked at"),
             map: ports.input("in/map", OccupancyGrid::default(), "the navigation map (walls and unknown space hide what lies behind them)"),
-            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead); a frame is looked from the first pose written at or after its stamp (in/frames' write time: the detector stamps it with the frame's)"),
+            robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead); the floor of a frame is searched from the first pose written at or after its stamp (in/frames' write time: the detector stamps it with the frame's)"),
             brightness: ports.input("in/brightness", 0.5, "mean grey level of the frame, 0..1 (link to the detector's out/brightness)"),
             fov_deg: ports.param_in("params/fov_deg", 60.0, Range::new(1.0, 179.0), "the camera's horizontal field of view, degrees"),
             victim_radius: ports.param_in("params/victim_radius", 0.25, Range::new(0.0, 5.0), "radius of a victim, m: a cell counts only where a victim standing on it would be whole in view (the detector leaves one cut by the image's border); 0: the whole field of view"),
