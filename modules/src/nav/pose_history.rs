@@ -35,7 +35,7 @@ impl PoseHistory {
     /// An empty history keeping the latest `capacity` poses (at least one).
     pub fn new(capacity: usize) -> Self {
         PoseHistory {
-            poses: VecDeque::with_capacity(capacity.clamp(1, DEFAULT_CAPACITY)),
+            poses: VecDeque::new(),
             capacity: capacity.max(1),
         }
     }
@@ -60,16 +60,6 @@ impl PoseHistory {
             .get(first_after)
             .or(self.poses.back())
             .map(|&(_, pose)| pose)
-    }
-
-    /// Poses held.
-    pub fn len(&self) -> usize {
-        self.poses.len()
-    }
-
-    /// No pose yet.
-    pub fn is_empty(&self) -> bool {
-        self.poses.is_empty()
     }
 }
 
@@ -117,7 +107,6 @@ mod tests {
         for t in [10, 20, 30] {
             history.record(ms(t0, t), Pose2::new(t as f64, 0.0, 0.0));
         }
-        assert_eq!(history.len(), 2);
         // The pose of 10 ms is gone: the oldest kept stands in for it.
         assert_eq!(history.at(ms(t0, 5)), Some(Pose2::new(20.0, 0.0, 0.0)));
         // A stamp earlier than the latest is recorded as the latest's.

@@ -20,6 +20,7 @@ mod fault;
 mod localizer;
 mod mapper;
 mod path_planner;
+mod pose_trail;
 mod recorder;
 mod searched;
 mod sequencer;

@@ -4,8 +4,9 @@ use petrel_actors::{
     CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule,
 };
 
+use super::pose_trail::PoseTrail;
 use super::{count, param_error};
-use crate::nav::{PoseHistory, SearchParams, SearchedMap};
+use crate::nav::{SearchParams, SearchedMap};
 
 /// `nav.searched`: wraps [`SearchedMap`].
 pub struct SearchedModule {
@@ -28,9 +29,7 @@ pub struct SearchedModule {
     /// The frame count last looked at: a step without a new frame (the first) looks at nothing.
     last_frame: i64,
     /// The poses since the frames began, to look from where the camera was when it took one.
-    poses: PoseHistory,
-    /// The pose version last added to `poses` (0: the declared default, no estimate yet).
-    pose_seen: u64,
+    poses: PoseTrail,
     core: Option<SearchedMap>,
 }
 
@@ -58,8 +57,7 @@ impl Module for SearchedModule {
             counted: ports.output("out/frames", 0, "frames that searched (bright enough)"),
             skipped: ports.output("out/skipped", 0, "frames too dark or too bright to search anything"),
             last_frame: 0,
-            poses: PoseHistory::default(),
-            pose_seen: 0,
+            poses: PoseTrail::default(),
             core: None,
         }
     }
@@ -83,11 +81,7 @@ impl Module for SearchedModule {
 
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let core = super::initialized(&mut self.core);
-        let pose = self.robot.read();
-        if pose.version != self.pose_seen {
-            self.pose_seen = pose.version;
-            self.poses.record(pose.written, *pose.value);
-        }
+        self.poses.follow(&self.robot);
         let frame = self.frames.read();
         if *frame.value == self.last_frame {
             return Ok(());

@@ -7,7 +7,7 @@ use petrel_actors::types::Path2;
 use petrel_actors::{Context, Input, Module, Output, Ports, Pose2, QueueWriter, Range, Schedule};
 
 use super::count;
-use crate::nav::PoseHistory;
+use super::pose_trail::PoseTrail;
 use crate::vision::{Detections, VictimMap, VictimMapParams};
 
 /// `targetDistance` when there is no target: farther than any map.
@@ -44,9 +44,7 @@ pub struct VictimMapper {
     frame_version: Option<u64>,
     /// The poses since the frames began, to place a sighting from where the camera was when
     /// it took the frame.
-    poses: PoseHistory,
-    /// The pose version last added to `poses` (0: the declared default, no estimate yet).
-    pose_seen: u64,
+    poses: PoseTrail,
     core: Option<VictimMap>,
 }
 
@@ -96,8 +94,7 @@ impl Module for VictimMapper {
             outbox: ports.queue_out("out/outbox", 64, "victims seen, as messages to params/report_to (`x y id`; the same id again: a better estimate)"),
             saved: ports.state("state/map", MapperMemory::default(), "candidates, seen and reported victims: a restarted module goes on from them"),
             frame_version: None,
-            poses: PoseHistory::default(),
-            pose_seen: 0,
+            poses: PoseTrail::default(),
             core: None,
         }
     }
@@ -136,12 +133,8 @@ impl Module for VictimMapper {
 
     async fn step(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let core = super::initialized(&mut self.core);
-        let current = self.robot.read();
-        if current.version != self.pose_seen {
-            self.pose_seen = current.version;
-            self.poses.record(current.written, *current.value);
-        }
-        let pose = *current.value;
+        self.poses.follow(&self.robot);
+        let pose = self.robot.value();
         let frame = self.detections.read();
         let new_frame = self.frame_version != Some(frame.version);
         let commands = self.report.value() != self.report_done.value()
