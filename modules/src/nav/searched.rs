@@ -1,17 +1,25 @@
 //! The searched map: the floor a camera has looked at well enough to see a victim there.
 //!
 //! A laser maps a room in one glance, but a camera resolves a victim only between a minimum
-//! distance (closer, the victim overflows the image and its foot leaves it) and a maximum one
+//! depth (nearer, the victim's foot leaves the bottom of the image) and a maximum distance
 //! (farther, its pattern is too small), inside a field of view narrower than the laser's.
 //! Exploration that ends when the laser map has no frontier left therefore leaves floor the
-//! camera never looked at. This map records, frame by frame, the cells that were in view: a
-//! cell is searched by a frame when its centre lies between `min_range` and `max_range` of the
-//! camera, a victim standing on it would be whole in the image (its bearing plus the victim's
-//! half-width seen from there, `atan(victim_radius / distance)`, within `fov / 2` less a
-//! degree: the detector leaves a victim cut by the image's border for a later frame, and a
-//! fixed 50° counted floor near the camera where a victim could not be seen), and the straight
-//! line from the camera to that centre crosses only known free cells of the navigation map (walls and unknown space hide
+//! camera never looked at. This map records, frame by frame, the cells that were in view. A
+//! victim may stand anywhere on a cell, so a cell is searched by a frame only when a victim
+//! standing at any of its corners (where the cell comes nearest to the camera and farthest off
+//! its heading) would be seen: at least `min_range` ahead of the camera along its heading (the
+//! depth decides where the foot falls in the image, not the distance), whole in the image (its
+//! bearing plus its half-width seen from there, `atan(victim_radius / distance)`, within
+//! `fov / 2` less a degree: the detector leaves a victim cut by the image's border for a later
+//! frame), the cell's centre within `max_range`, and the straight line from the camera to that
+//! centre crossing only known free cells of the navigation map (walls and unknown space hide
 //! what lies behind them; an occupied cell in view is itself searched, its face was seen).
+//! Judged by their centres alone, cells were counted where a victim on their near or outer
+//! part was cut by the image's border or had its foot below it: in the rescue world, one in
+//! ten victims on counted cells nearer than 1.5 m went unseen in a frame (a rescue team missed
+//! a victim whose one sighting nearby, from 1 m, was cut by the border); judged by their
+//! corners, one in a hundred
+//! (`the_searched_map_counts_only_floor_where_a_victim_would_be_seen`).
 //! One glimpse is not a search: a detector confirms a victim over several frames, so a cell
 //! counts as searched once it was in view in `min_views` frames.
 //! A cell at the edge of unknown space (beside a cell the navigation map does not know yet)
@@ -48,11 +56,14 @@ pub struct SearchParams {
     /// The camera's horizontal field of view, radians, centred on its heading (default 60°).
     pub fov: f64,
     /// Radius of what is searched for, metres (default 0.25, a victim): a cell counts only where
-    /// a victim standing on it would be whole in view. 0 counts the whole field of view.
+    /// a victim standing anywhere on it would be whole in view. 0: where all of the cell is in
+    /// the field of view.
     pub victim_radius: f64,
-    /// Cells closer than this are not searched, metres (default 1.0).
+    /// A cell counts only where all of it lies at least this far ahead of the camera, along its
+    /// heading, metres (default 1.0: the detector finds a victim from about 1.0 m ahead; nearer,
+    /// its foot leaves the image).
     pub min_range: f64,
-    /// Cells farther than this are not searched, metres (default 3.5).
+    /// Cells whose centre is farther than this are not searched, metres (default 3.5).
     pub max_range: f64,
     /// Navigation-map value from which a cell blocks the view (default 50, as the planner).
     pub occupied_threshold: i8,
@@ -190,6 +201,17 @@ impl SearchedMap {
                 nc >= 0 && nr >= 0 && nc < w && nr < h && map.data[(nr * w + nc) as usize] < 0
             })
         };
+        // Whether a victim standing at (dx, dy) from the camera is whole in the image and its
+        // foot too (nearer than `min_range` ahead, along the heading, the foot leaves the image).
+        let in_view = |dx: f64, dy: f64| {
+            let d = dx.hypot(dy);
+            let off = (dy.atan2(dx) - heading + std::f64::consts::PI)
+                .rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            d > 0.0
+                && d * off.cos() >= p.min_range
+                && off.abs() + (p.victim_radius / d).atan() <= p.fov / 2.0 - EDGE_MARGIN
+        };
         let camera_cell = ((cx / res).floor() as i64, (cy / res).floor() as i64);
         let reach = (p.max_range / res).ceil() as i64 + 1;
         let mut added = 0;
@@ -201,16 +223,18 @@ impl SearchedMap {
                 }
                 let (dx, dy) = ((c as f64 + 0.5) * res - cx, (r as f64 + 0.5) * res - cy);
                 let d = dx.hypot(dy);
-                if d < p.min_range || d > p.max_range || d == 0.0 {
+                if d > p.max_range || d > p.edge_range && borders_unknown(c, r) {
                     continue;
                 }
-                if d > p.edge_range && borders_unknown(c, r) {
-                    continue;
-                }
-                let off = (dy.atan2(dx) - heading + std::f64::consts::PI)
-                    .rem_euclid(std::f64::consts::TAU)
-                    - std::f64::consts::PI;
-                if off.abs() + (p.victim_radius / d).atan() > p.fov / 2.0 - EDGE_MARGIN {
+                // A victim may stand anywhere on the cell: the centre first (most cells are out
+                // of view), then every corner, which is where the cell comes nearest to the
+                // camera and farthest off its heading.
+                let corners = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)];
+                if !in_view(dx, dy)
+                    || !corners
+                        .iter()
+                        .all(|(kx, ky)| in_view(dx + kx * res, dy + ky * res))
+                {
                     continue;
                 }
                 let mut clear = true;

@@ -50,12 +50,12 @@ async fn victim_mapper(confirm_hits: i64) -> Agent {
 /// What `nav.searched` searched.
 const SEARCHED: &str = "searched/out/searched";
 
-/// `nav.searched` searching from 1 to 2.5 m in one frame, on [`free_map`], the camera in cell
-/// (0, 5) facing +x.
+/// `nav.searched` searching from 0.5 m ahead to 2.5 m away in one frame, on [`free_map`], the
+/// camera in cell (0, 5) facing +x: (1, 5) and the three cells of column 2 (as the core's test).
 async fn searched_facing_x() -> Agent {
     let agent = start(
         r#"(name: "searched", type: "nav.searched",
-            values: {"params/min_views": 1, "params/min_range": 1.0, "params/max_range": 2.5,
+            values: {"params/min_views": 1, "params/min_range": 0.5, "params/max_range": 2.5,
                      "params/fov_deg": 102.0, "params/victim_radius": 0.0})"#,
     )
     .await;
@@ -80,11 +80,11 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     bb.set("searched/in/frames", 1i64).await.unwrap();
     wait_for(&agent, "searched/out/skipped", 1).await;
     assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 0.0);
-    // Bright enough: the six cells ahead (as the core's test), 6 m².
+    // Bright enough: the four cells ahead, 4 m².
     bb.set("searched/in/brightness", 0.5).await.unwrap();
     bb.set("searched/in/frames", 2i64).await.unwrap();
     wait_for(&agent, "searched/out/frames", 1).await;
-    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 6.0);
+    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 4.0);
     let grid = bb.get::<OccupancyGrid>(SEARCHED).await.unwrap();
     assert_eq!(grid.get(1, 5), Some(0));
     assert_eq!(grid.get(0, 5), Some(-1));
@@ -192,7 +192,7 @@ async fn the_searched_floor_is_the_floor_ahead_of_the_pose_when_the_frame_was_ta
     let grid = bb.get::<OccupancyGrid>(SEARCHED).await.unwrap();
     assert_eq!(grid.get(1, 5), Some(0), "ahead along +x: searched");
     assert_eq!(grid.get(0, 7), Some(-1), "ahead along +y: not seen");
-    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 6.0);
+    assert_eq!(*bb.get::<f64>("searched/out/area").await.unwrap(), 4.0);
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 

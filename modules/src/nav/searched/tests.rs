@@ -15,7 +15,8 @@ fn open(w: usize, h: usize) -> OccupancyGrid {
 }
 
 /// The geometry alone: a 100° view (102° less the edge margin), nothing taken off for a
-/// victim's width.
+/// victim's width: a cell counts where all four of its corners are in view and `min_range`
+/// ahead.
 fn params(min_range: f64, max_range: f64) -> SearchParams {
     SearchParams {
         fov: 102f64.to_radians(),
@@ -39,38 +40,41 @@ fn cells(s: &SearchedMap) -> BTreeSet<(i64, i64)> {
 
 #[test]
 fn a_camera_searches_exactly_the_cells_in_its_view_and_range() {
-    // Camera in cell (0, 5) facing +x, ±50°, 1 to 2.5 m: the cells one and two columns ahead,
-    // one row either side (two rows either side are 2.83 m away, or 63° off).
-    let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
+    // Camera in cell (0, 5) facing +x, ±50°, from 0.5 m ahead to centres 2.5 m away: the cell
+    // ahead and the three of the next column. (1, 4) and (1, 6) reach 72° off at their far
+    // corners, (2, 3) and (2, 7) are 2.83 m away.
+    let mut s = SearchedMap::new(params(0.5, 2.5)).unwrap();
     let added = s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
-    let expected: BTreeSet<_> = [(1, 4), (1, 5), (1, 6), (2, 4), (2, 5), (2, 6)].into();
+    let expected: BTreeSet<_> = [(1, 5), (2, 4), (2, 5), (2, 6)].into();
     assert_eq!(cells(&s), expected);
-    assert_eq!(added, 6);
-    assert!((s.area() - 6.0).abs() < 1e-12);
+    assert_eq!(added, 4);
+    assert!((s.area() - 4.0).abs() < 1e-12);
     // Looking again from the same pose adds nothing.
     assert_eq!(s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10)), 0);
 }
 
 #[test]
 fn range_limits_leave_the_near_and_far_floor_unsearched() {
-    // A minimum of 1.5 m drops the first column (1 m and 1.41 m away).
+    // A minimum of 1.5 m ahead drops the first column (its near corners are 0.5 m ahead); the
+    // second column's are 1.5 m ahead.
     let mut s = SearchedMap::new(params(1.5, 2.5)).unwrap();
     s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
     assert_eq!(cells(&s), [(2, 4), (2, 5), (2, 6)].into());
-    // A band of 2.5 to 3 m: the third column straight ahead (3 m) and the second column two
-    // rows either side (2.83 m, 45° off).
-    let mut s = SearchedMap::new(params(2.5, 3.0)).unwrap();
+    // Ahead, not away: (2, 3) and (2, 7) are 2.83 m away, but their near corners only 1.5 m
+    // ahead. A band of 2.4 m ahead to 3 m away leaves the third column's middle cell (2.5 m
+    // ahead, 3 m away; its neighbours are 3.16 m away).
+    let mut s = SearchedMap::new(params(2.4, 3.0)).unwrap();
     s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
-    assert_eq!(cells(&s), [(2, 3), (2, 7), (3, 5)].into());
+    assert_eq!(cells(&s), [(3, 5)].into());
 }
 
 #[test]
 fn heading_and_map_origin_are_honoured() {
     // Facing -y (down) from cell (5, 5) of a map whose corner is at (-2, -3).
     let m = map(&[".........."; 10], (-2.0, -3.0));
-    let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
+    let mut s = SearchedMap::new(params(0.5, 2.5)).unwrap();
     s.look(Pose2::new(3.5, 2.5, -std::f64::consts::FRAC_PI_2), &m);
-    let expected: BTreeSet<_> = [(4, 4), (5, 4), (6, 4), (4, 3), (5, 3), (6, 3)].into();
+    let expected: BTreeSet<_> = [(5, 4), (4, 3), (5, 3), (6, 3)].into();
     assert_eq!(cells(&s), expected);
 }
 
@@ -109,19 +113,19 @@ fn walls_and_unknown_space_hide_what_lies_behind_them() {
 
 #[test]
 fn the_grid_marks_searched_cells_and_a_new_geometry_starts_afresh() {
-    let mut s = SearchedMap::new(params(1.0, 2.5)).unwrap();
+    let mut s = SearchedMap::new(params(0.5, 2.5)).unwrap();
     assert_eq!(s.grid().width, 0, "nothing before the first look");
     s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10));
     let g = s.grid();
     assert_eq!((g.width, g.height), (10, 10));
     assert_eq!(g.get(1, 5), Some(SEARCHED));
     assert_eq!(g.get(0, 5), Some(NOT_SEARCHED));
-    assert_eq!(g.data.iter().filter(|&&v| v == SEARCHED).count(), 6);
+    assert_eq!(g.data.iter().filter(|&&v| v == SEARCHED).count(), 4);
     s.look(Pose2::new(0.5, 5.5, 0.0), &open(12, 10));
     assert_eq!(s.grid().width, 12);
     assert_eq!(
         cells(&s).len(),
-        6,
+        4,
         "the old cells were dropped, the new look counted"
     );
 }
@@ -130,20 +134,17 @@ fn the_grid_marks_searched_cells_and_a_new_geometry_starts_afresh() {
 fn a_cell_is_searched_only_after_enough_views() {
     let mut s = SearchedMap::new(SearchParams {
         min_views: 2,
-        ..params(1.0, 2.5)
+        ..params(0.5, 2.5)
     })
     .unwrap();
     assert_eq!(s.look(Pose2::new(0.5, 5.5, 0.0), &open(10, 10)), 0);
     assert!(cells(&s).is_empty(), "one glimpse is not a search");
-    // The second frame, turned a little left: only the cells both frames saw are searched.
+    // The second frame, turned 34° left, sees (1, 6), (1, 7) and (2, 6): only the cell both
+    // frames saw is searched.
     let added = s.look(Pose2::new(0.5, 5.5, 0.6), &open(10, 10));
     let got = cells(&s);
     assert_eq!(added, got.len());
-    assert!(got.contains(&(1, 5)) && got.contains(&(1, 6)), "{got:?}");
-    assert!(
-        !got.contains(&(1, 4)) && !got.contains(&(2, 4)),
-        "seen once: {got:?}"
-    );
+    assert_eq!(got, [(2, 6)].into(), "seen once: the others");
 }
 
 #[test]

@@ -62,10 +62,13 @@ fn a_robot_in_the_dark_is_at_most_a_weak_sighting_that_the_victim_mapper_ignores
 }
 
 /// The searched map counts a cell only where the detector sees a victim standing there: lit
-/// frames of the rescue world's victims from 1 to 3.5 m, at bearings near the edge of what the
-/// map counts (10° to 27° off the heading, where a fixed 50° view had counted floor on which
-/// a victim 1.0 to 1.5 m away was seen in 2 of 343 frames). Measured with this model over 6,000
-/// frames: 90 % or more seen in each band of distance and bearing it counts.
+/// frames of the rescue world's victims from 0.9 to 3.6 m and up to 30° off the heading, the
+/// camera placed anywhere around each (so a victim stands anywhere on its cell). Cells judged
+/// by their centres were counted where a victim on their near or outer part had its foot below
+/// the image or was cut by its border: 951 of 1,000 such victims were seen, and 27 of the 274
+/// nearer than 1.5 m were not (a rescue team missed a victim whose one sighting nearby, from 1 m, was cut by the border).
+/// Judged by their corners, 983 of 1,000, and 2 of 222 near ones missed; what is left is
+/// scattered (a frame's noise), which the map's `min_views` frames cover.
 #[test]
 fn the_searched_map_counts_only_floor_where_a_victim_would_be_seen() {
     use crate::nav::{SearchParams, SearchedMap};
@@ -83,11 +86,12 @@ fn the_searched_map_counts_only_floor_where_a_victim_would_be_seen() {
     };
     let mut rng = rand::rngs::StdRng::seed_from_u64(11);
     let (mut counted, mut seen, mut tried) = (0, 0, 0);
-    while counted < 150 && tried < 5_000 {
+    let (mut near, mut missed_near) = (0, Vec::new());
+    while counted < 1000 && tried < 30_000 {
         tried += 1;
         let v = w.features.victims[rng.random_range(0..w.features.victims.len())];
-        let d: f64 = rng.random_range(1.0..3.5);
-        let b = rng.random_range(10f64..27.0).to_radians()
+        let d: f64 = rng.random_range(0.9..3.6);
+        let b = rng.random_range(0f64..30.0).to_radians()
             * if rng.random_bool(0.5) { 1.0 } else { -1.0 };
         let a: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
         let (x, y) = (v.0.x - d * a.cos(), v.0.y - d * a.sin());
@@ -120,6 +124,7 @@ fn the_searched_map_counts_only_floor_where_a_victim_would_be_seen() {
             continue;
         }
         counted += 1;
+        near += usize::from(d < 1.5);
         let mut frame_rng = rand::rngs::StdRng::seed_from_u64(tried);
         let img = still_frame(&w, camera, &cfg, &mut frame_rng);
         if run(&img, &DetectorParams::default())
@@ -128,14 +133,20 @@ fn the_searched_map_counts_only_floor_where_a_victim_would_be_seen() {
             .any(|det| (det.bearing - b).abs() < 0.15 && det.confidence >= min)
         {
             seen += 1;
+        } else if d < 1.5 {
+            missed_near.push((d, b.to_degrees()));
         }
     }
     assert!(
-        counted >= 150,
+        counted >= 1000,
         "only {counted} counted cells in {tried} tries"
     );
     assert!(
-        seen * 100 >= counted * 90,
+        missed_near.len() * 100 <= near * 2,
+        "victims nearer than 1.5 m on {near} counted cells went unseen (distance, bearing°): {missed_near:.2?}"
+    );
+    assert!(
+        seen * 100 >= counted * 97,
         "a victim was seen on {seen} of {counted} counted cells"
     );
 }
