@@ -66,9 +66,10 @@ fn a_robot_in_the_dark_is_at_most_a_weak_sighting_that_the_victim_mapper_ignores
 /// camera placed anywhere around each (so a victim stands anywhere on its cell). Cells judged
 /// by their centres were counted where a victim on their near or outer part had its foot below
 /// the image or was cut by its border: 951 of 1,000 such victims were seen, and 27 of the 274
-/// nearer than 1.5 m were not (a rescue team missed a victim whose one sighting nearby, from 1 m, was cut by the border).
-/// Judged by their corners, 983 of 1,000, and 2 of 222 near ones missed; what is left is
-/// scattered (a frame's noise), which the map's `min_views` frames cover.
+/// nearer than 1.5 m were not (a rescue team missed a victim whose one sighting nearby, from
+/// 1 m, was cut by the border). Judged by their corners, 983 of 1,000, and 2 of 222 near ones
+/// missed; what is left is scattered (a frame's noise), which the map's `min_views` frames
+/// cover.
 #[test]
 fn the_searched_map_counts_only_floor_where_a_victim_would_be_seen() {
     use crate::nav::{SearchParams, SearchedMap};
