@@ -45,6 +45,10 @@ use crate::sim::raycast::traverse;
 /// columns touch the border, and smooths texture over three columns (of 160 over 60°).
 const EDGE_MARGIN: f64 = 1.0 * std::f64::consts::PI / 180.0;
 
+/// A cell's corners from its centre, in cells: where a victim standing on the cell comes
+/// nearest to the camera and farthest off its heading.
+const CORNERS: [(f64, f64); 4] = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)];
+
 /// Value of a searched cell in the published grid (ROS convention: 0 = free, known).
 pub const SEARCHED: i8 = 0;
 /// Value of a cell not searched yet (ROS convention: -1 = unknown).
@@ -227,11 +231,9 @@ impl SearchedMap {
                     continue;
                 }
                 // A victim may stand anywhere on the cell: the centre first (most cells are out
-                // of view), then every corner, which is where the cell comes nearest to the
-                // camera and farthest off its heading.
-                let corners = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)];
+                // of view), then every corner.
                 if !in_view(dx, dy)
-                    || !corners
+                    || !CORNERS
                         .iter()
                         .all(|(kx, ky)| in_view(dx + kx * res, dy + ky * res))
                 {
