@@ -254,8 +254,25 @@ impl Recording {
     }
 }
 
-/// A chunk's records, decompressed (zstd, LZ4 frames or none), refusing sizes out of reason.
+/// A chunk's records, decompressed (zstd, LZ4 frames or none) and checked against the CRC-32
+/// the writer stored, refusing sizes out of reason. Without the check, damage that still
+/// decompresses (or a plain chunk's flipped bytes) was replayed as if recorded.
 fn decompress(header: &ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
+    let records = inflate(header, data)?;
+    // 0: the writer computed no CRC (MCAP's convention).
+    let stored = header.uncompressed_crc;
+    if stored != 0 {
+        let read = crc32fast::hash(&records);
+        if read != stored {
+            return Err(format!(
+                "a chunk whose records match its CRC-32 {stored:08x}, they give {read:08x} (the chunk's data is damaged)"
+            ));
+        }
+    }
+    Ok(records)
+}
+
+fn inflate(header: &ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
     let size = header.uncompressed_size;
     if size > MAX_CHUNK_BYTES {
         return Err(format!(

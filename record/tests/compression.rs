@@ -80,3 +80,24 @@ fn a_damaged_zstd_chunk_is_a_problem_at_its_offset_not_a_panic() {
     assert!(rec.chunks >= 1);
     assert!(!rec.messages.is_empty());
 }
+
+#[test]
+fn a_chunk_whose_bytes_changed_but_still_read_is_refused_by_its_crc() {
+    // A plain chunk: a flipped byte inside a message leaves every record well formed, so only
+    // the CRC the writer stored tells the message from the one recorded.
+    let bytes = file(None);
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let chunk = &summary.chunk_indexes[1];
+    let mut damaged = bytes.clone();
+    let end = (chunk.chunk_start_offset + chunk.chunk_length) as usize;
+    damaged[end - 100] ^= 0x55;
+    let rec = Recording::parse(&damaged);
+    let problem = rec.problem.expect("the damage is found");
+    assert_eq!(problem.offset, chunk.chunk_start_offset, "{problem:?}");
+    assert!(problem.expected.contains("CRC-32"), "{problem:?}");
+    // What came before the damaged chunk is kept (for `--salvage`), nothing of it after.
+    let first = &summary.chunk_indexes[0];
+    let before = rec.messages.len();
+    assert!(before > 0 && rec.chunks == 1, "{before} messages, {} chunks", rec.chunks);
+    assert!(rec.messages.iter().all(|m| m.log_ns <= first.message_end_time));
+}
