@@ -159,6 +159,16 @@ const CASES: &[(&[&str], i32, &str)] = &[
         "no such agent",
     ),
     (&["echo", "petrel://nobody/c/out/value"], 1, "no such agent"),
+    (
+        &["hz", "petrel://nobody/c/out/value", "-n", "1"],
+        2,
+        "a rate needs two changes",
+    ),
+    (
+        &["hz", "petrel://nobody/c/out/value", "--window", "0"],
+        2,
+        "a window of no interval",
+    ),
     (&["events"], 1, "nothing to follow"),
     (
         &["console", "--listen", "0.0.0.0:0", "--token", "short"],

@@ -98,6 +98,13 @@ fn a_chunk_whose_bytes_changed_but_still_read_is_refused_by_its_crc() {
     // What came before the damaged chunk is kept (for `--salvage`), nothing of it after.
     let first = &summary.chunk_indexes[0];
     let before = rec.messages.len();
-    assert!(before > 0 && rec.chunks == 1, "{before} messages, {} chunks", rec.chunks);
-    assert!(rec.messages.iter().all(|m| m.log_ns <= first.message_end_time));
+    assert!(
+        before > 0 && rec.chunks == 1,
+        "{before} messages, {} chunks",
+        rec.chunks
+    );
+    assert!(rec
+        .messages
+        .iter()
+        .all(|m| m.log_ns <= first.message_end_time));
 }

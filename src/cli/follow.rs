@@ -4,13 +4,13 @@ use std::collections::VecDeque;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use petrel_team::{TeamError, Update, Watch, WatchEvent};
+use petrel_team::{Client, TeamError, Update, Watch, WatchEvent};
 
 use super::rate::rate;
 use super::remote::{attached, target, Reach};
 
 /// Stamps `hz` keeps by default: its figures are over the last this many changes.
-pub(crate) const DEFAULT_WINDOW: usize = 100;
+pub(crate) const DEFAULT_WINDOW: u64 = 100;
 
 /// Prints each value or queue item of `url` as it comes, `count` of them or until Ctrl-C.
 pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> ExitCode {
@@ -20,10 +20,12 @@ pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> 
     };
     attached(&team, |client| async move {
         let mut watch = client.watch(&url).await?;
+        let agent = url.agent().unwrap_or_default();
         let mut printed = 0;
         while count.is_none_or(|n| printed < n) {
             let update = tokio::select! {
                 update = next_update(&mut watch) => update?,
+                left = gone(&client, agent) => return Err(left),
                 _ = tokio::signal::ctrl_c() => break,
             };
             println!("{}", line(&update, json));
@@ -41,16 +43,20 @@ pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> 
 
 /// Reports how often `url` changes: after `count` changes, or once a second until Ctrl-C,
 /// over the last `window` changes.
-pub(crate) fn hz(reach: &Reach, url: &str, window: usize, count: Option<usize>) -> ExitCode {
+pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> ExitCode {
     let (url, team) = match target(reach, url) {
         Ok(t) => t,
         Err(code) => return code,
     };
-    let window = window.max(2);
     attached(&team, |client| async move {
         let mut watch = client.watch(&url).await?;
+        let agent = url.agent().unwrap_or_default();
         // The first update is the current value, written whenever: not a change to time.
-        next_update(&mut watch).await?;
+        tokio::select! {
+            update = next_update(&mut watch) => update.map(drop)?,
+            left = gone(&client, agent) => return Err(left),
+        }
+        let window = usize::try_from(window).unwrap_or(usize::MAX);
         let mut stamps = VecDeque::with_capacity(window);
         let mut report = tokio::time::interval(Duration::from_secs(1));
         report.tick().await;
@@ -69,6 +75,10 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: usize, count: Option<usize>) 
                     }
                 }
                 _ = report.tick(), if count.is_none() => print_rate(stamps.make_contiguous()),
+                left = gone(&client, agent) => {
+                    print_rate(stamps.make_contiguous());
+                    return Err(left);
+                }
                 _ = tokio::signal::ctrl_c() => break,
             }
         }
@@ -81,6 +91,22 @@ fn print_rate(stamps: &[u64]) {
     match rate(stamps) {
         Some(r) => println!("{r}"),
         None => println!("no change yet"),
+    }
+}
+
+/// How long a follower waits without a value before it asks whether the agent still answers.
+const QUIET: Duration = Duration::from_secs(1);
+
+/// Resolves with an error once `agent` has gone quiet for [`QUIET`] and then does not answer
+/// (its run ended, it was killed, or its thread is held). A follower would otherwise wait
+/// without end, saying nothing, for an agent that may never come back. Dropped and made again
+/// at each value, so an agent that keeps writing is never asked.
+async fn gone(client: &Client, agent: &str) -> TeamError {
+    loop {
+        tokio::time::sleep(QUIET).await;
+        if let Err(e) = client.info(agent).await {
+            return e;
+        }
     }
 }
 
@@ -134,9 +160,20 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
     super::top::with_clients(&targets, |clients| async move {
         let (tx, mut rx) = tokio::sync::mpsc::channel(1024);
         let (opened_tx, mut opened) = tokio::sync::mpsc::channel(64);
-        let mut watches = Vec::new();
+        let (mut watches, mut departures) = (Vec::new(), Vec::new());
+        let (left_tx, mut left_rx) = tokio::sync::mpsc::channel(64);
         for (agent, client) in clients.iter() {
             let info = client.info(agent).await?;
+            let (clients, agent_name, left_tx) = (clients.clone(), agent.clone(), left_tx.clone());
+            departures.push(tokio::spawn(async move {
+                let client = clients
+                    .iter()
+                    .find(|(a, _)| *a == agent_name)
+                    .map(|(_, c)| c);
+                if let Some(client) = client {
+                    let _ = left_tx.send(gone(client, &agent_name).await).await;
+                }
+            }));
             for p in &info.properties {
                 if p.kind != "queue output" || !is_event_queue(&p.key) {
                     continue;
@@ -182,20 +219,30 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
             names.join(", ")
         );
         drop(tx);
-        let mut printed = 0;
+        let (mut printed, mut following) = (0, clients.len());
+        let mut result = Ok(());
         while count.is_none_or(|n| printed < n) {
             tokio::select! {
                 event = rx.recv() => match event {
                     Some((source, u)) => println!("{source}  {}", String::from_utf8_lossy(&u.json)),
                     None => break,
                 },
+                Some(left) = left_rx.recv() => {
+                    following -= 1;
+                    if following == 0 {
+                        result = Err(left);
+                        break;
+                    }
+                    eprintln!("{left}");
+                    continue;
+                }
                 _ = tokio::signal::ctrl_c() => break,
             }
             printed += 1;
         }
-        for w in watches {
+        for w in watches.into_iter().chain(departures) {
             w.abort();
         }
-        Ok(())
+        result
     })
 }

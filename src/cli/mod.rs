@@ -132,12 +132,12 @@ enum Command {
     Hz {
         /// The property, `petrel://agent/module/path` (or `agent/module/path`).
         url: String,
-        /// Figures over the last this many changes.
-        #[arg(short, long, default_value_t = follow::DEFAULT_WINDOW)]
-        window: usize,
-        /// Report once after this many changes, and exit.
-        #[arg(short = 'n', long)]
-        count: Option<usize>,
+        /// Figures over the last this many changes (2 or more: a rate needs an interval).
+        #[arg(short, long, default_value_t = follow::DEFAULT_WINDOW, value_parser = clap::value_parser!(u64).range(2..=1_000_000))]
+        window: u64,
+        /// Report once after this many changes, and exit (2 or more: a rate needs an interval).
+        #[arg(short = 'n', long, value_parser = clap::value_parser!(u64).range(2..))]
+        count: Option<u64>,
         #[command(flatten)]
         reach: remote::Reach,
     },

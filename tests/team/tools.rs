@@ -238,6 +238,57 @@ fn echo_follows_values_and_queue_items_and_hz_reports_a_rate() {
     assert!(err.contains("has no property `out/nope`"), "{err}");
 }
 
+/// A follower of a run that ends (here killed) says so and exits 1, rather than wait without
+/// end for an agent that cannot come back.
+#[test]
+fn followers_end_with_an_error_once_the_agent_is_gone() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut run, records) = lonely(dir.path());
+    let follower = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .env("PETREL_RUNTIME_DIR", &records)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("petrel starts")
+    };
+    let mut echo = follower(&[
+        "echo",
+        "petrel://lonely/signal/out/value",
+        "-n",
+        "100000000",
+    ]);
+    let mut events = follower(&["events", "lonely", "-n", "100000000"]);
+    // Both follow once echo printed a value and events said its streams are open.
+    let mut echo_out = BufReader::new(echo.stdout.take().unwrap()).lines();
+    assert!(echo_out.next().is_some(), "echo printed a value");
+    let mut events_err = BufReader::new(events.stderr.take().unwrap()).lines();
+    let opened = events_err.next().and_then(Result::ok).unwrap_or_default();
+    assert!(opened.starts_with("following "), "{opened}");
+
+    run.kill();
+    // Read what is left, so neither blocks writing it; bounded by the followers' ends.
+    let echo_rest = std::thread::spawn(move || echo_out.count());
+    let events_rest =
+        std::thread::spawn(move || events_err.map_while(Result::ok).collect::<Vec<_>>());
+    let echo = crate::bounded::wait_within_deadline(echo, "petrel echo");
+    let events = crate::bounded::wait_within_deadline(events, "petrel events");
+    echo_rest.join().unwrap();
+    let events_said = events_rest.join().unwrap().join("\n");
+    let echo_said = String::from_utf8_lossy(&echo.stderr).into_owned();
+    assert_eq!(echo.status.code(), Some(1), "{echo_said}");
+    assert!(
+        echo_said.contains("agent `lonely` did not answer"),
+        "{echo_said}"
+    );
+    assert_eq!(events.status.code(), Some(1), "{events_said}");
+    assert!(
+        events_said.contains("agent `lonely` did not answer"),
+        "{events_said}"
+    );
+}
+
 #[test]
 fn events_show_a_fault_and_the_restart_that_follows() {
     let dir = tempfile::tempdir().unwrap();
