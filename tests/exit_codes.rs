@@ -149,7 +149,11 @@ const CASES: &[(&[&str], i32, &str)] = &[
     ),
     (&["record", "info", "not.mcap"], 2, "not a recording"),
     (&["record", "info", "missing.mcap"], 2, "missing recording"),
-    (&["replay", "not.mcap", "goal.ron"], 2, "not a recording"),
+    (
+        &["replay", "not.mcap", "goal.ron", "--replace", "m"],
+        2,
+        "not a recording",
+    ),
     (&["ls"], 0, "nothing running is an empty listing"),
     (&["top", "--once"], 0, "nothing running is an empty table"),
     (&["get", "petrel://nobody/c/out/value"], 1, "no such agent"),
@@ -205,4 +209,38 @@ fn every_subcommand_exits_with_its_documented_code() {
         }
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+}
+
+/// `petrel replay` refuses, before anything runs, what would run live instead of replayed or
+/// replay at a rate nobody asked for.
+#[test]
+fn replay_refuses_modules_the_config_lacks_and_a_rate_of_zero() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in FILES {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--replace", "ghost"],
+            "goal.ron has no module `ghost`; expected one of its modules: m",
+        ),
+        (&["--replace", "m,ghost"], "--replace ghost: "),
+        (&["--replace", "replay"], "has no module `replay`"),
+        (
+            &["--replace", "m", "--rate", "0"],
+            "expected a factor in [0.001, 1000] or `max`, got `0`",
+        ),
+    ];
+    for (args, says) in cases {
+        let out = bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(["replay", "not.mcap", "goal.ron"])
+                .args(*args)
+                .current_dir(dir.path())
+                .env("PETREL_RUNTIME_DIR", dir.path()),
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
 }

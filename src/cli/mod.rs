@@ -202,8 +202,9 @@ struct ReplayArgs {
     file: PathBuf,
     #[command(flatten)]
     run: RunArgs,
-    /// A module whose recorded outputs are replayed in its place (repeat for several).
-    #[arg(long, required = true)]
+    /// A module whose recorded outputs are replayed in its place (repeat, or separate with
+    /// commas, for several).
+    #[arg(long, required = true, value_delimiter = ',')]
     replace: Vec<String>,
     /// Recorded time scale: `2` twice as fast, `max` as fast as the agent takes it.
     #[arg(long, default_value = "1", value_parser = record::parse_rate)]

@@ -70,13 +70,37 @@ pub(crate) fn parse_rate(text: &str) -> Result<f64, String> {
     let rate: f64 = text
         .parse()
         .map_err(|_| format!("expected a factor (e.g. 2) or `max`, got `{text}`"))?;
+    // 0 is how the module's parameter says `max`; on the command line it is a typo, not a rate.
+    (rate != 0.0)
+        .then_some(())
+        .ok_or_else(|| format!("expected a factor in [0.001, 1000] or `max`, got `{text}`"))?;
     petrel_record::replay::Rate::from_param(rate)
         .map_err(|_| format!("expected a factor in [0.001, 1000] or `max`, got `{text}`"))?;
     Ok(rate)
 }
 
-/// Turns `replace`d modules off and adds the playback module that writes their outputs.
-pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) {
+/// Turns `replace`d modules off and adds the playback module that writes their outputs; an
+/// error names a `--replace` that is not a module of the config (which would run live, not
+/// be replayed) and a module already called like the playback module.
+pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) -> Result<(), String> {
+    let names: Vec<&str> = file
+        .config
+        .modules
+        .iter()
+        .map(|m| m.name.as_str())
+        .collect();
+    let config = file.path().display().to_string();
+    if names.contains(&REPLAY_MODULE) {
+        return Err(format!(
+            "{config}: has a module named `{REPLAY_MODULE}`, the name of the playback module `petrel replay` adds; rename it to replay this config"
+        ));
+    }
+    if let Some(missing) = spec.replace.iter().find(|r| !names.contains(&r.as_str())) {
+        return Err(format!(
+            "--replace {missing}: {config} has no module `{missing}`; expected one of its modules: {}",
+            names.join(", ")
+        ));
+    }
     let path = std::path::absolute(&spec.file).unwrap_or_else(|_| spec.file.clone());
     for m in file
         .config
@@ -103,6 +127,7 @@ pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) {
         .into(),
         ..Default::default()
     });
+    Ok(())
 }
 
 /// The recording a run asks for: `--record FILE`, else the first config's `record:` section.

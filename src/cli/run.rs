@@ -84,7 +84,10 @@ fn load_all(registry: &ModuleRegistry, args: &RunArgs) -> Result<Vec<ConfigFile>
     for config in &args.configs {
         let mut file = load(config, &args.overlay).map_err(|e| bad_input(&e))?;
         if let Some(replay) = &args.replay {
-            super::record::apply_replay(&mut file, replay);
+            super::record::apply_replay(&mut file, replay).map_err(|e| {
+                eprintln!("error: {e}");
+                ExitCode::from(EXIT_BAD_INPUT)
+            })?;
         }
         check_all(&file, registry).map_err(|e| bad_input(&e))?;
         files.push(file);
