@@ -73,7 +73,10 @@ pub(crate) fn table(rows: &[ModuleRow]) -> String {
     let cells: Vec<[String; 11]> = rows
         .iter()
         .map(|r| {
-            let rate = match r.mean_interval_ms > 0.0 {
+            // The mean interval is what the module's last steps had: of a module that no
+            // longer runs (failed, stopped, disabled) it is no rate.
+            let running = r.status == petrel_actors::status::RUNNING;
+            let rate = match r.mean_interval_ms > 0.0 && running {
                 true => format!("{:.1}", 1000.0 / r.mean_interval_ms),
                 false => "-".into(),
             };
@@ -239,6 +242,17 @@ mod tests {
             table(&rows),
             "AGENT  MODULE  TYPE        STATUS   STEPS  STEPS/S  MEAN_US  LAST_US  RESTARTS  FAILURES  DROPPED\n\
              a      scale   demo.scale  running  42     50.0     3.5      4.0      1         2         7\n"
+        );
+        let failed = ModuleRow {
+            status: "failed".into(),
+            ..rows[0].clone()
+        };
+        let shown = table(&[failed]);
+        let cells: Vec<&str> = shown.lines().nth(1).unwrap().split_whitespace().collect();
+        assert_eq!(
+            cells[3..6],
+            ["failed", "42", "-"],
+            "no rate once it no longer runs"
         );
     }
 }

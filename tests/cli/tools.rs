@@ -18,7 +18,7 @@ fn modules_lists_and_describes_types() {
             "params/factor",
             "param",
             "f64",
-            "finite",
+            "-1e9..=1e9",
             "1.0"
         ])),
         "{described}"

@@ -7,6 +7,7 @@ mod custom_module;
 mod failures;
 mod fairness;
 mod links;
+mod nan_recovery;
 mod ordering;
 mod ordering_modules;
 mod placement;

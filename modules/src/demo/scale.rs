@@ -17,8 +17,13 @@ impl Module for Scale {
     fn declare(ports: &mut Ports) -> Self {
         Scale {
             input: ports.input("in/value", 0.0, "value to scale"),
-            factor: ports.param("params/factor", 1.0, "multiplier"),
-            offset: ports.param("params/offset", 0.0, "added after scaling"),
+            factor: ports.param_in("params/factor", 1.0, Range::new(-1e9, 1e9), "multiplier"),
+            offset: ports.param_in(
+                "params/offset",
+                0.0,
+                Range::new(-1e9, 1e9),
+                "added after scaling",
+            ),
             smoothing: ports.param_in(
                 "params/smoothing",
                 0.0,
@@ -39,8 +44,13 @@ impl Module for Scale {
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         let target = self.factor.value() * self.input.value() + self.offset.value();
         let alpha = self.smoothing.value().clamp(0.0, 1.0);
-        self.out
-            .set(alpha * self.out.value() + (1.0 - alpha) * target);
+        // A past output that is not a number (a NaN input once) is no history to smooth
+        // with: weighted even by 0 it stays NaN, and the output never recovered.
+        let previous = Some(self.out.value()).filter(|p| p.is_finite());
+        self.out.set(match previous {
+            Some(previous) => alpha * previous + (1.0 - alpha) * target,
+            None => target,
+        });
         Ok(())
     }
 }

@@ -61,8 +61,18 @@ impl Module for Signal {
                 Range::new(0.001, 1e6),
                 "waveform period, s",
             ),
-            amplitude: ports.param("params/amplitude", 1.0, "half the peak-to-peak swing"),
-            offset: ports.param("params/offset", 0.0, "value around which the signal swings"),
+            amplitude: ports.param_in(
+                "params/amplitude",
+                1.0,
+                Range::new(-1e9, 1e9),
+                "half the peak-to-peak swing",
+            ),
+            offset: ports.param_in(
+                "params/offset",
+                0.0,
+                Range::new(-1e9, 1e9),
+                "value around which the signal swings",
+            ),
             value: ports.output("out/value", 0.0, "the current sample"),
         }
     }
