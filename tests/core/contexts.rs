@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use petrel::actors::{status, Agent, Blackboard, ConfigFile, DEFAULT_STOP_TIMEOUT};
+use petrel::actors::{status, Agent, Blackboard, ConfigFile, FilePath, DEFAULT_STOP_TIMEOUT};
 
 use crate::support::{advance, registry, start};
 
@@ -195,6 +195,38 @@ async fn reloading_applies_the_difference_and_a_broken_file_changes_nothing() {
         Some("odometry/out/value"),
         "the kept effect stays"
     );
+    r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_refused_reload_puts_params_rules_back_so_a_restart_loads_the_rules_that_ran() {
+    let r = rig(LOST).await;
+    let (bb, rules) = (&r.bb, &r.rules);
+    let missing = rules.with_file_name("missing.rules.ron");
+    bb.set(
+        "contexts/params/rules",
+        FilePath::from(missing.to_str().unwrap()),
+    )
+    .await
+    .unwrap();
+    bb.set("contexts/params/reload", 1_i64).await.unwrap();
+    advance(20).await;
+    let errors = text(bb, "contexts/out/errors").await;
+    assert!(errors.contains("missing.rules.ron"), "{errors}");
+    assert!(errors.contains("params/rules is back to"), "{errors}");
+    let now = bb.get::<FilePath>("contexts/params/rules").await.unwrap();
+    assert_eq!(now.as_path(), rules.as_path());
+
+    // A crash now restarts the manager on the rules that ran, instead of failing to start
+    // until the supervisor gives the agent up.
+    bb.set("contexts/control/fault", "panic".to_string())
+        .await
+        .unwrap();
+    quality(bb, 0.1).await;
+    advance(1000).await;
+    assert_eq!(*bb.get::<i64>("contexts/stats/restarts").await.unwrap(), 1);
+    assert_eq!(text(bb, "contexts/stats/status").await, status::RUNNING);
+    assert_eq!(text(bb, "contexts/out/active").await, "lost");
     r.agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 

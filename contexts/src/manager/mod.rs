@@ -102,6 +102,9 @@ pub struct ContextManager {
     /// The memory published two saves ago, to fill in place (see `save_memory`).
     spare: Option<Arc<ContextMemory>>,
     reload_seen: u64,
+    /// The rules file the engine runs, once one loaded: what `params/rules` is put back to
+    /// when a reload is refused.
+    running_rules: Option<FilePath>,
     started: Option<Instant>,
     /// Contexts whose changes reach their own condition, to name in a loop report.
     self_undoing: Vec<crate::lint::SelfUndoing>,
@@ -166,6 +169,7 @@ impl Module for ContextManager {
             actions: Vec::new(),
             evaluations_at: None,
             reload_seen: 0,
+            running_rules: None,
             started: None,
             self_undoing: Vec::new(),
             last_switched: None,
@@ -315,6 +319,7 @@ impl ContextManager {
             })
             .collect();
         self.handles = handles;
+        self.running_rules = Some((*path).clone());
         self.errors.set(String::new());
         tracing::info!(rules = %path, contexts = loaded.rules.contexts.len(), "context rules loaded");
         Ok(engine)
@@ -341,10 +346,30 @@ impl ContextManager {
                 ctx.reschedule();
             }
             Err(errors) => {
-                tracing::error!("context rules not reloaded; the running rules stay:\n{errors}");
-                self.errors.set(errors);
                 self.watched = previous;
                 self.handles = previous_handles;
+                // `params/rules` is put back to the rules that run: left naming a file that
+                // was refused, a later restart of this manager (a crash) would load it and
+                // fail every time, and the supervisor would give the agent up.
+                let running = self.running_rules.clone();
+                let restored = match &running {
+                    Some(path) if *path != *self.rules.get() => {
+                        let key = format!("{}/params/rules", ctx.module());
+                        match ctx.blackboard().any_handle(&key).await {
+                            Ok(h) => h.set(Arc::new(path.clone())).is_ok(),
+                            Err(_) => false,
+                        }
+                    }
+                    _ => false,
+                };
+                let errors = match (restored, running) {
+                    (true, Some(path)) => {
+                        format!("{errors}\n(params/rules is back to `{path}`, the rules that run)")
+                    }
+                    _ => errors,
+                };
+                tracing::error!("context rules not reloaded; the running rules stay:\n{errors}");
+                self.errors.set(errors);
             }
         }
     }
