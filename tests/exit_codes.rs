@@ -139,6 +139,11 @@ const CASES: &[(&[&str], i32, &str)] = &[
         2,
         "would overwrite its input",
     ),
+    (
+        &["plan", "check", "goal.plan", "--max-states", "0"],
+        2,
+        "no marking explored",
+    ),
     (&["plan", "simulate", "goal.plan"], 0, "goal"),
     (&["plan", "simulate", "fail.plan"], 1, "fail"),
     (&["plan", "simulate", "bad.plan"], 2, "bad input"),

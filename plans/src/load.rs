@@ -19,20 +19,46 @@ pub struct LoadedPlan {
     pub path: PathBuf,
 }
 
-/// Reads a plan, rules or script file as text (a regular file within
-/// [`petrel_actors::files::limits::PLAN`], byte-order mark dropped); PNML files are often
-/// ISO-8859-1, so bytes that are not UTF-8 are read as Latin-1.
+/// Reads a text plan, rules or script file (a regular file within
+/// [`petrel_actors::files::limits::PLAN`], byte-order mark dropped); bytes that are not
+/// UTF-8 are an error at their line and column, as in configs and rules.
 pub(crate) fn read_text(path: &Path) -> Result<String, PlanError> {
-    use petrel_actors::files;
-    let bytes = files::read_bytes(path, "plan file", files::limits::PLAN).map_err(|message| {
-        PlanError::Io {
-            path: path.to_path_buf(),
-            message,
+    let bytes = read_bytes(path)?;
+    match String::from_utf8(bytes) {
+        Ok(s) => Ok(petrel_actors::files::strip_bom(&s).to_string()),
+        Err(e) => {
+            let valid = e.utf8_error().valid_up_to();
+            let before = String::from_utf8_lossy(&e.as_bytes()[..valid]);
+            let count = |n: usize| u32::try_from(n + 1).unwrap_or(u32::MAX);
+            let line = count(before.matches('\n').count());
+            let column = count(before.rsplit('\n').next().map_or(0, |l| l.chars().count()));
+            Err(PlanError::Syntax {
+                file: path.display().to_string(),
+                line,
+                column,
+                message: format!(
+                    "expected UTF-8 text, found the byte 0x{:02X} (save the file as UTF-8)",
+                    e.as_bytes()[valid]
+                ),
+            })
         }
-    })?;
-    Ok(match String::from_utf8(bytes) {
-        Ok(s) => files::strip_bom(&s).to_string(),
+    }
+}
+
+/// Reads a PNML file as text: PNML editors often write ISO-8859-1, so bytes that are not
+/// UTF-8 are read as Latin-1.
+fn read_pnml_text(path: &Path) -> Result<String, PlanError> {
+    Ok(match String::from_utf8(read_bytes(path)?) {
+        Ok(s) => petrel_actors::files::strip_bom(&s).to_string(),
         Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
+    })
+}
+
+fn read_bytes(path: &Path) -> Result<Vec<u8>, PlanError> {
+    use petrel_actors::files;
+    files::read_bytes(path, "plan file", files::limits::PLAN).map_err(|message| PlanError::Io {
+        path: path.to_path_buf(),
+        message,
     })
 }
 
@@ -66,7 +92,11 @@ pub fn load_plan(path: &Path, rules: Option<&Path>) -> Result<LoadedPlan, PlanEr
                 ),
             });
         }
-        parse_pnml(&read_text(path)?, &path.display().to_string(), &stem(path))?
+        parse_pnml(
+            &read_pnml_text(path)?,
+            &path.display().to_string(),
+            &stem(path),
+        )?
     } else {
         compile_file(path, rules)?
     };
@@ -119,7 +149,7 @@ fn attach_subplans(
             Some(sub) => sub.clone(),
             None => {
                 chain.push(name.clone());
-                let sub = parse_pnml(&read_text(&file)?, &file.display().to_string(), &name)?;
+                let sub = parse_pnml(&read_pnml_text(&file)?, &file.display().to_string(), &name)?;
                 let sub = Arc::new(attach_subplans(sub, &file, chain, loaded)?);
                 chain.pop();
                 loaded.insert(file, sub.clone());

@@ -77,3 +77,26 @@ fn random_inputs_never_panic() {
         }
     }
 }
+
+#[test]
+fn a_text_plan_that_is_not_utf8_is_an_error_at_its_byte_and_a_pnml_one_reads_as_latin1() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = dir.path().join("bad.plan");
+    std::fs::write(&text, b"a; b\n  c\xff; d\n").unwrap();
+    let err = load_plan(&text, None).unwrap_err().to_string();
+    assert!(err.contains("bad.plan:2:4"), "{err}");
+    assert!(
+        err.contains("expected UTF-8 text, found the byte 0xFF"),
+        "{err}"
+    );
+    // PNML editors write ISO-8859-1: a place labelled `caf\xe9` reads as `café`.
+    let pnml = dir.path().join("latin.pnml");
+    let mut bytes = br#"<?xml version="1.0" encoding="ISO-8859-1"?><pnml><net id="n"><place id="p1"><name><text>caf"#.to_vec();
+    bytes.extend_from_slice(b"\xe9");
+    bytes.extend_from_slice(br#"</text></name><initialMarking><text>1</text></initialMarking></place><place id="p2"><name><text>goal</text></name></place><transition id="t"><name><text>[true]</text></name></transition><arc id="a1" source="p1" target="t"/><arc id="a2" source="t" target="p2"/></net></pnml>"#);
+    std::fs::write(&pnml, bytes).unwrap();
+    match load_plan(&pnml, None) {
+        Ok(_) => {}
+        Err(e) => assert!(!e.to_string().contains("UTF-8"), "{e}"),
+    }
+}

@@ -24,9 +24,9 @@ pub(crate) enum PlanCommand {
         /// Execution rules for a text plan.
         #[arg(long)]
         rules: Option<PathBuf>,
-        /// Markings explored at most; beyond, the report is marked incomplete.
-        #[arg(long, default_value_t = DEFAULT_MAX_STATES)]
-        max_states: usize,
+        /// Markings explored at most (1 or more); beyond, the report is marked incomplete.
+        #[arg(long, default_value_t = DEFAULT_MAX_STATES as u64, value_parser = clap::value_parser!(u64).range(1..))]
+        max_states: u64,
     },
     /// Prints the plan as a Graphviz graph (`petrel plan dot P | dot -Tsvg > p.svg`).
     Dot {
@@ -75,6 +75,7 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             rules,
             max_states,
         } => with_plan(&plan, rules.as_deref(), |loaded| {
+            let max_states = usize::try_from(max_states).unwrap_or(usize::MAX);
             let report = check_with(&loaded.plan, &CheckOptions { max_states });
             print!("{report}");
             if report.is_ok() {
