@@ -233,6 +233,11 @@ pub(crate) struct WriteRule {
     pub range: Option<crate::range::RangeCheck>,
     /// The property's one-line description, for the out-of-range message.
     pub doc: String,
+    /// Its module reads it only when it starts: every write through a handle is refused
+    /// (handles write while the agent runs; configs and snapshots go through the registry).
+    pub read_at_start: bool,
+    /// Its rule on whole values, if any.
+    pub shape: Option<crate::ports::Shape>,
 }
 
 impl WriteRule {
@@ -242,12 +247,21 @@ impl WriteRule {
         key: &str,
         kind: crate::PropertyKind,
         range: Option<&crate::range::RangeCheck>,
+        shape: Option<&crate::ports::Shape>,
         doc: &str,
         value: &AnyValue,
     ) -> Result<(), crate::BlackboardError> {
         if !kind.settable() {
             let key = key.to_string();
             return Err(crate::BlackboardError::NotSettable { key, kind });
+        }
+        if let Some((shape, refused)) = shape.and_then(|s| Some((s, (s.refuses)(value)?))) {
+            return Err(crate::BlackboardError::OutOfRange {
+                key: key.to_string(),
+                value: refused,
+                range: shape.expected.to_string(),
+                doc: doc.to_string(),
+            });
         }
         match range.and_then(|check| Some((check, check.refuses(value)?))) {
             Some((check, refused)) => Err(crate::BlackboardError::OutOfRange {
@@ -322,10 +336,14 @@ impl AnyHandle {
             });
         }
         let rule = &*self.rule;
+        if rule.read_at_start {
+            return Err(crate::BlackboardError::ReadAtStart { key: key() });
+        }
         WriteRule::check(
             &self.ep.key,
             rule.kind,
             rule.range.as_ref(),
+            rule.shape.as_ref(),
             &rule.doc,
             value,
         )

@@ -36,12 +36,38 @@ pub struct PropertyDecl {
     pub capacity: Option<usize>,
     /// The values a numeric parameter accepts (every `f64` parameter: finite ones at least).
     pub(crate) range: Option<crate::range::RangeCheck>,
+    /// A parameter its module reads only when it starts (see [`Ports::read_at_start`]).
+    pub(crate) read_at_start: bool,
+    /// What a value must look like beyond its numbers' range (see [`Ports::accept_last`]).
+    pub(crate) shape: Option<Shape>,
+}
+
+/// Says, of a value, how people read it if it is refused.
+type ShapeRule = dyn Fn(&AnyValue) -> Option<String> + Send + Sync;
+
+/// A parameter's rule on a whole value (a list's length, its bounds' order), with what it
+/// takes in words: checked wherever a range is (configs, `petrel check`, tools, rules,
+/// bindings).
+#[derive(Clone)]
+pub(crate) struct Shape {
+    /// The value as people read it, if refused.
+    pub refuses: Arc<ShapeRule>,
+    pub expected: &'static str,
 }
 
 impl PropertyDecl {
+    /// Whether its module reads it only when it starts, so a running agent refuses to change
+    /// it (see [`Ports::read_at_start`]).
+    pub fn is_read_at_start(&self) -> bool {
+        self.read_at_start
+    }
+
     /// What it accepts, for a listing: a numeric parameter's range (`0..=1`) or the words a
     /// text property takes (`sine|square`); `None` when it takes any value of its type.
     pub fn accepts(&self) -> Option<String> {
+        if let Some(shape) = &self.shape {
+            return Some(shape.expected.to_string());
+        }
         let check = self.range?;
         match check.choices() {
             [] => Some(check.range.to_string()),
@@ -201,6 +227,63 @@ impl Ports {
         decl.range = Some(check);
     }
 
+    /// Marks parameters (declared already) that the module reads only when it starts (in
+    /// `init`, or into a core built there): a running agent refuses to change them, from a
+    /// tool, a context rule or a plan binding, and `petrel check` refuses rules and bindings
+    /// that would. Without it such a write was taken and did nothing, or, when the value was
+    /// one `init` refuses, made the module's next restart fail. Configs, overlays and
+    /// snapshots set them as before, ahead of the start. Like ROS 2's read-only parameters.
+    pub fn read_at_start(&mut self, paths: &[&str]) {
+        for path in paths {
+            match self.decls.iter_mut().find(|d| d.path == *path) {
+                Some(d) if d.kind == PropertyKind::Param => d.read_at_start = true,
+                _ => self.errors.push(format!(
+                    "`{path}` of module `{}` is marked read at start but is no parameter it declared",
+                    self.module
+                )),
+            }
+        }
+    }
+
+    /// Adds a rule on the whole value of the parameter declared last (of type `T`): `accepts`
+    /// says whether a value is one it takes, `expected` says in words what it takes (for the
+    /// message and `petrel modules describe`). For values whose numbers are each in range but
+    /// that do not fit together (`[x0, y0, x1, y1]` with x0 > x1, a list of the wrong length):
+    /// refused at load, by `petrel check`, and from tools, rules and bindings while running,
+    /// rather than failing the module's step or its next start.
+    pub fn accept_last<T: PropertyType>(
+        &mut self,
+        accepts: fn(&T) -> bool,
+        expected: &'static str,
+    ) {
+        let Some(decl) = self.decls.last_mut() else {
+            return;
+        };
+        if decl.type_info != TypeInfo::of::<T>() {
+            self.errors.push(format!(
+                "`{}` of module `{}`: a value rule for another type than its own",
+                decl.path, self.module
+            ));
+            return;
+        }
+        let refuses = move |value: &AnyValue| {
+            let value = value.downcast_ref::<T>()?;
+            (!accepts(value)).then(|| format!("{value:?}"))
+        };
+        if let Some(default) = &decl.default {
+            if refuses(default).is_some() {
+                self.errors.push(format!(
+                    "parameter `{}` of module `{}`: its default is not {expected}",
+                    decl.path, self.module
+                ));
+            }
+        }
+        decl.shape = Some(Shape {
+            refuses: Arc::new(refuses),
+            expected,
+        });
+    }
+
     /// Declares an output `out/...` with its initial value.
     pub fn output<T: PropertyType>(&mut self, path: &str, initial: T, doc: &str) -> Output<T> {
         Output::new(
@@ -324,6 +407,8 @@ impl Ports {
             doc: doc.to_string(),
             capacity,
             range: None,
+            read_at_start: false,
+            shape: None,
         });
     }
 

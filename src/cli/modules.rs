@@ -48,7 +48,10 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
                 p.type_info.name().to_string(),
                 p.accepts().unwrap_or_default(),
                 p.default_text(),
-                p.doc.clone(),
+                match p.is_read_at_start() {
+                    true => format!("{} (read at start: not settable while running)", p.doc),
+                    false => p.doc.clone(),
+                },
             ]
         })
         .collect();

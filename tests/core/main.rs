@@ -10,6 +10,7 @@ mod links;
 mod nan_recovery;
 mod ordering;
 mod ordering_modules;
+mod param_rules;
 mod placement;
 mod queues;
 mod realtime;

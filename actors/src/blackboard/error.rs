@@ -87,6 +87,14 @@ pub enum BlackboardError {
         /// What the parameter is, in its module's words.
         doc: String,
     },
+    /// A parameter its module reads only when it starts, written while the agent runs.
+    #[error(
+        "`{key}` is read once, when its module starts: a running agent does not change it (set it in the config; a context rule or plan binding cannot set it either)"
+    )]
+    ReadAtStart {
+        /// The property.
+        key: String,
+    },
     /// The property cannot be set (stats, queues).
     #[error(
         "`{key}` ({kind}) cannot be set: only inputs, parameters, outputs, state and `enabled` can"

@@ -132,7 +132,7 @@ impl Actor for BlackboardActor {
                 let _ = reply.send(result);
             }
             BlackboardMsg::SetRon(key, value, reply) => {
-                let _ = reply.send(reg.set_from_ron(&key, value));
+                let _ = reply.send(reg.set_from_ron_live(&key, value));
             }
             BlackboardMsg::Get(key, reply) => {
                 let _ = reply.send(reg.get(&key));
@@ -327,13 +327,31 @@ impl Blackboard {
         .await
     }
 
-    /// Sets a property from RON text, checking it against the property's type.
+    /// Sets a property from RON text, checking it against the property's type and range, as a
+    /// person's write while the agent runs (`petrel set`, the console): a parameter its module
+    /// reads only when it starts is refused.
     pub async fn set_text(&self, address: &str, ron_text: &str) -> Result<(), BlackboardError> {
-        let value: ron::Value = ron::from_str(ron_text).map_err(|e| BlackboardError::BadValue {
+        let bad = |reason: String| BlackboardError::BadValue {
             key: address.to_string(),
             expected: "a RON value",
-            reason: e.to_string(),
+            reason,
+        };
+        let value: ron::Value = ron::from_str(ron_text).map_err(|e| {
+            bad(match e.code {
+                // ron's own text names its options, which a person setting a value cannot use.
+                ron::Error::ExceededRecursionLimit => {
+                    "nested too deeply (lists or structures within each other)".into()
+                }
+                _ => e.to_string(),
+            })
         })?;
+        // RON reads a bare word as a unit value: text takes quotes.
+        let word = ron_text.trim();
+        if value == ron::Value::Unit && !word.is_empty() && word != "()" {
+            return Err(bad(format!(
+                "`{word}` is a bare word; text takes double quotes, `\"{word}\"` (in a shell: '\"{word}\"')"
+            )));
+        }
         self.call(|r| BlackboardMsg::SetRon(address.to_string(), value, r))
             .await
     }

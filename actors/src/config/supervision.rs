@@ -25,6 +25,15 @@ impl ConfigFile {
     /// Checks the `supervision` section, groups, and the modules' supervision fields.
     pub(super) fn check_supervision(&self) -> Vec<ConfigError> {
         let mut errors = Vec::new();
+        // Named in events, the run summary and module settings like a module.
+        for g in &self.config.groups {
+            if !crate::url::valid_segment(&g.name) {
+                errors.push(self.locate(
+                    &format!("\"{}\"", g.name),
+                    format!("group name `{}`: {}", g.name, super::NAME_RULE),
+                ));
+            }
+        }
         let at = |needle: &str, message: String| self.locate(&format!("{needle}:"), message);
         let s = &self.config.supervision;
         let mut intensity = |what: &str, max: u32, within: f64, needle: &str| {

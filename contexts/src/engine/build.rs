@@ -115,7 +115,11 @@ impl Engine {
                         None,
                         format!("context `{}`: cannot relink `{input}` ({}) to `{source}` ({}): the types differ", rule.name, a.name(), b.name()),
                     )),
-                    (Some(_), Some(_)) => {}
+                    (Some(_), Some(_)) => {
+                        if let Some(why) = schema.refuses_link(input, source) {
+                            errors.push(err(Some(source), None, format!("context `{}`: cannot relink `{input}` to `{source}`: {why}", rule.name)));
+                        }
+                    }
                     (None, _) => errors.push(err(Some(input), None, format!("context `{}`: unknown property `{input}`", rule.name))),
                     (_, None) => errors.push(err(Some(source), None, format!("context `{}`: unknown property `{source}`", rule.name))),
                 }

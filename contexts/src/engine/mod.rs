@@ -26,6 +26,14 @@ pub trait Schema {
     /// Why the property at `path` would refuse `value` (of its type), if it would: a kind
     /// nobody sets from outside (`stats/...`, queues) or a parameter out of its range.
     fn refuses(&self, path: &str, value: &AnyValue) -> Option<String>;
+
+    /// Why `input` could not be linked to `source`, if it could not: not an input or
+    /// parameter, a value and a queue, other types, or a link cycle with the links there are.
+    /// Known to a schema that holds the links (`petrel check`'s registry); others say nothing
+    /// and the link is checked when made.
+    fn refuses_link(&self, _input: &str, _source: &str) -> Option<String> {
+        None
+    }
 }
 
 /// One step of the engine's output, in the order to carry out. Fields are named by what they

@@ -15,7 +15,13 @@ impl Schema for Registry {
     }
 
     fn refuses(&self, path: &str, value: &AnyValue) -> Option<String> {
-        self.check_set(path, value).err().map(|e| e.to_string())
+        self.check_live_set(path, value)
+            .err()
+            .map(|e| e.to_string())
+    }
+
+    fn refuses_link(&self, input: &str, source: &str) -> Option<String> {
+        self.check_link(input, source).err().map(|e| e.to_string())
     }
 }
 

@@ -37,7 +37,7 @@ impl Module for Chaos {
         "Makes the modules in params/targets panic, hang or fail at random.";
 
     fn declare(ports: &mut Ports) -> Self {
-        Chaos {
+        let module = Chaos {
             targets: ports.param(
                 "params/targets",
                 String::new(),
@@ -59,7 +59,10 @@ impl Module for Chaos {
             handles: Vec::new(),
             kinds: Vec::new(),
             rng: crate::seeded::seeded(1),
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&["params/targets", "params/faults", "params/seed"]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

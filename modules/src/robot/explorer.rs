@@ -64,7 +64,7 @@ impl Module for ExplorerModule {
         "Explores the map being built: sends the path planner to the best reachable frontier until none is left.";
 
     fn declare(ports: &mut Ports) -> Self {
-        ExplorerModule {
+        let module = ExplorerModule {
             map: ports.input("in/map", OccupancyGrid::default(), "the map being built"),
             searched: ports.input("in/searched", OccupancyGrid::default(), "optional: the floor a camera searched (nav.searched's out/searched); reachable free cells not searched are frontiers too, so exploring ends only when the camera looked everywhere"),
             robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose"),
@@ -80,7 +80,11 @@ impl Module for ExplorerModule {
             give_up_s: ports.param_in("params/give_up_s", 60.0, Range::new(0.1, 1e7), "a target not reached within this many simulated seconds is given up (and skipped from then on)"),
             end_run: ports.param("params/end_run", false, "end the run when exploration is done (exit 0) or times out (exit 1)"),
             timeout_s: ports.param_in("params/timeout_s", 0.0, Range::new(0.0, 1e7), "simulated time after which exploration fails, s (0 = none)"),
-            area: ports.param("params/area", Vec::new(), "explore only frontiers in `[x0, y0, x1, y1]` (a robot's share of a team's search); empty = everywhere. Read at every step: a new area starts exploring again"),
+            area: {
+                let area = ports.param("params/area", Vec::new(), "explore only frontiers in `[x0, y0, x1, y1]` (a robot's share of a team's search); empty = everywhere. Read at every step: a new area starts exploring again");
+                ports.accept_last(area_fits, "`[]` or `[x0, y0, x1, y1]` with x0 < x1 and y0 < y1");
+                area
+            },
             team: ports.param("params/team", false, "follow a team's search: go to the frontier `in/assigned` names (a coordinator's nav.team_search allocates it on the team's merged map) instead of choosing one on this robot's map; done when `in/teamDone` is"),
             assigned: ports.input("in/assigned", Vec::new(), "with params/team: the frontier to explore, `[x, y]`; empty = none for now"),
             team_done: ports.input("in/teamDone", false, "with params/team: the team's search is over"),
@@ -90,7 +94,15 @@ impl Module for ExplorerModule {
             frontiers: ports.output("out/frontiers", 0, "reachable frontiers at the last evaluation"),
             explored: ports.output("out/explored", 0.0, "known area of the map, m²"),
             state: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/clearance",
+            "params/min_frontier_cells",
+            "params/gain_weight",
+            "params/blacklist_radius",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {
@@ -294,7 +306,8 @@ impl ExplorerModule {
         Ok(())
     }
 
-    /// `params/area` as the core takes it.
+    /// `params/area` as the core takes it (refused before it is set when it does not fit:
+    /// [`area_fits`]).
     fn area(&self) -> anyhow::Result<Option<[f64; 4]>> {
         let area = match self.area.get().as_slice() {
             [] => None,
@@ -309,5 +322,20 @@ impl ExplorerModule {
         };
         check.validate().map_err(|e| param_error(e, &[]))?;
         Ok(area)
+    }
+}
+
+/// Whether `area` is one `params/area` takes: empty, or a box the frontier search accepts.
+#[allow(clippy::ptr_arg)] // the parameter is a `Vec<f64>`: a rule on it takes one
+fn area_fits(area: &Vec<f64>) -> bool {
+    match area.as_slice() {
+        [] => true,
+        &[x0, y0, x1, y1] => FrontierParams {
+            area: Some([x0, y0, x1, y1]),
+            ..FrontierParams::default()
+        }
+        .validate()
+        .is_ok(),
+        _ => false,
     }
 }

@@ -108,7 +108,7 @@ impl Module for LocalizerModule {
         "Estimates the robot pose from odometry, corrected by scan matching or with simulated drift and lost episodes.";
 
     fn declare(ports: &mut Ports) -> Self {
-        LocalizerModule {
+        let module = LocalizerModule {
             odometry: ports.queue_in("in/odometry", "odometric poses"),
             scans: ports.queue_in(
                 "in/laserScan",
@@ -220,7 +220,24 @@ impl Module for LocalizerModule {
             pending_scans: VecDeque::new(),
             odometry_stamp: None,
             core: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/scan_matching",
+            "params/resolution",
+            "params/size",
+            "params/origin",
+            "params/laser_mount",
+            "params/drift_per_meter",
+            "params/drift_direction",
+            "params/lost_episodes",
+            "params/lost_drift_speed",
+            "params/lost_heading_rate",
+            "params/recovery_time",
+            "params/quality_scale",
+            "params/heading_quality_scale",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

@@ -35,7 +35,7 @@ impl Module for MapperModule {
         "Builds an occupancy grid from laser scans taken at the estimated pose.";
 
     fn declare(ports: &mut Ports) -> Self {
-        MapperModule {
+        let module = MapperModule {
             scans: ports.queue_in("in/laserScan", "laser scans"),
             pose: ports.input(
                 "in/pose",
@@ -77,7 +77,17 @@ impl Module for MapperModule {
             ),
             pending: VecDeque::new(),
             core: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/resolution",
+            "params/size",
+            "params/origin",
+            "params/laser_mount",
+            "params/fov_deg",
+            "params/max_range",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

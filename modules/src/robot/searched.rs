@@ -39,7 +39,7 @@ impl Module for SearchedModule {
         "Marks the map cells the camera looked at well enough to see a victim (in range, in view, not hidden, image not too dark or bright), for an explorer that searches.";
 
     fn declare(ports: &mut Ports) -> Self {
-        SearchedModule {
+        let module = SearchedModule {
             frames: ports.input("in/frames", 0, "frames the detector processed (link to its out/frames): each new value is one frame looked at"),
             map: ports.input("in/map", OccupancyGrid::default(), "the navigation map (walls and unknown space hide what lies behind them)"),
             robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead); the floor of a frame is searched from the first pose written at or after its stamp (in/frames' write time: the detector stamps it with the frame's)"),
@@ -59,7 +59,17 @@ impl Module for SearchedModule {
             last_frame: 0,
             poses: PoseTrail::default(),
             core: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/fov_deg",
+            "params/victim_radius",
+            "params/min_range",
+            "params/max_range",
+            "params/edge_range",
+            "params/min_views",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

@@ -50,7 +50,7 @@ impl Module for GoalSequencerModule {
         "Feeds goals one at a time, prints progress, and ends the run: exit 0 when all are reached.";
 
     fn declare(ports: &mut Ports) -> Self {
-        GoalSequencerModule {
+        let module = GoalSequencerModule {
             goals: ports.param("params/goals", Path2::default(), "goals in visiting order, `[(x: 1.0, y: 2.0), ...]` (world frame)"),
             tolerance: ports.param_in("params/tolerance", 0.4, Range::new(0.01, 100.0), "distance within which an arrival at a goal counts, m (>= the planner's goal_tolerance)"),
             timeout_s: ports.param_in("params/timeout_s", 600.0, Range::new(0.1, 1e7), "mission time after which the mission fails, s"),
@@ -65,7 +65,10 @@ impl Module for GoalSequencerModule {
             reached: ports.output("out/reached", 0, "goals reached so far"),
             done: ports.output("out/done", false, "every goal reached"),
             run: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&["params/goals", "params/tolerance"]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

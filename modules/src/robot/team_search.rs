@@ -80,7 +80,7 @@ impl Module for TeamSearch {
         "A team's shared search: merges its robots' maps and searched floor, allocates the merged map's frontiers (unknown space, floor no camera searched) to the robots (nearest unclaimed, none shared), reassigns a departed robot's frontier.";
 
     fn declare(ports: &mut Ports) -> Self {
-        TeamSearch {
+        let module = TeamSearch {
             members: ports.param("params/members", MemberNames::default(), "the nav.team_member modules of this agent, one per robot, each named as its robot's agent"),
             clock: ports.input("in/clock", 0.0, "simulated time, s (link it to the world's out/simTime)"),
             replan_s: ports.param_in("params/replan_s", 1.0, Range::new(0.05, 1e4), "merge and allocate this often, simulated s"),
@@ -97,7 +97,15 @@ impl Module for TeamSearch {
             reassigned: ports.output("out/reassigned", 0, "frontiers of departed robots given to others"),
             saved_log: ports.state("state/log", TeamLog::default(), "who explored how many frontiers, who left, stalled or took over: the summary goes on from here after a restart"),
             state: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/members",
+            "params/clearance",
+            "params/min_frontier_cells",
+            "params/blacklist_radius",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

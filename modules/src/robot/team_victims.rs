@@ -25,7 +25,7 @@ impl Module for TeamVictimsModule {
         "Merges the victims the robots of a team report (messages `x y id`: a later report with the same id revises the robot's estimate) into one list: who found which.";
 
     fn declare(ports: &mut Ports) -> Self {
-        TeamVictimsModule {
+        let module = TeamVictimsModule {
             inbox: ports.queue_in(
                 "in/inbox",
                 "victims reported by robots' vision.victim_mapper (`x y id`: map frame, metres, then the robot's id for the victim; without the id a report cannot be revised)",
@@ -49,7 +49,10 @@ impl Module for TeamVictimsModule {
             found: ports.output("out/found", 0, "the team's victims"),
             saved: ports.state("state/list", TeamVictims::default(), "the list with every robot's latest report: a restarted module goes on from it"),
             core: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&["params/merge_radius"]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

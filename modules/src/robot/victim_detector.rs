@@ -32,7 +32,11 @@ impl Module for VictimDetector {
             images: ports.queue_in("in/image", "camera frames (mono8)"),
             threshold: ports.param_in("params/threshold", 12.0, Range::new(0.1, 255.0), "texture above the noise floor that marks a victim, grey levels (0, 255]; read every frame"),
             deblur: ports.param_in("params/deblur", 0.0, Range::new(0.0, 4.0), "sharpening amount before detection, [0, 4], 0 = off (costs CPU); read every frame"),
-            roi: ports.param("params/roi", vec![0.0, 0.5, 1.0, 1.0], "region searched, fractions `[x0, y0, x1, y1]` of the image, top-left origin"),
+            roi: {
+                let roi = ports.param("params/roi", vec![0.0, 0.5, 1.0, 1.0], "region searched, fractions `[x0, y0, x1, y1]` of the image, top-left origin");
+                ports.accept_last(roi_fits, "fractions `[x0, y0, x1, y1]` with 0 <= x0 < x1 <= 1 and 0 <= y0 < y1 <= 1");
+                roi
+            },
             fov_deg: ports.param_in("params/fov_deg", 60.0, Range::new(1.0, 179.0), "the camera's horizontal field of view, degrees"),
             // What this detector needs from its camera: a driver whose settings are linked here
             // follows them (a team robot's body in the world agent does; the detector itself
@@ -111,4 +115,17 @@ impl VictimDetector {
             .map_err(|e| anyhow!("invalid parameter {e}"))?;
         Ok(params)
     }
+}
+
+/// Whether `roi` is one `params/roi` takes: a region the detector accepts.
+#[allow(clippy::ptr_arg)] // the parameter is a `Vec<f64>`: a rule on it takes one
+fn roi_fits(roi: &Vec<f64>) -> bool {
+    <[f64; 4]>::try_from(roi.as_slice()).is_ok_and(|roi| {
+        DetectorParams {
+            roi,
+            ..DetectorParams::default()
+        }
+        .validate()
+        .is_ok()
+    })
 }

@@ -67,7 +67,7 @@ impl Module for VictimMapper {
         "Turns repeated victim detections and the robot pose into de-duplicated victim positions in the map frame; a mission reports or dismisses them one at a time.";
 
     fn declare(ports: &mut Ports) -> Self {
-        VictimMapper {
+        let module = VictimMapper {
             detections: ports.input("in/detections", Detections::default(), "detections of the latest frame"),
             robot: ports.input("in/robotPose", Pose2::default(), "estimated robot pose (camera at its centre, looking ahead); a frame's sightings are placed from the first pose written at or after its stamp (in/detections' write time: the detector stamps it with the frame's)"),
             report: ports.input("in/report", false, "while true: the target is reported (joins out/victims), then out/reportDone is true"),
@@ -96,7 +96,18 @@ impl Module for VictimMapper {
             frame_version: None,
             poses: PoseTrail::default(),
             core: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/merge_radius",
+            "params/confirm_hits",
+            "params/min_confidence",
+            "params/max_range",
+            "params/confirm_range",
+            "params/standoff",
+            "params/view_frames",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

@@ -123,7 +123,7 @@ impl Module for SimWorld {
         "Simulates robots (kinematics, odometry, laser, camera, collisions) in a world file: itself, or the sim.body modules it names.";
 
     fn declare(ports: &mut Ports) -> Self {
-        SimWorld {
+        let module = SimWorld {
             world_file: ports.param("params/world", FilePath::default(), "world file: `.txt` ASCII grid or `.yaml` map_server map (relative to the config file)"),
             start: ports.param("params/start", Vec::new(), "start pose `[x, y, heading_deg]`; empty = the world file's `R` marker"),
             png: ports.param("params/png", String::new(), "a picture (path relative to the working directory, as sim.recorder's) written when the run stops: the world, its victims, every robot's trajectory in its own colour, a cross where one whose agent left the team stopped (empty = none)"),
@@ -169,7 +169,10 @@ impl Module for SimWorld {
             saved_world: ports.state("state/world", WorldState::default(), "time and robots' motion, kept when stopped for a restart or a move: the next instance goes on from them (once)"),
             saved_tracks: ports.state("state/tracks", Tracks::default(), "trajectories and departures for the picture, kept likewise"),
             sim: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&["params/world", "params/start", "params/seed", "params/dt"]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

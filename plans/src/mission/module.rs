@@ -55,7 +55,7 @@ impl Module for Mission {
         "Runs a Petri Net Plan: actions bound to modules, conditions to property expressions.";
 
     fn declare(ports: &mut Ports) -> Self {
-        Mission {
+        let module = Mission {
             plan_path: ports.param("params/plan", FilePath::default(), "plan file (.pnml or text plan), relative to the config file"),
             rules: ports.param("params/rules", FilePath::default(), "execution rules file for a text plan (empty = none), relative to the config file"),
             is_mission: ports.param("params/is_mission", false, "goal stops the agent with exit code 0, fail with 1"),
@@ -79,7 +79,19 @@ impl Module for Mission {
             wake: ports.state("state/wake", 0, "bumped to make the mission step again: a held/age deadline passed, or many steps fired in a row"),
             memory: ports.state("state/memory", MissionMemory::default(), "the plan's marking, running actions with their start times, and what each action did: a restarted mission goes on from here"),
             run: None,
-        }
+        };
+        // Read only by `init`: a running agent refuses new values for these.
+        ports.read_at_start(&[
+            "params/plan",
+            "params/rules",
+            "params/actions",
+            "params/conditions",
+            "params/places",
+            "params/mode",
+            "params/executor",
+            "params/allow_unbound",
+        ]);
+        module
     }
 
     fn schedule(&self) -> Schedule {

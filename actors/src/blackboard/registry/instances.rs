@@ -124,6 +124,8 @@ impl Registry {
             doc: "failures, restarts and give-ups of this agent's modules".into(),
             capacity: Some(EVENTS_CAPACITY),
             range: None,
+            read_at_start: false,
+            shape: None,
         };
         let handle = Handle::QueueOut(QueueCore::new(&key, type_info, EVENTS_CAPACITY));
         self.entries.insert(

@@ -179,6 +179,8 @@ impl Registry {
                         doc: format!("items `{}` lost by lagging behind its queue", decl.path),
                         capacity: None,
                         range: None,
+                        read_at_start: false,
+                        shape: None,
                     };
                     let key = format!("{module}/{}", dropped.path);
                     let entry = Entry {
@@ -310,6 +312,17 @@ impl Registry {
     }
 
     fn link_local(&mut self, from: &str, to: &str) -> Result<(), BlackboardError> {
+        let (from, to) = self.check_link(from, to)?;
+        self.drop_remote(&from);
+        self.links.set(&from, Some(&to));
+        self.resolve(&from);
+        Ok(())
+    }
+
+    /// Whether `from` could be linked to `to`, a property of this agent, as the links stand:
+    /// `from` linkable, both values or both queues, one type, and no cycle. Returns both keys.
+    /// For checks made before a run (a context rule's `relink`) as well as for linking.
+    pub fn check_link(&self, from: &str, to: &str) -> Result<(String, String), BlackboardError> {
         let from = self.key_of(from)?;
         let to = self.key_of(to)?;
         let (f, t) = (&self.entries[&from].decl, &self.entries[&to].decl);
@@ -339,10 +352,7 @@ impl Registry {
         if let Some(chain) = self.links.cycle(&from, &to) {
             return Err(BlackboardError::Cycle(chain));
         }
-        self.drop_remote(&from);
-        self.links.set(&from, Some(&to));
-        self.resolve(&from);
-        Ok(())
+        Ok((from, to))
     }
 
     /// Removes the link of `from`: it reads its own value (or private queue) again.

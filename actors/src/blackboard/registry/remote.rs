@@ -58,6 +58,8 @@ impl Registry {
                     doc: format!("how the remote link of `{path}` fares"),
                     capacity: None,
                     range: None,
+                    read_at_start: false,
+                    shape: None,
                 };
                 let ep =
                     Endpoint::new(&status_key, decl.type_info, Arc::new(LinkStatus::default()));
@@ -201,6 +203,8 @@ impl Registry {
                     doc: "messages of out/outbox delivered, refused and dropped".into(),
                     capacity: None,
                     range: None,
+                    read_at_start: false,
+                    shape: None,
                 };
                 let ep = Endpoint::new(&key, decl.type_info, Arc::new(OutboxStatus::default()));
                 self.insert_runtime(key, decl, Handle::Value(ep.clone()));
@@ -261,6 +265,8 @@ impl Registry {
             doc: "the alive agents of the team and their modules".into(),
             capacity: None,
             range: None,
+            read_at_start: false,
+            shape: None,
         };
         let key = format!("{TEAM_MODULE}/members");
         let ep = Endpoint::new(&key, members.type_info, Arc::new(TeamMembers::default()));
@@ -273,6 +279,8 @@ impl Registry {
             doc: "agents that joined, left or rejoined the team".into(),
             capacity: Some(TEAM_EVENTS_CAPACITY),
             range: None,
+            read_at_start: false,
+            shape: None,
         };
         let key = format!("{TEAM_MODULE}/events");
         let core = QueueCore::new(&key, events.type_info, TEAM_EVENTS_CAPACITY);

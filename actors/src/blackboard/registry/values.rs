@@ -59,8 +59,44 @@ impl Registry {
     pub fn check_set(&self, address: &str, value: &AnyValue) -> Result<String, BlackboardError> {
         let key = self.key_of(address)?;
         let decl = &self.entries[&key].decl;
-        crate::handle::WriteRule::check(&key, decl.kind, decl.range.as_ref(), &decl.doc, value)?;
+        crate::handle::WriteRule::check(
+            &key,
+            decl.kind,
+            decl.range.as_ref(),
+            decl.shape.as_ref(),
+            &decl.doc,
+            value,
+        )?;
         Ok(key)
+    }
+
+    /// [`check_set`](Self::check_set) for a write while the agent runs (a person's `petrel
+    /// set`, a context rule's, a plan binding's), which also refuses a parameter its module
+    /// reads only when it starts ([`Ports::read_at_start`](crate::Ports::read_at_start)).
+    pub fn check_live_set(
+        &self,
+        address: &str,
+        value: &AnyValue,
+    ) -> Result<String, BlackboardError> {
+        let key = self.check_set(address, value)?;
+        match self.entries[&key].decl.read_at_start {
+            true => Err(BlackboardError::ReadAtStart { key }),
+            false => Ok(key),
+        }
+    }
+
+    /// [`set_from_ron`](Self::set_from_ron) for a person's write while the agent runs (`petrel
+    /// set`, the console): a parameter read only at start is refused before its value is read.
+    pub fn set_from_ron_live(
+        &mut self,
+        address: &str,
+        value: ron::Value,
+    ) -> Result<(), BlackboardError> {
+        let key = self.key_of(address)?;
+        if self.entries[&key].decl.read_at_start {
+            return Err(BlackboardError::ReadAtStart { key });
+        }
+        self.set_from_ron(&key, value)
     }
 
     /// Sets any value property, including runtime-owned `stats/...`.
@@ -136,10 +172,15 @@ impl Registry {
             kind: decl.kind,
             range: decl.range,
             doc: decl.doc.clone(),
+            read_at_start: decl.read_at_start,
+            shape: decl.shape.clone(),
         };
         Ok(crate::AnyHandle {
             ep,
-            plain: rule.kind.settable() && rule.range.is_none(),
+            plain: rule.kind.settable()
+                && rule.range.is_none()
+                && rule.shape.is_none()
+                && !rule.read_at_start,
             rule: Arc::new(rule),
         })
     }
