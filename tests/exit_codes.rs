@@ -161,6 +161,12 @@ const CASES: &[(&[&str], i32, &str)] = &[
     ),
     (&["ls"], 0, "nothing running is an empty listing"),
     (&["top", "--once"], 0, "nothing running is an empty table"),
+    (&["ls", "--pid", "999999"], 1, "no run has that pid"),
+    (
+        &["top", "--once", "--pid", "999999"],
+        1,
+        "no run has that pid",
+    ),
     (&["get", "petrel://nobody/c/out/value"], 1, "no such agent"),
     (
         &["set", "petrel://nobody/c/params/x", "1"],

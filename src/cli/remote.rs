@@ -112,12 +112,29 @@ fn list_agents(reach: &Reach) -> ExitCode {
         eprintln!("error: `petrel ls --via CONFIG` needs an AGENT: a team has no list of agents to ask before it is joined");
         return ExitCode::from(EXIT_BAD_INPUT);
     }
-    let records: Vec<_> = discovery::running(&discovery::directory())
-        .into_iter()
-        .filter(|r| reach.pid.is_none_or(|p| p == r.pid))
-        .collect();
-    print!("{}", super::listing::agents(&records));
-    ExitCode::SUCCESS
+    match runs(reach) {
+        Ok(records) => {
+            print!("{}", super::listing::agents(&records));
+            ExitCode::SUCCESS
+        }
+        Err(code) => code,
+    }
+}
+
+/// The runs on this machine, or with `--pid` that one; a pid that runs nothing here is an
+/// error naming the pids that do (an empty listing looked like nothing running at all).
+pub(crate) fn runs(reach: &Reach) -> Result<Vec<discovery::Record>, ExitCode> {
+    let records = discovery::running(&discovery::directory());
+    let Some(pid) = reach.pid else {
+        return Ok(records);
+    };
+    let (mine, others): (Vec<_>, Vec<_>) = records.into_iter().partition(|r| r.pid == pid);
+    if mine.is_empty() {
+        let runs: Vec<u32> = others.iter().map(|r| r.pid).collect();
+        eprintln!("error: {}", discovery::FindError::NoSuchRun { pid, runs });
+        return Err(ExitCode::from(EXIT_REFUSED));
+    }
+    Ok(mine)
 }
 
 /// The team section to reach `agent` with: the `--via` config's, or the recorded run's.

@@ -118,9 +118,8 @@ pub(crate) fn targets(reach: &Reach, agent: Option<&str>) -> Result<Vec<Reachabl
             eprintln!("error: with --via CONFIG, name the AGENT");
             Err(ExitCode::from(EXIT_BAD_INPUT))
         }
-        None => Ok(discovery::running(&discovery::directory())
+        None => Ok(super::remote::runs(reach)?
             .into_iter()
-            .filter(|r| reach.pid.is_none_or(|p| p == r.pid))
             .flat_map(|r| r.agents)
             .collect()),
     }

@@ -40,9 +40,7 @@ pub(crate) async fn set(
     match replies.recv_async().await {
         Ok(reply) => match reply.result() {
             Ok(_) => Ok(()),
-            Err(e) => Err(TeamError::Refused(
-                String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
-            )),
+            Err(e) => Err(refused(agent, e)),
         },
         Err(_) => Err(no_answer(agent, team)),
     }
@@ -73,9 +71,20 @@ pub(crate) async fn get(
                 .unwrap_or_default();
             Ok((type_name, sample.payload().to_bytes().into_owned()))
         }
-        Err(e) => Err(TeamError::Refused(
-            String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
-        )),
+        Err(e) => Err(refused(agent, e)),
+    }
+}
+
+/// What an agent's error reply says; zenoh's own `Timeout` (the agent's session answered for
+/// it: the agent did not reply in time) is said as such.
+fn refused(agent: &str, e: &zenoh::query::ReplyError) -> TeamError {
+    let said = String::from_utf8_lossy(&e.payload().to_bytes()).into_owned();
+    match said.as_str() {
+        "Timeout" => TeamError::Busy {
+            agent: agent.to_string(),
+            timeout: REQUEST_TIMEOUT,
+        },
+        _ => TeamError::Refused(said),
     }
 }
 
@@ -122,9 +131,7 @@ pub(crate) async fn info(
     match reply.result() {
         Ok(sample) => serde_json::from_slice(&sample.payload().to_bytes())
             .map_err(|e| TeamError::Refused(format!("agent `{agent}` answered nonsense: {e}"))),
-        Err(e) => Err(TeamError::Refused(
-            String::from_utf8_lossy(&e.payload().to_bytes()).into_owned(),
-        )),
+        Err(e) => Err(refused(agent, e)),
     }
 }
 

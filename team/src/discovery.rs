@@ -86,6 +86,14 @@ pub enum FindError {
         /// The agents that do run, nearest name first.
         running: Vec<String>,
     },
+    /// `--pid` names no process that runs agents here.
+    #[error("no `petrel run` has pid {pid}{}", runs_list(.runs))]
+    NoSuchRun {
+        /// The pid asked for.
+        pid: u32,
+        /// The pids that do run agents here.
+        runs: Vec<u32>,
+    },
     /// Several processes run an agent of that name.
     #[error("agent `{agent}` runs in {} processes (pids {}): pick one with --pid", .pids.len(), join(.pids))]
     Ambiguous {
@@ -110,6 +118,13 @@ fn running_list(running: &[String]) -> String {
     }
 }
 
+fn runs_list(runs: &[u32]) -> String {
+    match runs {
+        [] => " (no `petrel run` is running on this machine for this user)".to_string(),
+        pids => format!("; runs here: pid {}", join(pids)),
+    }
+}
+
 fn join(pids: &[u32]) -> String {
     pids.iter()
         .map(u32::to_string)
@@ -119,6 +134,12 @@ fn join(pids: &[u32]) -> String {
 
 /// Finds `agent` among `records` (of process `pid` when given).
 pub fn find(records: &[Record], agent: &str, pid: Option<u32>) -> Result<Reachable, FindError> {
+    if let Some(pid) = pid.filter(|p| records.iter().all(|r| r.pid != *p)) {
+        return Err(FindError::NoSuchRun {
+            pid,
+            runs: records.iter().map(|r| r.pid).collect(),
+        });
+    }
     let hits: Vec<(u32, &Reachable)> = records
         .iter()
         .filter(|r| pid.is_none_or(|p| p == r.pid))
@@ -293,6 +314,11 @@ mod tests {
         assert_eq!(
             find(&records, "robot", Some(12)).unwrap().connect,
             ["tcp/127.0.0.1:12"]
+        );
+        // A pid that runs nothing here is said to be one, not the agent to be missing.
+        assert_eq!(
+            find(&records, "robot", Some(9)).unwrap_err().to_string(),
+            "no `petrel run` has pid 9; runs here: pid 10, 12"
         );
     }
 

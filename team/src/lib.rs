@@ -65,6 +65,14 @@ pub enum TeamError {
     /// The other agent refused a remote write, saying why.
     #[error("{0}")]
     Refused(String),
+    /// The agent is there but did not answer in time.
+    #[error("agent `{agent}` did not answer within {timeout:?}: it runs, but its thread is busy (a step that does not return? `petrel top` shows each module's last step)")]
+    Busy {
+        /// The agent asked.
+        agent: String,
+        /// How long we waited.
+        timeout: std::time::Duration,
+    },
     /// Nobody answered.
     #[error(
         "agent `{agent}` did not answer within {timeout:?} (is it a member of team `{team}`?)"

@@ -148,3 +148,26 @@ async fn a_consumer_linked_late_counts_no_gap_before_its_first_item() {
     assert_eq!(*bb.get::<i64>("c/state/last").await.unwrap(), produced - 1);
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+/// A tool or recorder that asks to follow a queue input is told which queue to follow: the
+/// input holds no items of its own (it was told the input "cannot be set").
+#[tokio::test(start_paused = true)]
+async fn following_a_queue_input_names_the_queue_it_reads() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "producer", type: "demo.producer"),
+            (name: "linked", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+            (name: "alone", type: "demo.consumer"),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    let linked = bb.tap("linked/in/items").await.err().unwrap().to_string();
+    assert_eq!(
+        linked,
+        "`linked/in/items` is a queue input, which holds no items of its own: follow the queue it reads, `producer/out/items`"
+    );
+    let alone = bb.tap("alone/in/items").await.err().unwrap().to_string();
+    assert!(alone.ends_with("(it is not linked to one)"), "{alone}");
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

@@ -87,6 +87,14 @@ pub enum BlackboardError {
         /// What the parameter is, in its module's words.
         doc: String,
     },
+    /// A queue input asked for its items (a tool, a recorder): it has none of its own.
+    #[error("`{key}` is a queue input, which holds no items of its own: follow the queue it reads{}", reads(.linked_to))]
+    QueueInput {
+        /// The property.
+        key: String,
+        /// The queue it is linked to, if any.
+        linked_to: Option<String>,
+    },
     /// A parameter its module reads only when it starts, written while the agent runs.
     #[error(
         "`{key}` is read once, when its module starts: a running agent does not change it (set it in the config; a context rule or plan binding cannot set it either)"
@@ -127,4 +135,12 @@ pub enum BlackboardError {
     /// The blackboard actor is gone.
     #[error("the blackboard of this agent has stopped")]
     Stopped,
+}
+
+/// The queue a queue input reads, for a message.
+fn reads(linked_to: &Option<String>) -> String {
+    match linked_to {
+        Some(queue) => format!(", `{queue}`"),
+        None => " (it is not linked to one)".to_string(),
+    }
 }

@@ -122,7 +122,15 @@ impl Eval<'_> {
             Node::Len(list) => Value::Num(list_of(self.eval(list)?)?.len() as f64),
             Node::Clamp(x, lo, hi) => {
                 let (x, lo, hi) = (self.num(x)?, self.num(lo)?, self.num(hi)?);
-                // Not f64::clamp: it panics when lo > hi, and bad bounds must not panic.
+                // Bounds the wrong way round are an error, not a silent `hi` (and not
+                // f64::clamp, which panics on them).
+                if lo > hi {
+                    return Err(format!(
+                        "clamp(x, lo, hi): lo ({}) is above hi ({})",
+                        short_number(lo),
+                        short_number(hi)
+                    ));
+                }
                 Value::Num(x.max(lo).min(hi))
             }
             Node::Age(i) => Value::Num(

@@ -106,7 +106,7 @@ fn every_construct_evaluates() {
         ("max(a/out/y, -7)", Value::Num(-2.0)),
         ("clamp(a/out/x, 0, 1)", Value::Num(1.0)),
         ("clamp(a/out/y, 0, 1)", Value::Num(0.0)),
-        ("clamp(5, 3, 1)", Value::Num(1.0)),
+        ("clamp(5, 1, 3)", Value::Num(3.0)),
         ("loc/out/pose.y", Value::Num(2.0)),
         ("loc/out/pose.theta * 2", Value::Num(1.0)),
         ("1500ms + 2s", Value::Num(3.5)),
@@ -450,6 +450,11 @@ fn arithmetic_that_leaves_the_numbers_cannot_be_evaluated() {
             "z/out/v - z/out/v",
             f64::INFINITY,
             "inf - inf is not a finite number",
+        ),
+        (
+            "clamp(a/out/x, z/out/v, 1)",
+            2.0,
+            "clamp(x, lo, hi): lo (2) is above hi (1)",
         ),
     ];
     for (src, z, message) in failing {

@@ -132,9 +132,9 @@ impl Registry {
         match &entry.handle {
             Handle::Value(ep) => Ok(Tap::Value(ValueTap::new(ep.clone()))),
             Handle::QueueOut(core) => Ok(Tap::Queue(QueueTap::new(queue_tap(&key, core)))),
-            Handle::QueueIn(_) => Err(BlackboardError::NotSettable {
+            Handle::QueueIn(_) => Err(BlackboardError::QueueInput {
+                linked_to: self.link_of(&key).map(str::to_string),
                 key,
-                kind: entry.decl.kind,
             }),
         }
     }
