@@ -23,7 +23,12 @@ pub struct LoadedPlan {
 /// [`petrel_actors::files::limits::PLAN`], byte-order mark dropped); bytes that are not
 /// UTF-8 are an error at their line and column, as in configs and rules.
 pub(crate) fn read_text(path: &Path) -> Result<String, PlanError> {
-    let bytes = read_bytes(path)?;
+    read_text_of(path, "plan file")
+}
+
+/// [`read_text`] of a file said to be `what` in errors (`rules file`).
+fn read_text_of(path: &Path, what: &str) -> Result<String, PlanError> {
+    let bytes = read_bytes(path, what)?;
     match String::from_utf8(bytes) {
         Ok(s) => Ok(petrel_actors::files::strip_bom(&s).to_string()),
         Err(e) => {
@@ -48,15 +53,15 @@ pub(crate) fn read_text(path: &Path) -> Result<String, PlanError> {
 /// Reads a PNML file as text: PNML editors often write ISO-8859-1, so bytes that are not
 /// UTF-8 are read as Latin-1.
 fn read_pnml_text(path: &Path) -> Result<String, PlanError> {
-    Ok(match String::from_utf8(read_bytes(path)?) {
+    Ok(match String::from_utf8(read_bytes(path, "plan file")?) {
         Ok(s) => petrel_actors::files::strip_bom(&s).to_string(),
         Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
     })
 }
 
-fn read_bytes(path: &Path) -> Result<Vec<u8>, PlanError> {
+fn read_bytes(path: &Path, what: &str) -> Result<Vec<u8>, PlanError> {
     use petrel_actors::files;
-    files::read_bytes(path, "plan file", files::limits::PLAN).map_err(|message| PlanError::Io {
+    files::read_bytes(path, what, files::limits::PLAN).map_err(|message| PlanError::Io {
         path: path.to_path_buf(),
         message,
     })
@@ -111,7 +116,7 @@ pub fn load_plan(path: &Path, rules: Option<&Path>) -> Result<LoadedPlan, PlanEr
 fn compile_file(path: &Path, rules: Option<&Path>) -> Result<Plan, PlanError> {
     let text = read_text(path)?;
     let rules_text = rules
-        .map(|r| read_text(r).map(|t| (t, r.display().to_string())))
+        .map(|r| read_text_of(r, "rules file").map(|t| (t, r.display().to_string())))
         .transpose()?;
     compile_text(
         &text,
@@ -163,5 +168,11 @@ fn attach_subplans(
 
 /// Compiles a text plan (plus optional rules file) to JARP-openable PNML.
 pub fn compile_to_pnml(path: &Path, rules: Option<&Path>) -> Result<String, PlanError> {
+    if is_pnml(path) {
+        return Err(PlanError::Io {
+            path: path.to_path_buf(),
+            message: "is a PNML plan already; `plan compile` turns a text plan into PNML".into(),
+        });
+    }
     Ok(write_pnml(&compile_file(path, rules)?))
 }

@@ -100,3 +100,20 @@ fn a_text_plan_that_is_not_utf8_is_an_error_at_its_byte_and_a_pnml_one_reads_as_
         Err(e) => assert!(!e.to_string().contains("UTF-8"), "{e}"),
     }
 }
+
+#[test]
+fn errors_name_what_the_user_gave_a_nul_a_rules_file_a_pnml_to_compile() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = dir.path().join("nul.plan");
+    std::fs::write(&plan, b"a; \0b\n").unwrap();
+    let err = load_plan(&plan, None).unwrap_err().to_string();
+    assert!(err.contains("unexpected character U+0000"), "{err}");
+    std::fs::write(&plan, "a; b\n").unwrap();
+    let missing = dir.path().join("missing.er");
+    let err = load_plan(&plan, Some(&missing)).unwrap_err().to_string();
+    assert!(err.contains("rules file"), "{err}");
+    let pnml = dir.path().join("p.pnml");
+    std::fs::write(&pnml, "<pnml/>").unwrap();
+    let err = compile_to_pnml(&pnml, None).unwrap_err().to_string();
+    assert!(err.contains("is a PNML plan already"), "{err}");
+}

@@ -10,6 +10,9 @@ use tokio::time::Instant;
 use super::{Effect, Effects, Engine, Rule, Schema};
 use crate::rules::{LoadedRules, RuleError};
 
+/// The longest `min_dwell_ms` a rule may ask for, ms: a day.
+const MAX_DWELL_MS: u64 = 86_400_000;
+
 impl Engine {
     /// Checks `loaded` against `schema` and builds an engine; returns every problem found.
     pub fn build(loaded: &LoadedRules, schema: &dyn Schema) -> Result<Engine, Vec<RuleError>> {
@@ -47,6 +50,17 @@ impl Engine {
                 continue;
             }
             names.push(rule.name.clone());
+            // A dwell is a wait: past a day it is a typo (and u64::MAX overflowed the clock).
+            if rule.min_dwell_ms > MAX_DWELL_MS {
+                errors.push(err(
+                    None,
+                    None,
+                    format!(
+                        "context `{}`: min_dwell_ms is {}; expected at most {MAX_DWELL_MS} (a day)",
+                        rule.name, rule.min_dwell_ms
+                    ),
+                ));
+            }
             let mut add = |src: &str, want: &Ty, errors: &mut Vec<RuleError>| -> Option<ExprId> {
                 let env = env_for(src, schema);
                 match engine.exprs.add(src, &env, Some(want)) {

@@ -80,6 +80,9 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
     let mut origin = (0.0, 0.0);
     let mut heading_deg = 0.0;
     let mut features = WorldFeatures::default();
+    // The single-valued keys given so far, with their line: a second one is an error, not
+    // a silent override.
+    let mut given: Vec<(&'static str, usize)> = Vec::new();
     // (line number, row text) of each grid row, top first.
     let mut rows: Vec<(usize, &str)> = Vec::new();
     let mut blank_after_grid: Option<usize> = None;
@@ -99,6 +102,7 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
                     origin: &mut origin,
                     heading_deg: &mut heading_deg,
                     features: &mut features,
+                    given: &mut given,
                 };
                 header.parse(header_line)?;
                 continue;
@@ -201,6 +205,7 @@ struct Header<'a> {
     origin: &'a mut (f64, f64),
     heading_deg: &'a mut f64,
     features: &'a mut WorldFeatures,
+    given: &'a mut Vec<(&'static str, usize)>,
 }
 
 /// Column of the header value: after `# `, the key and the colon, then spaces.
@@ -251,6 +256,18 @@ impl Header<'_> {
         }
         let value = value.trim();
         let column = value_column(header, value);
+        if let Some(once) = ["resolution", "origin", "heading"]
+            .into_iter()
+            .find(|k| *k == key)
+        {
+            if let Some((_, first)) = self.given.iter().find(|(k, _)| *k == once) {
+                return Err(self.error(
+                    3,
+                    format!("`{once}` is given twice (first on line {first}); expected it once"),
+                ));
+            }
+            self.given.push((once, self.lineno));
+        }
         match key {
             "resolution" => {
                 let r = self.numbers(key, value, column, "a number of metres per cell", 1)?[0];
@@ -331,6 +348,10 @@ mod tests {
         assert_eq!(
             parse("# resolution: fine\n#\n").unwrap_err(),
             "w.txt:1:15: `resolution`: expected a number of metres per cell, got \"fine\""
+        );
+        assert_eq!(
+            parse("# resolution: 0.1\n# origin: 0, 0\n# resolution: 0.2\n#\n").unwrap_err(),
+            "w.txt:3:3: `resolution` is given twice (first on line 1); expected it once"
         );
         assert_eq!(
             parse("# resolutoin: 0.1\n#\n").unwrap_err(),

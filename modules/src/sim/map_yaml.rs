@@ -235,6 +235,12 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
 /// serde-saphyr's error as `file:line:column: message` (its own text ends in the position).
 fn yaml_error(path: &Path, e: &serde_saphyr::Error) -> WorldFileError {
     let text = e.without_snippet().to_string();
+    // The library's advice is to its programmers (an option of its parser), not to a person
+    // writing a map file.
+    let text = match text.split_once(", set DuplicateKeyPolicy") {
+        Some((said, _)) => format!("{said}: each key once"),
+        None => text,
+    };
     match e.location().filter(|l| l.line() > 0) {
         Some(l) => {
             let suffix = format!(" at line {}, column {}", l.line(), l.column());

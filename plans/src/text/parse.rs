@@ -75,7 +75,12 @@ impl<'a> Parser<'a> {
     fn next(&mut self) -> Result<(usize, Tok), PlanError> {
         self.lx.next().or_else(|at| {
             let c = self.lx.src[at..].chars().next().unwrap_or(' ');
-            self.err(at, format!("unexpected character '{c}'"))
+            // A control character (a NUL) shows as nothing: name it by its code.
+            let shown = match c.is_control() {
+                true => format!("U+{:04X}", u32::from(c)),
+                false => format!("'{c}'"),
+            };
+            self.err(at, format!("unexpected character {shown}"))
         })
     }
 

@@ -234,6 +234,9 @@ impl<'de> Deserialize<'de> for LinkTarget {
     }
 }
 
+/// The longest period or minimum interval of a link, ms: a day.
+const MAX_LINK_MS: u64 = 86_400_000;
+
 #[derive(Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 enum ModeArgs {
@@ -255,9 +258,21 @@ impl<'de> Deserialize<'de> for Mode {
         if text == "on_change" {
             return Ok(Mode::default());
         }
+        // A period of 0 is no pace the owner can send at (it refused the stream, and the input
+        // never changed); past a day, a typo.
+        let within = |what: &str, ms: u64, min: u64| match (min..=MAX_LINK_MS).contains(&ms) {
+            true => Ok(ms),
+            false => Err(de::Error::custom(format!(
+                "link mode `{text}`: {what} is {ms}; expected {min}..={MAX_LINK_MS} ms (a day)"
+            ))),
+        };
         match raw.into_rust::<ModeArgs>() {
-            Ok(ModeArgs::OnChange { min_interval_ms }) => Ok(Mode::OnChange { min_interval_ms }),
-            Ok(ModeArgs::Periodic { ms }) => Ok(Mode::Periodic { ms }),
+            Ok(ModeArgs::OnChange { min_interval_ms }) => Ok(Mode::OnChange {
+                min_interval_ms: within("min_interval_ms", min_interval_ms, 0)?,
+            }),
+            Ok(ModeArgs::Periodic { ms }) => Ok(Mode::Periodic {
+                ms: within("ms", ms, 1)?,
+            }),
             Err(e) => {
                 // An unknown variant would name the private helper enum: say nothing more.
                 let detail = match e.code {

@@ -24,6 +24,20 @@ fn link_targets_read_both_forms_and_round_trip() {
     assert!(qos.lossy);
     assert_eq!(target(&long.to_ron()).unwrap(), long);
     let periodic = target(r#"(from: "petrel://r2/a/out/x", mode: periodic(ms: 200))"#).unwrap();
+    for (mode, says) in [
+        ("periodic(ms: 0)", "ms is 0; expected 1..=86400000 ms"),
+        (
+            "periodic(ms: 99999999999)",
+            "ms is 99999999999; expected 1..=86400000 ms",
+        ),
+        (
+            "on_change(min_interval_ms: 99999999999)",
+            "min_interval_ms is 99999999999",
+        ),
+    ] {
+        let e = target(&format!(r#"(from: "petrel://r2/a/out/x", mode: {mode})"#)).unwrap_err();
+        assert!(e.contains(says), "{mode}: {e}");
+    }
     assert_eq!(periodic.qos.unwrap().mode, Mode::Periodic { ms: 200 });
     assert_eq!(target(&periodic.to_ron()).unwrap(), periodic);
     let plain = target(r#"(from: "petrel://r2/a/out/x", mode: on_change)"#).unwrap();

@@ -112,3 +112,11 @@ fn deep_nesting_is_refused_not_overflowed() {
     let e = parse(&deep).unwrap_err();
     assert!(e.starts_with("m.yaml"), "{e}");
 }
+
+#[test]
+fn a_key_given_twice_is_said_in_the_map_writers_terms() {
+    let e =
+        parse("image: m.pgm\nresolution: 0.05\nresolution: 0.1\norigin: [0, 0, 0]\n").unwrap_err();
+    assert!(e.contains("resolution: each key once"), "{e}");
+    assert!(!e.contains("DuplicateKeyPolicy"), "{e}");
+}
