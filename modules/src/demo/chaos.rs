@@ -1,6 +1,6 @@
 use std::sync::Arc;
 
-use anyhow::{bail, Context as _};
+use anyhow::{anyhow, bail, Context as _};
 use petrel_actors::{AnyHandle, Context, Module, Output, Param, Ports, Range, Schedule};
 use rand::Rng;
 
@@ -24,6 +24,26 @@ pub struct Chaos {
 }
 
 /// Splits a comma-separated list, trimming blanks.
+const NO_TARGETS: &str = "empty; expected comma-separated module names";
+
+/// The faults `params/faults` names, or what is wrong with it.
+fn fault_kinds(faults: &str) -> Result<Vec<&'static str>, String> {
+    let kinds = list(faults)
+        .into_iter()
+        .map(|fault| {
+            FAULTS
+                .iter()
+                .find(|f| **f == fault)
+                .copied()
+                .ok_or_else(|| format!("`{fault}` is no fault; expected panic, hang or error"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    match kinds.is_empty() {
+        true => Err("empty; expected panic, hang or error".into()),
+        false => Ok(kinds),
+    }
+}
+
 fn list(text: &str) -> Vec<&str> {
     text.split(',')
         .map(str::trim)
@@ -71,10 +91,28 @@ impl Module for Chaos {
         ))
     }
 
+    /// What `init` would refuse of the lists, before anything runs (whether the targets are
+    /// modules of the agent, `init` finds out).
+    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+        let targets = self.targets.get();
+        let faults = self.faults.get();
+        let problems = [
+            (
+                "params/targets",
+                list(&targets).is_empty().then_some(NO_TARGETS.to_string()),
+            ),
+            ("params/faults", fault_kinds(&faults).err()),
+        ];
+        problems
+            .into_iter()
+            .filter_map(|(path, problem)| Some(petrel_actors::CheckProblem::new(path, problem?)))
+            .collect()
+    }
+
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
         let targets = self.targets.get();
         if list(&targets).is_empty() {
-            bail!("params/targets is empty; expected comma-separated module names");
+            bail!("params/targets: {NO_TARGETS}");
         }
         for target in list(&targets) {
             let handle = ctx
@@ -84,15 +122,7 @@ impl Module for Chaos {
                 .with_context(|| format!("params/targets names `{target}`"))?;
             self.handles.push((target.to_string(), handle));
         }
-        for fault in list(&self.faults.get()) {
-            match FAULTS.iter().find(|f| **f == fault) {
-                Some(f) => self.kinds.push(f),
-                None => bail!("params/faults has `{fault}`; expected panic, hang or error"),
-            }
-        }
-        if self.kinds.is_empty() {
-            bail!("params/faults is empty; expected panic, hang or error");
-        }
+        self.kinds = fault_kinds(&self.faults.get()).map_err(|e| anyhow!("params/faults: {e}"))?;
         self.rng = crate::seeded::seeded(self.seed.value() as u64);
         Ok(())
     }

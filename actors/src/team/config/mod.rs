@@ -333,6 +333,14 @@ pub fn check(team: &TeamConfig) -> Vec<String> {
             errors.push(e);
         }
     }
+    // A second listen on one endpoint fails at start ("address already in use"): say it here.
+    for (i, endpoint) in team.listen.iter().enumerate() {
+        if team.listen[..i].contains(endpoint) {
+            errors.push(format!(
+                "team listen has `{endpoint}` twice; expected each endpoint once"
+            ));
+        }
+    }
     if team.mode == SessionMode::Client && team.connect.is_empty() {
         errors.push(
             "team mode `client` needs a router in `connect` (e.g. \"tcp/127.0.0.1:7447\")".into(),

@@ -90,3 +90,16 @@ fn team_checks_name_what_is_wrong() {
     assert!(errors.contains("`tcp/127.0.0.1:x`"), "{errors}");
     assert!(!errors.contains("7448"), "{errors}");
 }
+
+#[test]
+fn an_endpoint_listened_on_twice_is_refused() {
+    let team = TeamConfig {
+        name: "t".into(),
+        listen: vec!["tcp/127.0.0.1:7998".into(), "tcp/127.0.0.1:7998".into()],
+        ..TeamConfig::default()
+    };
+    assert_eq!(
+        check(&team),
+        ["team listen has `tcp/127.0.0.1:7998` twice; expected each endpoint once"]
+    );
+}
