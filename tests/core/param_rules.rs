@@ -60,7 +60,7 @@ async fn a_running_agent_refuses_a_parameter_read_at_start_and_keeps_it() {
         .unwrap_err();
     assert!(
         bare.to_string()
-            .contains("`abc` is a bare word; text takes double quotes"),
+            .contains("`abc` is a bare word, which is no value (text takes double quotes"),
         "{bare}"
     );
     let deep = format!("{}{}", "[".repeat(5000), "]".repeat(5000));

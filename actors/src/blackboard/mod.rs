@@ -349,7 +349,7 @@ impl Blackboard {
         let word = ron_text.trim();
         if value == ron::Value::Unit && !word.is_empty() && word != "()" {
             return Err(bad(format!(
-                "`{word}` is a bare word; text takes double quotes, `\"{word}\"` (in a shell: '\"{word}\"')"
+                "`{word}` is a bare word, which is no value (text takes double quotes: `\"{word}\"`, in a shell '\"{word}\"')"
             )));
         }
         self.call(|r| BlackboardMsg::SetRon(address.to_string(), value, r))
