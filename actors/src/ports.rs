@@ -256,7 +256,15 @@ impl Ports {
         accepts: fn(&T) -> bool,
         expected: &'static str,
     ) {
-        let Some(decl) = self.decls.last_mut() else {
+        let Some(decl) = self
+            .decls
+            .last_mut()
+            .filter(|d| d.kind == PropertyKind::Param)
+        else {
+            self.errors.push(format!(
+                "module `{}`: a value rule ({expected}) that follows no parameter",
+                self.module
+            ));
             return;
         };
         if decl.type_info != TypeInfo::of::<T>() {

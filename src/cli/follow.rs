@@ -61,10 +61,14 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
         let mut report = tokio::time::interval(Duration::from_secs(1));
         report.tick().await;
         let mut seen = 0;
+        // Kept across the reports (each second too, like the quiet it waits for): made again
+        // only when a value comes.
+        let mut quiet = std::pin::pin!(gone(&client, agent));
         loop {
             tokio::select! {
                 update = next_update(&mut watch) => {
                     let update = update?;
+                    quiet.set(gone(&client, agent));
                     if stamps.len() == window {
                         stamps.pop_front();
                     }
@@ -75,7 +79,7 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
                     }
                 }
                 _ = report.tick(), if count.is_none() => print_rate(stamps.make_contiguous()),
-                left = gone(&client, agent) => {
+                left = &mut quiet => {
                     print_rate(stamps.make_contiguous());
                     return Err(left);
                 }
@@ -99,8 +103,8 @@ const QUIET: Duration = Duration::from_secs(1);
 
 /// Resolves with an error once `agent` has gone quiet for [`QUIET`] and then does not answer
 /// (its run ended, it was killed, or its thread is held). A follower would otherwise wait
-/// without end, saying nothing, for an agent that may never come back. Dropped and made again
-/// at each value, so an agent that keeps writing is never asked.
+/// without end, saying nothing, for an agent that may never come back. Made again at each
+/// value, so an agent that keeps writing is never asked.
 async fn gone(client: &Client, agent: &str) -> TeamError {
     loop {
         tokio::time::sleep(QUIET).await;

@@ -239,7 +239,7 @@ fn echo_follows_values_and_queue_items_and_hz_reports_a_rate() {
 }
 
 /// A follower of a run that ends (here killed) says so and exits 1, rather than wait without
-/// end for an agent that cannot come back.
+/// end for an agent that cannot come back; hz too while it reports every second.
 #[test]
 fn followers_end_with_an_error_once_the_agent_is_gone() {
     let dir = tempfile::tempdir().unwrap();
@@ -260,9 +260,13 @@ fn followers_end_with_an_error_once_the_agent_is_gone() {
         "100000000",
     ]);
     let mut events = follower(&["events", "lonely", "-n", "100000000"]);
-    // Both follow once echo printed a value and events said its streams are open.
+    // hz without a count reports each second, as long as it runs.
+    let mut hz = follower(&["hz", "petrel://lonely/signal/out/value"]);
+    // All follow once echo printed a value, hz a rate, and events said its streams are open.
     let mut echo_out = BufReader::new(echo.stdout.take().unwrap()).lines();
     assert!(echo_out.next().is_some(), "echo printed a value");
+    let mut hz_out = BufReader::new(hz.stdout.take().unwrap()).lines();
+    assert!(hz_out.next().is_some(), "hz reported");
     let mut events_err = BufReader::new(events.stderr.take().unwrap()).lines();
     let opened = events_err.next().and_then(Result::ok).unwrap_or_default();
     assert!(opened.starts_with("following "), "{opened}");
@@ -270,11 +274,20 @@ fn followers_end_with_an_error_once_the_agent_is_gone() {
     run.kill();
     // Read what is left, so neither blocks writing it; bounded by the followers' ends.
     let echo_rest = std::thread::spawn(move || echo_out.count());
+    let hz_rest = std::thread::spawn(move || hz_out.count());
     let events_rest =
         std::thread::spawn(move || events_err.map_while(Result::ok).collect::<Vec<_>>());
     let echo = crate::bounded::wait_within_deadline(echo, "petrel echo");
     let events = crate::bounded::wait_within_deadline(events, "petrel events");
+    let hz = crate::bounded::wait_within_deadline(hz, "petrel hz");
     echo_rest.join().unwrap();
+    hz_rest.join().unwrap();
+    let hz_said = String::from_utf8_lossy(&hz.stderr).into_owned();
+    assert_eq!(hz.status.code(), Some(1), "{hz_said}");
+    assert!(
+        hz_said.contains("agent `lonely` did not answer"),
+        "{hz_said}"
+    );
     let events_said = events_rest.join().unwrap().join("\n");
     let echo_said = String::from_utf8_lossy(&echo.stderr).into_owned();
     assert_eq!(echo.status.code(), Some(1), "{echo_said}");
