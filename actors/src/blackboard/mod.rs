@@ -51,6 +51,7 @@ pub(crate) enum BlackboardMsg {
     AnyHandle(String, Reply<AnyHandle>),
     Snapshot(Reply<String>),
     LinkOf(String, Reply<Option<String>>),
+    CheckLink(String, String, Reply<()>),
     FeedbackCycle(String, Reply<Option<Vec<String>>>),
     AddModule(
         Box<ModuleConfig>,
@@ -155,6 +156,9 @@ impl Actor for BlackboardActor {
                 let result = reg.remove_module(&module);
                 tracing::info!(agent = reg.agent(), %module, ok = result.is_ok(), "module removed");
                 let _ = reply.send(result);
+            }
+            BlackboardMsg::CheckLink(from, to, reply) => {
+                let _ = reply.send(reg.check_link(&from, &to).map(drop));
             }
             BlackboardMsg::LinkOf(address, reply) => {
                 let result = reg
@@ -269,6 +273,13 @@ impl Blackboard {
     /// Links `from` to `to` while running; readers of `from` see `to` from their next read.
     pub async fn link(&self, from: &str, to: &str) -> Result<(), BlackboardError> {
         self.call(|r| BlackboardMsg::Link(from.to_string(), to.to_string(), r))
+            .await
+    }
+
+    /// Whether `from` could be linked to `to` as the links stand now (see
+    /// [`Registry::check_link`]): for checks made before a link is, such as a plan binding's.
+    pub async fn check_link(&self, from: &str, to: &str) -> Result<(), BlackboardError> {
+        self.call(|r| BlackboardMsg::CheckLink(from.to_string(), to.to_string(), r))
             .await
     }
 

@@ -137,6 +137,12 @@ impl Binder<'_> {
         if want != have {
             return Err(format!("`{input}` is a {want}, but `{source}` is a {have}"));
         }
+        // A link onto itself or around a loop of links, refused when made: the action went
+        // on as if linked.
+        self.bb
+            .check_link(input, source)
+            .await
+            .map_err(|e| e.to_string())?;
         self.bb.link_of(input).await.map_err(|e| e.to_string())
     }
 
