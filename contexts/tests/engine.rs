@@ -18,7 +18,8 @@ fn prop<T: PropertyType>(v: T) -> (TypeInfo, AnyValue) {
 
 /// A small agent: sensors `speed/out/v` (f64), `loc/out/q` (f64), `hw/out/pose` (Pose2);
 /// targets `cam/params/deblur` (bool), `oa/params/maxSpeed` (f64), `mapper/in/pose` (Pose2),
-/// `nav/params/mode` (string), modules `cam`, `oa`, `mapper`, `rec` (with `enabled`).
+/// `nav/params/mode` (string), `cam/params/exposure` (i64, as is `cam/out/frames`), modules
+/// `cam`, `oa`, `mapper`, `rec` (with `enabled`).
 fn schema() -> Props {
     let mut m = HashMap::new();
     m.insert("speed/out/v".into(), prop(0.0));
@@ -29,6 +30,8 @@ fn schema() -> Props {
     m.insert("oa/params/maxSpeed".into(), prop(1.0));
     m.insert("mapper/in/pose".into(), prop(Pose2::default()));
     m.insert("nav/params/mode".into(), prop(String::from("normal")));
+    m.insert("cam/params/exposure".into(), prop(10_i64));
+    m.insert("cam/out/frames".into(), prop(0_i64));
     for module in ["cam", "oa", "mapper", "rec", "nav"] {
         m.insert(format!("{module}/enabled"), prop(true));
     }
@@ -305,6 +308,31 @@ fn bad_rules_are_reported_with_positions() {
         "rules.ron:5:12: error: contexts `c` and `d` both change the oa/params/maxSpeed with priority 2: give them different priorities",
         "rules.ron:3:12: error: context `b` can never hold: its `when` is always false",
         "rules.ron:7:24: error: context `f` can never hold: `loc/out/q < 0.2` and `loc/out/q > 0.5` cannot both be true",
+    ];
+    assert_eq!(e, expected);
+}
+
+#[test]
+fn an_integer_is_set_only_from_what_gives_whole_numbers() {
+    // Whole by construction: i64 properties, whole constants, + - * and min/max/abs/len.
+    engine(
+        r#"Contexts(contexts: [
+    (name: "a", when: "speed/out/v > 1", set: {"cam/params/exposure": "max(cam/out/frames * 2 - 1, 3)"}),
+])"#,
+    );
+    let e = errors(
+        r#"Contexts(contexts: [
+    (name: "a", when: "speed/out/v > 1", set: {"cam/params/exposure": "cam/out/frames + speed/out/v * 2"}),
+    (name: "b", when: "speed/out/v > 2", set: {"cam/params/exposure": "cam/out/frames / 2"}),
+    (name: "c", when: "speed/out/v > 3", set: {"cam/params/exposure": "abs(hw/out/pose.x)"}),
+    (name: "d", when: "speed/out/v > 4", set: {"cam/params/exposure": "cam/out/frames + elapsed()"}),
+])"#,
+    );
+    let expected = [
+        "rules.ron:2:49: error: context `a`: `cam/params/exposure` takes whole numbers (an i64), but `cam/out/frames + speed/out/v * 2` may give a fraction: `speed/out/v` is an f64",
+        "rules.ron:3:49: error: context `b`: `cam/params/exposure` takes whole numbers (an i64), but `cam/out/frames / 2` may give a fraction: `cam/out/frames / 2` divides",
+        "rules.ron:4:49: error: context `c`: `cam/params/exposure` takes whole numbers (an i64), but `abs(hw/out/pose.x)` may give a fraction: `hw/out/pose.x` may hold a fraction",
+        "rules.ron:5:49: error: context `d`: `cam/params/exposure` takes whole numbers (an i64), but `cam/out/frames + elapsed()` may give a fraction: `elapsed()` counts seconds, with fractions",
     ];
     assert_eq!(e, expected);
 }

@@ -105,6 +105,20 @@ fn structural_errors() {
 }
 
 #[test]
+fn an_action_that_looks_like_a_wait_but_is_not_one_is_a_warning() {
+    let p = compile_text("wait_abc; wait_2; r1#wait_-1", "t.plan", "t", None).unwrap();
+    let r = check(&p);
+    assert_eq!(codes(&r), (vec![], vec!["not-a-wait", "not-a-wait"]), "{r}");
+    assert!(
+        r.warnings[0]
+            .message
+            .starts_with("`wait_abc` is not the built-in wait: `wait_N` takes a number of seconds"),
+        "{r}"
+    );
+    assert!(r.warnings[1].message.contains("`wait_-1`"), "{r}");
+}
+
+#[test]
 fn timed_actions_cannot_deadlock_whichever_ends_first() {
     let p = compile_text("a|5", "t.plan", "t", None).unwrap();
     let r = check(&p);

@@ -71,7 +71,7 @@ async fn unbound_actions_may_be_allowed_to_finish_at_once() {
 
 #[tokio::test(start_paused = true)]
 async fn bad_bindings_are_all_refused_at_init_with_positions() {
-    let plans = Plans::new(&[("bad.plan", "a; b; c; d; e_1")]);
+    let plans = Plans::new(&[("bad.plan", "a; b; c; d; e_1; wait_x")]);
     let agent = start(&agent_with_mission(&format!(
         r#""params/plan": "{}", "params/is_mission": true,
            "params/conditions": {{"unused": "true"}},
@@ -97,8 +97,8 @@ async fn bad_bindings_are_all_refused_at_init_with_positions() {
         r#"m/params/actions["c"].enable (action `c`): no module `nope` in this agent"#,
         r#"bad.plan:1): `c1/params/period_ms` takes a value like 10, found "fast""#,
         r#"m/params/actions["e"].failed: 1:19: expected a value, found the end (in `c1/out/value > 1 +`)"#,
-        "m/params/actions: no binding for action `d` at ",
-        "(bound: a, b, c, e); bind them, or set params/allow_unbound",
+        "m/params/actions: no binding for actions `d` at ",
+        "(bound: a, b, c, e); bind them, or set params/allow_unbound to let them finish at once; `wait_x` is not the built-in wait: `wait_N` takes a number of seconds",
     ] {
         assert!(err.contains(want), "missing `{want}` in:\n{err}");
     }

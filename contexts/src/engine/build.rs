@@ -114,7 +114,16 @@ impl Engine {
                 let Some(id) = add(&src, &want, &mut errors) else {
                     continue;
                 };
-                match constant_refused(&src, &want, info, &target, schema) {
+                let fraction = match info.is::<i64>() {
+                    true => super::whole::fraction_source(&src, schema).map(|why| {
+                        format!(
+                            "`{target}` takes whole numbers (an i64), but `{}` may give a fraction: {why}",
+                            quoted(&src)
+                        )
+                    }),
+                    false => None,
+                };
+                match constant_refused(&src, &want, info, &target, schema).or(fraction) {
                     Some(why) => {
                         let message = format!("context `{}`: {why}", rule.name);
                         errors.push(err(Some(&needle), None, message));

@@ -12,6 +12,7 @@ use tokio::time::Instant;
 mod build;
 mod effects;
 mod memory;
+mod whole;
 
 pub(crate) use memory::{fill_in_place, same_name};
 pub use memory::{EngineMemory, SavedEffect};

@@ -230,6 +230,15 @@ fn structural(plan: &Plan, r: &mut CheckReport) {
             ));
         }
     }
+    for e in plan.executables().iter().filter(|e| e.subplan.is_none()) {
+        let local = crate::remote::robot_of(&e.name).map_or(e.name.as_str(), |(_, l)| l);
+        if let Some(why) = crate::mission::builtin::not_a_wait(local) {
+            r.warnings.push(finding(
+                "not-a-wait",
+                format!("{why}; as written it is an ordinary action, which a mission must bind"),
+            ));
+        }
+    }
     for (i, p) in plan.places().iter().enumerate() {
         if p.goal == 0 && p.fail == 0 && plan.output_transitions(i).is_empty() {
             r.warnings.push(finding(

@@ -7,7 +7,7 @@ use std::collections::{BTreeSet, HashMap};
 use petrel_actors::expr::{parse, properties, ExprId, ExprSet, Ty, TypeEnv};
 use petrel_actors::{AnyHandle, Blackboard};
 
-use super::builtin::{builtin, Builtin};
+use super::builtin::{builtin, not_a_wait, Builtin};
 use super::config::{
     config_form, match_action, max_param, substitute, substitute_value, ActionBindings, ActionName,
     ConditionBindings, Places,
@@ -368,6 +368,14 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
                 .join(", "),
             if keys.is_empty() { "none".to_string() } else { keys.join(", ") }
         );
+        let almost: Vec<String> = unbound
+            .iter()
+            .filter_map(|u| not_a_wait(crate::remote::robot_of(u).map_or(u, |(_, l)| l)))
+            .collect();
+        let message = match almost.is_empty() {
+            true => message,
+            false => format!("{message}; {}", almost.join("; ")),
+        };
         b.problem("params/actions", message);
     }
     let warnings = unused_bindings(p.module, p.actions, &action_names);

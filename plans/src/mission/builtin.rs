@@ -28,6 +28,19 @@ pub(crate) fn builtin(local: &str) -> Option<Builtin> {
     Some(Builtin::Log(text.replace('_', " ")))
 }
 
+/// Why `local` looks like the built-in `wait_N` but is not one (`wait_abc`, `wait_-1`,
+/// `wait_1e999`): such an action is an ordinary one that needs a binding, which is seldom
+/// what its author meant.
+pub(crate) fn not_a_wait(local: &str) -> Option<String> {
+    let n = local.strip_prefix("wait_")?;
+    if builtin(local).is_some() {
+        return None;
+    }
+    Some(format!(
+        "`{local}` is not the built-in wait: `wait_N` takes a number of seconds, finite and at least 0 (`wait_2`, `wait_0.5`), and `{n}` is not one"
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -43,5 +56,15 @@ mod tests {
         );
         assert_eq!(builtin("log_at_A"), Some(Builtin::Log("at A".into())));
         assert_eq!(builtin("goto_A"), None);
+    }
+
+    #[test]
+    fn almost_waits_are_named() {
+        for almost in ["wait_abc", "wait_-1", "wait_1e999", "wait_NaN", "wait_"] {
+            assert!(not_a_wait(almost).is_some(), "{almost}");
+        }
+        for fine in ["wait_2", "wait_0.5", "goto_A", "waiting"] {
+            assert_eq!(not_a_wait(fine), None, "{fine}");
+        }
     }
 }

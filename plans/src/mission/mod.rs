@@ -55,7 +55,7 @@
 
 mod bind;
 mod bound;
-mod builtin;
+pub(crate) mod builtin;
 mod config;
 mod env;
 mod hints;
