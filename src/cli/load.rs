@@ -13,7 +13,17 @@ use super::EXIT_BAD_INPUT;
 pub(crate) fn load(config: &PathBuf, overlays: &[PathBuf]) -> Result<ConfigFile, ConfigErrors> {
     let mut file = ConfigFile::load(config)?;
     for overlay in overlays {
+        let before = file.config.name.clone();
         file.overlay(ConfigFile::load(overlay)?);
+        // A deliberate rename (one base config, an overlay per robot) and a snapshot of another
+        // robot laid over by mistake look the same here: said, so neither passes unseen.
+        if file.config.name != before {
+            eprintln!(
+                "note: {}: renames the agent `{before}` to `{}`",
+                overlay.display(),
+                file.config.name
+            );
+        }
     }
     link_mission_clocks(&mut file);
     if let Some(rules) = file.config.contexts.clone() {

@@ -48,6 +48,22 @@ fn run_for_a_while_prints_a_summary_and_writes_a_runnable_snapshot() {
         "and a valid overlay: {}",
         text(&overlay.stderr)
     );
+    assert!(!text(&overlay.stderr).contains("renames"));
+    // A snapshot of another robot laid over: taken, and said.
+    let other = dir.path().join("other.ron");
+    let snapshot = std::fs::read_to_string(&snap).unwrap();
+    assert!(snapshot.contains("name: \"robot1\""), "{snapshot}");
+    std::fs::write(&other, snapshot.replace("name: \"robot1\"", "name: \"robot2\"")).unwrap();
+    let renamed = petrel(&["check", "configs/pipeline.ron", "--overlay", other.to_str().unwrap()]);
+    assert!(renamed.status.success(), "{}", text(&renamed.stderr));
+    assert!(
+        text(&renamed.stderr).contains(&format!(
+            "note: {}: renames the agent `robot1` to `robot2`",
+            other.display()
+        )),
+        "{}",
+        text(&renamed.stderr)
+    );
 }
 
 #[test]
