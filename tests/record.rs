@@ -264,10 +264,13 @@ fn bad_recordings_and_mismatched_configs_are_errors_naming_what_is_wrong() {
             "--no-remote",
         ],
     );
+    // Refused by the check before anything runs, as `petrel check` would.
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        text(&out.stdout).contains("magic bytes"),
-        "{}",
-        text(&out.stdout)
+        stderr.contains("junk.mcap: at byte 0: expected the MCAP magic bytes")
+            && stderr.contains("nothing was started"),
+        "{stderr}"
     );
     let out = petrel(
         dir.path(),

@@ -56,7 +56,10 @@ pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfi
 pub use handle::{
     AnyHandle, Input, Item, Output, Param, PropertyHandle, QueueReader, QueueWriter, Sample, State,
 };
-pub use module::{Cause, CheckProblem, Context, Module, Schedule, Unrecoverable, Watchable};
+pub use module::{
+    module_names_problem, AgentView, Cause, CheckProblem, Context, Module, Schedule, Unrecoverable,
+    Watchable,
+};
 pub use module_actor::status;
 pub use module_types::{ModuleRegistry, ModuleType};
 pub use ports::{Ports, PropertyDecl, PropertyKind};

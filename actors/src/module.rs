@@ -67,9 +67,10 @@ pub trait Module: Send + Sized + 'static {
     /// Checks, before anything runs, what [`init`](Module::init) will read from the configured
     /// values (a world file that must parse, a range two parameters must respect): `petrel
     /// check` and `petrel run` call it on an instance declared over the config's values, and
-    /// report each problem at the property it names, in the config file. Must not have side
-    /// effects. The default finds nothing.
-    fn check(&self) -> Vec<CheckProblem> {
+    /// report each problem at the property it names, in the config file. `agent` tells the
+    /// other modules of the agent, for parameters that name them. Must not have side effects.
+    /// The default finds nothing.
+    fn check(&self, _agent: &AgentView) -> Vec<CheckProblem> {
         Vec::new()
     }
 
@@ -114,6 +115,65 @@ impl CheckProblem {
             message: message.into(),
         }
     }
+}
+
+/// What [`Module::check`] may see of the rest of its agent: the modules the config declares.
+pub struct AgentView<'a> {
+    registry: &'a crate::Registry,
+}
+
+impl<'a> AgentView<'a> {
+    pub(crate) fn new(registry: &'a crate::Registry) -> Self {
+        AgentView { registry }
+    }
+
+    /// The type of the agent's module `name` (`sim.body`), if the agent has one of that name.
+    pub fn module_type(&self, name: &str) -> Option<&'a str> {
+        self.registry.module_type(name)
+    }
+
+    /// The agent's module names, in config order.
+    pub fn modules(&self) -> &'a [String] {
+        self.registry.modules()
+    }
+
+    /// Why `names` (a parameter's list of modules) is not a list of this agent's modules, each
+    /// once and of type `want` (any type when `None`); see [`module_names_problem`].
+    pub fn names_problem(&self, names: &[&str], want: Option<&str>) -> Option<String> {
+        module_names_problem(names, want, |name| self.module_type(name))
+    }
+}
+
+/// Why `names` (a parameter's list of modules: a world's bodies, chaos targets) is not a list
+/// of an agent's modules, each once and of type `want` (any type when `None`), given the type
+/// of each module the agent has (`type_of`). One message for `petrel check` and for a
+/// module's `init`, which asks the running agent.
+pub fn module_names_problem<'t>(
+    names: &[&str],
+    want: Option<&str>,
+    type_of: impl Fn(&str) -> Option<&'t str>,
+) -> Option<String> {
+    let expected = match want {
+        Some(t) => format!("{t} modules"),
+        None => "this agent's modules".to_string(),
+    };
+    for (i, name) in names.iter().enumerate() {
+        if names[..i].contains(name) {
+            return Some(format!("`{name}` is named twice; expected each once"));
+        }
+        match (type_of(name), want) {
+            (None, _) => {
+                return Some(format!(
+                    "this agent has no module `{name}`; expected the names of {expected}"
+                ))
+            }
+            (Some(t), Some(want)) if t != want => {
+                return Some(format!("`{name}` is a {t}, expected a {want} module"))
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// An error from [`Module::init`] that a restart cannot fix: the module is reported failed

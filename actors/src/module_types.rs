@@ -55,7 +55,7 @@ impl ModuleType {
                 if !ports.errors.is_empty() {
                     return Vec::new(); // the registry reports declaration errors itself
                 }
-                module.check()
+                module.check(&crate::module::AgentView::new(registry))
             },
             spawn: |args, supervisor| {
                 Box::pin(async move {

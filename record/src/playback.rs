@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::{bail, Context as _};
 use petrel_actors::team::RemoteFeed;
 use petrel_actors::{
-    CheckProblem, Context, FilePath, Input, Module, Output, Ports, Range, Schedule,
+    AgentView, CheckProblem, Context, FilePath, Input, Module, Output, Ports, Range, Schedule,
 };
 use tokio::time::Instant;
 
@@ -85,20 +85,30 @@ impl Module for Playback {
         }
     }
 
-    /// What `prepare` would refuse without reading the recording: `petrel check` says it at
-    /// the property's line. (Whether the recording fits the config is known only once it is
-    /// read, at the start of the run.)
-    fn check(&self) -> Vec<CheckProblem> {
+    /// What `prepare` would refuse without reading the recording (past its first bytes, which
+    /// say whether it is an MCAP file at all): `petrel check` says it at the property's line.
+    /// (Whether the recording fits the config is known only once it is read, at the start of
+    /// the run.)
+    fn check(&self, agent: &AgentView) -> Vec<CheckProblem> {
         let mut problems = Vec::new();
         if let Err(e) = Rate::from_param(self.rate.value()) {
             problems.push(CheckProblem::new("params/rate", e));
         }
-        if self.replayed().is_empty() {
-            problems.push(CheckProblem::new("params/modules", NO_MODULES));
+        let replayed = self.replayed();
+        let names: Vec<&str> = replayed.iter().map(String::as_str).collect();
+        let modules = match names.is_empty() {
+            true => Some(NO_MODULES.to_string()),
+            false => agent.names_problem(&names, None),
+        };
+        if let Some(problem) = modules {
+            problems.push(CheckProblem::new("params/modules", problem));
         }
         // A file that is missing or not a regular file is refused for every file parameter.
-        if self.file.get().is_empty() {
+        let file = self.file.get();
+        if file.is_empty() {
             problems.push(CheckProblem::new("params/file", NO_FILE));
+        } else if let Some(problem) = Recording::not_mcap(file.as_path()) {
+            problems.push(CheckProblem::new("params/file", problem));
         }
         problems
     }

@@ -14,6 +14,8 @@ use crate::sink::meta;
 /// The 8 bytes every MCAP file starts (and, when finished, ends) with.
 pub const MAGIC: &[u8] = mcap::MAGIC;
 
+const NOT_MCAP: &str = "the MCAP magic bytes (89 4D 43 41 50 30 0D 0A): this is not an MCAP file";
+
 /// A chunk claiming to decompress to more than this is refused rather than allocated.
 pub const MAX_CHUNK_BYTES: u64 = 1 << 30;
 
@@ -103,7 +105,10 @@ impl Recording {
         let bytes =
             std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
         let rec = Recording::parse(&bytes);
-        match (&rec.problem, salvage) {
+        // Salvage keeps what a damaged recording holds; a file that is none holds nothing.
+        let not_mcap = !bytes.starts_with(MAGIC);
+        match (&rec.problem, salvage || not_mcap) {
+            (Some(p), _) if not_mcap => Err(format!("{}: {p}", path.display())),
             (Some(p), false) => Err(format!(
                 "{}: {p} (the file is damaged or was cut; `--salvage` replays the {} messages before it)",
                 path.display(),
@@ -111,6 +116,18 @@ impl Recording {
             )),
             _ => Ok(rec),
         }
+    }
+
+    /// Why `path` is no MCAP file, by its first bytes (as [`Recording::open`] says it), if it
+    /// is none; `None` too when it cannot be read, which the caller reports its own way.
+    pub fn not_mcap(path: &Path) -> Option<String> {
+        use std::io::Read;
+        let mut head = Vec::with_capacity(MAGIC.len());
+        let file = std::fs::File::open(path).ok()?;
+        file.take(MAGIC.len() as u64).read_to_end(&mut head).ok()?;
+        let problem = Recording::parse(&head).problem?;
+        // Eight bytes of a real recording read as one cut short after its magic.
+        (problem.offset == 0).then(|| format!("{}: {problem}", path.display()))
     }
 
     /// Reads a recording from memory, as far as it is readable.
@@ -122,9 +139,7 @@ impl Recording {
         if bytes.get(..MAGIC.len()) != Some(MAGIC) {
             rec.problem = Some(ReadProblem {
                 offset: 0,
-                expected:
-                    "the MCAP magic bytes (89 4D 43 41 50 30 0D 0A): this is not an MCAP file"
-                        .into(),
+                expected: NOT_MCAP.into(),
             });
             return rec;
         }

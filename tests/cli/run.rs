@@ -53,8 +53,17 @@ fn run_for_a_while_prints_a_summary_and_writes_a_runnable_snapshot() {
     let other = dir.path().join("other.ron");
     let snapshot = std::fs::read_to_string(&snap).unwrap();
     assert!(snapshot.contains("name: \"robot1\""), "{snapshot}");
-    std::fs::write(&other, snapshot.replace("name: \"robot1\"", "name: \"robot2\"")).unwrap();
-    let renamed = petrel(&["check", "configs/pipeline.ron", "--overlay", other.to_str().unwrap()]);
+    std::fs::write(
+        &other,
+        snapshot.replace("name: \"robot1\"", "name: \"robot2\""),
+    )
+    .unwrap();
+    let renamed = petrel(&[
+        "check",
+        "configs/pipeline.ron",
+        "--overlay",
+        other.to_str().unwrap(),
+    ]);
     assert!(renamed.status.success(), "{}", text(&renamed.stderr));
     assert!(
         text(&renamed.stderr).contains(&format!(

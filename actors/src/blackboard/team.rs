@@ -35,6 +35,14 @@ pub struct AgentListing {
     pub properties: Vec<PropertyListing>,
 }
 
+impl AgentListing {
+    /// The type of module `name` (`sim.body`), if the agent has one of that name.
+    pub fn module_type(&self, name: &str) -> Option<&str> {
+        let m = self.modules.iter().find(|m| m.name == name)?;
+        Some(&m.type_name)
+    }
+}
+
 /// One module of an [`AgentListing`].
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ModuleListing {

@@ -91,15 +91,18 @@ impl Module for Chaos {
         ))
     }
 
-    /// What `init` would refuse of the lists, before anything runs (whether the targets are
-    /// modules of the agent, `init` finds out).
-    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+    /// What `init` would refuse of the lists, before anything runs.
+    fn check(&self, agent: &petrel_actors::AgentView) -> Vec<petrel_actors::CheckProblem> {
         let targets = self.targets.get();
         let faults = self.faults.get();
+        let targets = list(&targets);
         let problems = [
             (
                 "params/targets",
-                list(&targets).is_empty().then_some(NO_TARGETS.to_string()),
+                match targets.is_empty() {
+                    true => Some(NO_TARGETS.to_string()),
+                    false => agent.names_problem(&targets, None),
+                },
             ),
             ("params/faults", fault_kinds(&faults).err()),
         ];

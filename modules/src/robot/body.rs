@@ -8,8 +8,8 @@
 //! real driver: a robot agent's config changes only in the agent and module it names.
 
 use petrel_actors::{
-    CheckProblem, Context, Image, Input, LaserScan, Module, Output, Ports, Pose2, QueueWriter,
-    Schedule, Twist2,
+    AgentView, CheckProblem, Context, Image, Input, LaserScan, Module, Output, Ports, Pose2,
+    QueueWriter, Schedule, Twist2,
 };
 
 /// `sim.body`: a robot body hosted by a `sim.world` (see the module docs).
@@ -53,7 +53,7 @@ impl Module for SimBody {
     }
 
     /// The start pose's shape; the world checks where it lies when it places the body.
-    fn check(&self) -> Vec<CheckProblem> {
+    fn check(&self, _agent: &AgentView) -> Vec<CheckProblem> {
         let start = self._start.get();
         super::world_body::start_problem(&start)
             .map(|p| CheckProblem::new("params/start", p))

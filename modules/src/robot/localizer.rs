@@ -5,7 +5,7 @@ use std::collections::VecDeque;
 
 use anyhow::bail;
 use petrel_actors::{
-    CheckProblem, Context, Input, Item, LaserScan, Module, Output, Point2, Ports, Pose2,
+    AgentView, CheckProblem, Context, Input, Item, LaserScan, Module, Output, Point2, Ports, Pose2,
     QueueReader, QueueWriter, Range, Schedule,
 };
 
@@ -247,7 +247,7 @@ impl Module for LocalizerModule {
     }
 
     /// Parameters valid alone but not together: `petrel check` says so before anything runs.
-    fn check(&self) -> Vec<CheckProblem> {
+    fn check(&self, _agent: &AgentView) -> Vec<CheckProblem> {
         super::check_built(self.build_core())
     }
 

@@ -96,7 +96,7 @@ impl Module for MapperModule {
 
     /// Parameters valid alone but not together (an extent of no cells, or too many):
     /// `petrel check` says so before anything runs.
-    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+    fn check(&self, _agent: &petrel_actors::AgentView) -> Vec<petrel_actors::CheckProblem> {
         super::check_built(self.build_core())
     }
 

@@ -4,7 +4,8 @@ use std::sync::Arc;
 
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule,
+    AgentView, CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range,
+    Schedule,
 };
 
 use super::param_error;
@@ -177,7 +178,7 @@ impl Module for PathPlanner {
 
     /// Parameters that are valid alone but not together (a preferred clearance inside the
     /// robot's own margin): `petrel check` says so before anything runs.
-    fn check(&self) -> Vec<CheckProblem> {
+    fn check(&self, _agent: &AgentView) -> Vec<CheckProblem> {
         match Planner::new(self.params()) {
             Ok(_) => Vec::new(),
             Err(e) => vec![CheckProblem::new(&format!("params/{}", e.param), e.message)],

@@ -1,7 +1,8 @@
 //! `nav.searched`: the floor the camera has searched for victims, frame by frame.
 
 use petrel_actors::{
-    CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range, Schedule,
+    AgentView, CheckProblem, Context, Input, Module, OccupancyGrid, Output, Ports, Pose2, Range,
+    Schedule,
 };
 
 use super::pose_trail::PoseTrail;
@@ -80,7 +81,7 @@ impl Module for SearchedModule {
             .on_change(&self.robot)
     }
 
-    fn check(&self) -> Vec<CheckProblem> {
+    fn check(&self, _agent: &AgentView) -> Vec<CheckProblem> {
         super::check_built(self.build_core())
     }
 

@@ -81,7 +81,7 @@ impl Module for GoalSequencerModule {
     }
 
     /// No goal at all: `petrel check` says so, as `init` would.
-    fn check(&self) -> Vec<petrel_actors::CheckProblem> {
+    fn check(&self, _agent: &petrel_actors::AgentView) -> Vec<petrel_actors::CheckProblem> {
         match self.goals.get().points().is_empty() {
             true => vec![petrel_actors::CheckProblem::new("params/goals", NO_GOALS)],
             false => Vec::new(),

@@ -14,8 +14,8 @@ use anyhow::bail;
 use petrel_actors::team::{RemoteFeed, RemoteValue, TeamMembers};
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    AnyHandle, Context, Input, Module, OccupancyGrid, Output, Point2, Ports, Pose2, PropertyHandle,
-    Range, Schedule, Unrecoverable,
+    AgentView, AnyHandle, CheckProblem, Context, Input, Module, OccupancyGrid, Output, Point2,
+    Ports, Pose2, PropertyHandle, Range, Schedule, Unrecoverable,
 };
 
 use super::count;
@@ -110,6 +110,15 @@ impl Module for TeamSearch {
 
     fn schedule(&self) -> Schedule {
         Schedule::new().on_change(&self.clock)
+    }
+
+    /// The members must be this agent's `nav.team_member` modules, as `init` finds too.
+    fn check(&self, agent: &AgentView) -> Vec<CheckProblem> {
+        let names = self.members.get();
+        members_problem(&names.0, |name| agent.module_type(name))
+            .map(|problem| CheckProblem::new("params/members", problem))
+            .into_iter()
+            .collect()
     }
 
     async fn init(&mut self, ctx: &mut Context) -> anyhow::Result<()> {
@@ -326,20 +335,25 @@ fn distinct(candidates: &BTreeMap<String, Vec<crate::nav::Frontier>>, radius: f6
     seen
 }
 
+/// Why `names` is not a list of this agent's `nav.team_member` modules, once each, given each
+/// module's type: the same words from `petrel check` and from `init`.
+fn members_problem<'t>(
+    names: &[String],
+    type_of: impl Fn(&str) -> Option<&'t str>,
+) -> Option<String> {
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    petrel_actors::module_names_problem(&names, Some(MEMBER_TYPE), type_of)
+}
+
 /// Binds the ports of each `nav.team_member` named in `params/members`.
 async fn bind_members(ctx: &Context, names: &[String]) -> anyhow::Result<Vec<Member>> {
     let bb = ctx.blackboard();
     let listing = bb.listing().await?;
+    if let Some(problem) = members_problem(names, |name| listing.module_type(name)) {
+        bail!("invalid parameter `params/members`: {problem}");
+    }
     let mut members = Vec::new();
-    for (i, name) in names.iter().enumerate() {
-        if names[..i].contains(name) {
-            bail!("invalid parameter `params/members`: `{name}` is named twice; expected each robot once");
-        }
-        match listing.modules.iter().find(|m| &m.name == name) {
-            Some(m) if m.type_name == MEMBER_TYPE => {}
-            Some(m) => bail!("invalid parameter `params/members`: `{name}` is a {}, expected a {MEMBER_TYPE} module", m.type_name),
-            None => bail!("invalid parameter `params/members`: this agent has no module `{name}`; expected the names of {MEMBER_TYPE} modules"),
-        }
+    for name in names {
         let at = |path: &str| format!("{name}/{path}");
         let RemoteFeed::Value(target) = bb.feed(&at("out/target")).await? else {
             bail!("`{name}/out/target` is a queue, expected a value");

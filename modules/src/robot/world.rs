@@ -4,8 +4,8 @@ use std::time::Duration;
 
 use petrel_actors::types::Path2;
 use petrel_actors::{
-    CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Point2, Ports, Pose2,
-    QueueWriter, Range, Schedule, Twist2, Unrecoverable,
+    AgentView, CheckProblem, Context, FilePath, Image, Input, LaserScan, Module, Output, Point2,
+    Ports, Pose2, QueueWriter, Range, Schedule, Twist2, Unrecoverable,
 };
 use tokio::time::Instant;
 
@@ -13,7 +13,9 @@ mod config;
 mod sim;
 
 use self::sim::Sim;
-use super::world_body::{check_bodies, start_pose, start_problem, BodyIo, BodyNames};
+use super::world_body::{
+    bodies_problem, check_bodies, start_pose, start_problem, BodyIo, BodyNames,
+};
 use super::world_tracks::Tracks;
 use super::{check_params, param_error};
 use crate::sim::error::{non_negative, positive};
@@ -180,11 +182,13 @@ impl Module for SimWorld {
         Schedule::every(Duration::from_secs_f64(period))
     }
 
-    /// The world file must parse: `petrel check` says so before anything runs.
-    /// The world file, and where the robot of a single-robot world starts (bodies are placed
-    /// from their own modules' values, which a check of this module cannot see: the world
-    /// refuses them at init).
-    fn check(&self) -> Vec<CheckProblem> {
+    /// The world file, the bodies it names, and where the robot of a single-robot world
+    /// starts (bodies are placed from their own modules' values, checked there).
+    fn check(&self, agent: &AgentView) -> Vec<CheckProblem> {
+        let bodies = self.bodies.get();
+        if let Some(problem) = bodies_problem(&bodies.0, |name| agent.module_type(name)) {
+            return vec![CheckProblem::new("params/bodies", problem)];
+        }
         let map = match self.load_map() {
             Ok(map) => map,
             Err(e) => return vec![CheckProblem::new("params/world", e.0)],

@@ -53,22 +53,20 @@ pub(super) struct BodyIo {
 /// Checks that every name in `bodies` is a `sim.body` module of this agent, once each.
 pub(super) async fn check_bodies(bb: &Blackboard, bodies: &[String]) -> anyhow::Result<()> {
     let listing = bb.listing().await?;
-    for (i, name) in bodies.iter().enumerate() {
-        if bodies[..i].contains(name) {
-            bail!("invalid parameter `params/bodies`: `{name}` is named twice; expected each body once");
-        }
-        match listing.modules.iter().find(|m| &m.name == name) {
-            Some(m) if m.type_name == BODY_TYPE => {}
-            Some(m) => bail!(
-                "invalid parameter `params/bodies`: `{name}` is a {}, expected a {BODY_TYPE} module",
-                m.type_name
-            ),
-            None => bail!(
-                "invalid parameter `params/bodies`: this agent has no module `{name}`; expected the names of {BODY_TYPE} modules"
-            ),
-        }
+    match bodies_problem(bodies, |name| listing.module_type(name)) {
+        Some(problem) => bail!("invalid parameter `params/bodies`: {problem}"),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// Why `bodies` is not a list of this agent's `sim.body` modules, once each, given each
+/// module's type: the same words from `petrel check` and from `init`.
+pub(super) fn bodies_problem<'t>(
+    bodies: &[String],
+    type_of: impl Fn(&str) -> Option<&'t str>,
+) -> Option<String> {
+    let names: Vec<&str> = bodies.iter().map(String::as_str).collect();
+    petrel_actors::module_names_problem(&names, Some(BODY_TYPE), type_of)
 }
 
 impl BodyIo {
