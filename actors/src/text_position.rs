@@ -15,6 +15,21 @@ pub fn line_column(text: &str, offset: usize) -> (usize, usize) {
     (line, column)
 }
 
+/// The byte offset of 1-based `line` and `column` (in characters, as [`line_column`] counts
+/// them), if `text` has that place: the inverse of [`line_column`], for positions other
+/// parsers give (RON's).
+pub(crate) fn offset_of(text: &str, line: usize, column: usize) -> Option<usize> {
+    let start: usize = (text.split_inclusive('\n'))
+        .take(line.checked_sub(1)?)
+        .map(str::len)
+        .sum();
+    let (i, _) = text
+        .get(start..)?
+        .char_indices()
+        .nth(column.checked_sub(1)?)?;
+    Some(start + i)
+}
+
 /// The starts of a text's lines, for many [`line_column`] lookups in one text: each costs a
 /// binary search and the characters of one line, not the whole text before it (a 100,000-action
 /// plan names the line of every action).
@@ -51,7 +66,7 @@ impl LineIndex {
 
 #[cfg(test)]
 mod tests {
-    use super::{line_column, LineIndex};
+    use super::{line_column, offset_of, LineIndex};
 
     #[test]
     fn the_index_agrees_with_the_plain_function_everywhere() {
@@ -65,6 +80,18 @@ mod tests {
                 assert_eq!(index.line(clamped), expected.0, "{offset}");
             }
         }
+    }
+
+    #[test]
+    fn offsets_come_back_from_their_line_and_column() {
+        let text = "ab\nçé→x\n\nlast é";
+        for (offset, _) in text.char_indices() {
+            let (line, column) = line_column(text, offset);
+            assert_eq!(offset_of(text, line, column), Some(offset), "{offset}");
+        }
+        assert_eq!(offset_of(text, 0, 1), None);
+        assert_eq!(offset_of(text, 1, 0), None);
+        assert_eq!(offset_of(text, 9, 1), None);
     }
 
     #[test]

@@ -27,6 +27,17 @@ fn ron_syntax_errors_give_file_line_and_column() {
 }
 
 #[test]
+fn a_whole_number_out_of_range_names_its_field() {
+    let e = errors(
+        "Agent(name: \"r\", modules: [\n  (name: \"c\", type: \"demo.counter\", shutdown_timeout_ms:  99999999999999999999999),\n])",
+    );
+    assert_eq!(
+        e,
+        ["bad.ron:2:59: error: `shutdown_timeout_ms`: a whole number out of range for this field (counts and times in ms take 0 or more; see the field's documentation for its limit) (RON syntax of an agent config; see the example in the README)"]
+    );
+}
+
+#[test]
 fn a_missing_file_is_named() {
     let e = ConfigFile::load("no/such/config.ron")
         .unwrap_err()

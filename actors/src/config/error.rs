@@ -39,12 +39,26 @@ impl ConfigError {
         }
     }
 
-    /// A RON syntax error in `file`; `what` names the kind of file for the reader.
-    pub fn from_ron(file: &Path, error: &ron::error::SpannedError, what: &str) -> Self {
+    /// A RON syntax error in `file` (whose contents are `text`); `what` names the kind of
+    /// file for the reader.
+    pub fn from_ron(file: &Path, text: &str, error: &ron::error::SpannedError, what: &str) -> Self {
         // Some of RON's own words are for programmers: say what to do instead.
         let code = match &error.code {
-            ron::Error::IntegerOutOfBounds => "a whole number out of range for this field (counts and times in ms take 0 or more; see the field's documentation for its limit)".to_string(),
-            ron::Error::ExceededRecursionLimit => "nested too deeply (more than 128 levels of brackets)".to_string(),
+            ron::Error::IntegerOutOfBounds => {
+                let at = crate::text_position::offset_of(
+                    text,
+                    error.span.start.line,
+                    error.span.start.col,
+                );
+                let field = at.and_then(|at| field_before(text, at));
+                format!(
+                    "{}a whole number out of range for this field (counts and times in ms take 0 or more; see the field's documentation for its limit)",
+                    field.map(|f| format!("`{f}`: ")).unwrap_or_default()
+                )
+            }
+            ron::Error::ExceededRecursionLimit => {
+                "nested too deeply (more than 128 levels of brackets)".to_string()
+            }
             other => other.to_string(),
         };
         let message = format!("{code} (RON syntax of {what})");
@@ -55,6 +69,17 @@ impl ConfigError {
             message,
         }
     }
+}
+
+/// The name of the struct field whose value starts at byte `at` of `text` (`name: <at>`), if
+/// one does: RON's errors about a value do not say which field it is for.
+fn field_before(text: &str, at: usize) -> Option<&str> {
+    let before = text.get(..at)?.trim_end().strip_suffix(':')?.trim_end();
+    let start = before
+        .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .map_or(0, |i| i + 1);
+    let name = &before[start..];
+    (!name.is_empty() && !name.starts_with(|c: char| c.is_ascii_digit())).then_some(name)
 }
 
 impl ConfigError {
@@ -123,5 +148,5 @@ pub fn parse_ron<T: serde::de::DeserializeOwned>(
         ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
     options
         .from_str::<T>(text)
-        .map_err(|e| ConfigError::from_ron(path, &e, what))
+        .map_err(|e| ConfigError::from_ron(path, text, &e, what))
 }
