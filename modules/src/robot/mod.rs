@@ -106,8 +106,6 @@ fn initialized<T>(built: &mut Option<T>) -> &mut T {
         .expect("stepping only after a successful init")
 }
 
-/// `check`'s answer for a module whose `init` builds a core from its parameters: nothing, or
-/// why the core cannot be built.
 /// The cells (columns, rows) of a grid of extent `size` (m) at `res` m a cell: at least one
 /// each way, at most [`crate::sim::Grid::MAX_CELLS`] in all; an error naming both parameters.
 fn grid_cells(res: f64, size: petrel_actors::Point2) -> anyhow::Result<(u32, u32)> {
@@ -123,6 +121,8 @@ fn grid_cells(res: f64, size: petrel_actors::Point2) -> anyhow::Result<(u32, u32
     Ok((w as u32, h as u32))
 }
 
+/// `check`'s answer for a module whose `init` builds a core from its parameters: nothing, or
+/// why the core cannot be built.
 fn check_built<T>(built: anyhow::Result<T>) -> Vec<petrel_actors::CheckProblem> {
     built.err().iter().map(check_problem).collect()
 }
@@ -136,6 +136,24 @@ fn check_problem(e: &anyhow::Error) -> petrel_actors::CheckProblem {
         .unwrap_or("params")
         .to_string();
     petrel_actors::CheckProblem::new(&path, message)
+}
+
+/// Makes the folder of `params/png` (a picture written when the run stops), in `init`: so
+/// that a run does not go its whole length to find it cannot write it. A folder that cannot
+/// be made will not be made by a restart either.
+fn png_folder(png: &str) -> Result<(), petrel_actors::Unrecoverable> {
+    let Some(dir) = std::path::Path::new(png)
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+    else {
+        return Ok(());
+    };
+    std::fs::create_dir_all(dir).map_err(|e| {
+        petrel_actors::Unrecoverable(format!(
+            "params/png is `{png}`, but its folder {} cannot be created: {e}",
+            dir.display()
+        ))
+    })
 }
 
 /// An `i64` parameter as a count, or an error naming it when it is negative.

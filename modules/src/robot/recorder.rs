@@ -168,18 +168,7 @@ impl Module for Recorder {
     }
 
     async fn init(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
-        let png = self.png.get();
-        if let Some(dir) = Path::new(png.as_str())
-            .parent()
-            .filter(|d| !d.as_os_str().is_empty())
-        {
-            std::fs::create_dir_all(dir).map_err(|e| {
-                anyhow::anyhow!(
-                    "params/png is `{png}`, but its folder {} cannot be created: {e}",
-                    dir.display()
-                )
-            })?;
-        }
+        super::png_folder(&self.png.get())?;
         self.started = Some(std::time::Instant::now());
         self.record = (*self.saved.get()).clone();
         Ok(())

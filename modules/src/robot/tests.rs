@@ -81,6 +81,32 @@ async fn lowering_max_speed_while_running_slows_the_robot_down() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn a_picture_folder_that_cannot_be_made_fails_once_without_restarts() {
+    let png = r#""params/png": "/proc/no/such/dir/x.png""#;
+    let agent = start(&format!(
+        r#"(name: "world", type: "sim.world", values: {{"params/world": "{WORLD}", {png}}}),
+           (name: "recorder", type: "sim.recorder", values: {{{png}}})"#
+    ))
+    .await;
+    // Long enough for every restart the default policy would make.
+    tokio::time::sleep(Duration::from_secs(60)).await;
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    for module in ["world", "recorder"] {
+        let report = summary.module(module).unwrap();
+        let error = report.last_error.clone().unwrap_or_default();
+        assert!(
+            error.contains("params/png is `/proc/no/such/dir/x.png`, but its folder /proc/no/such/dir cannot be created"),
+            "{module}: {error}"
+        );
+        assert_eq!(
+            (report.status.as_str(), report.failures, report.restarts),
+            (status::FAILED, 1, 0),
+            "{module}: {error}"
+        );
+    }
+}
+
+#[tokio::test(start_paused = true)]
 async fn bad_parameters_fail_init_naming_the_parameter() {
     let cases = [
         (

@@ -282,16 +282,7 @@ impl Module for SimWorld {
             self.pose.set(world.pose(0).unwrap_or_default());
         }
         tracing::info!(module = ctx.module(), world = %file, robots = ios.len(), "world loaded");
-        let png = self.png.get();
-        let png_path = std::path::Path::new(png.as_str());
-        if let Some(dir) = png_path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| {
-                let dir = dir.display();
-                Unrecoverable(format!(
-                    "params/png is `{png}`, but its folder {dir} cannot be created: {e}"
-                ))
-            })?;
-        }
+        super::png_folder(&self.png.get())?;
         let members = ctx.blackboard().any_handle("_team/members").await.ok();
         // An instance started again after a restart or a move goes on where the last one
         // stopped, not with every robot back at its start at time 0. The memory is used once:
