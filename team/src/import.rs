@@ -162,8 +162,9 @@ async fn subscribe(ctx: &Arc<Ctx>, id: &str, group: &[RemoteLink]) -> zenoh::Res
     let variant = variant(&first.qos);
     let type_info = first.feed.type_info();
     let mut tracker = StreamTracker::new(&source.to_string(), type_info.name());
-    if let Some(zid) = ctx.membership.lock().zid_of(&owner) {
-        tracker.owner_is(zid);
+    match ctx.membership.lock().zid_of(&owner) {
+        Some(zid) => tracker.owner_is(zid),
+        None => tracker.owner_absent(&ctx.config.name),
     }
     let stream = Arc::new(Stream {
         owner: owner.clone(),

@@ -59,7 +59,7 @@ fn apply(ctx: &Ctx, board: &Board, change: &Change) {
     let zid = ctx.membership.lock().zid_of(agent).map(str::to_string);
     for stream in ctx.streams.lock().values().filter(|s| s.owner == agent) {
         match (change, &zid) {
-            (Change::Left(_), _) => stream.update(|t| t.owner_left()),
+            (Change::Left(_), _) => stream.update(|t| t.owner_left(&ctx.config.name)),
             (Change::Joined(_) | Change::Rejoined(_), Some(zid)) => {
                 stream.update(|t| t.owner_is(zid))
             }

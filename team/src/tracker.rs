@@ -133,16 +133,45 @@ impl StreamTracker {
 
     /// The owner left the team: its inputs keep the last value and go stale. The next session
     /// to send under its name is taken as the owner (its samples may come before its token).
-    pub fn owner_left(&mut self) {
+    pub fn owner_left(&mut self, team: &str) {
         if self.status.state == link_state::LIVE {
             self.status.state = link_state::STALE.into();
+            self.status.detail = format!(
+                "agent `{}` left team `{team}`; the inputs keep its last value",
+                self.owner()
+            );
         }
+        self.owner_absent(team);
         self.owner_zid = None;
+    }
+
+    /// The owner is not in the team (yet): a link that waits says so, since an agent in a
+    /// team of another name, or unreachable, looks just like one that has not started.
+    pub fn owner_absent(&mut self, team: &str) {
+        if self.status.state == link_state::WAITING {
+            self.status.detail = format!(
+                "agent `{}` is not in team `{team}`: not started yet, in a team of another name, or not reachable (`petrel ls` lists the team)",
+                self.owner()
+            );
+        }
     }
 
     /// The owner is (again) the session `zid`.
     pub fn owner_is(&mut self, zid: &str) {
         self.owner_zid = Some(zid.to_string());
+        if self.status.state == link_state::WAITING {
+            self.status.detail = format!(
+                "agent `{}` is in the team; no value from it yet",
+                self.owner()
+            );
+        }
+    }
+
+    /// The agent the stream comes from, as its source names it.
+    fn owner(&self) -> &str {
+        let source = &self.status.source;
+        let rest = source.strip_prefix("petrel://").unwrap_or(source);
+        rest.split('/').next().unwrap_or(rest)
     }
 
     /// Whether a rejection may be logged now (at most once per [`LOG_EVERY`]).
@@ -181,6 +210,33 @@ mod tests {
     }
 
     #[test]
+    fn a_waiting_stream_says_whether_its_owner_is_in_the_team() {
+        let mut t = StreamTracker::new("petrel://a/m/out/x", "f64");
+        t.owner_absent("crew");
+        assert_eq!(t.status().state, "waiting");
+        assert!(
+            t.status().detail.starts_with(
+                "agent `a` is not in team `crew`: not started yet, in a team of another name"
+            ),
+            "{:?}",
+            t.status()
+        );
+        t.owner_is("z1");
+        assert_eq!(
+            t.status().detail,
+            "agent `a` is in the team; no value from it yet"
+        );
+        assert_eq!(t.on_sample(&att(0, "f64", "z1")), Verdict::Accept);
+        assert_eq!(t.status().detail, "");
+        t.owner_left("crew");
+        assert_eq!(t.status().state, "stale");
+        assert_eq!(
+            t.status().detail,
+            "agent `a` left team `crew`; the inputs keep its last value"
+        );
+    }
+
+    #[test]
     fn a_stream_goes_live_counts_gaps_and_ignores_repeats() {
         let mut t = StreamTracker::new("petrel://a/m/out/x", "f64");
         assert_eq!(t.status().state, "waiting");
@@ -216,7 +272,7 @@ mod tests {
         let mut t = StreamTracker::new("petrel://a/m/out/x", "f64");
         t.owner_is("z1");
         t.on_sample(&att(10, "f64", "z1"));
-        t.owner_left();
+        t.owner_left("crew");
         assert_eq!(t.status().state, "stale");
         assert_eq!(
             t.on_sample(&att(0, "f64", "z2")),
@@ -225,7 +281,7 @@ mod tests {
         );
         t.owner_is("z2");
         assert_eq!(t.status().state, "live");
-        t.owner_left();
+        t.owner_left("crew");
         t.owner_is("z3");
         assert_eq!(
             t.on_sample(&att(0, "f64", "z3")),
@@ -244,7 +300,7 @@ mod tests {
         let mut t = StreamTracker::new("petrel://a/m/out/q", "f64");
         t.owner_is("z1");
         t.on_sample(&att(4, "f64", "z1"));
-        t.owner_left();
+        t.owner_left("crew");
         t.owner_is("z1");
         assert_eq!(t.on_sample(&att(9, "f64", "z1")), Verdict::Accept);
         assert_eq!(

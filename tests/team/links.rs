@@ -32,6 +32,32 @@ async fn a_remote_value_feeds_an_input_like_a_local_link() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_link_to_an_agent_of_another_team_says_why_it_waits() {
+    // Connected sessions, but team names that differ by one letter.
+    let (pa, pb) = (free_port(), free_port());
+    let (team_a, team_b) = (team_name("crew"), team_name("crow"));
+    let count = r#"(name: "count", type: "demo.counter", values: {"params/period_ms": 5}),"#;
+    let a = start(&agent_config("a", &team_a, pa, &[], "", count)).await;
+    let scale = r#"(name: "scale", type: "demo.scale",
+         links: {"in/value": "petrel://a/count/out/value"}),"#;
+    let b = start(&agent_config("b", &team_b, pb, &[pa], "", scale)).await;
+    let status = b.handle::<LinkStatus>("scale/stats/links/in/value").await;
+    let s = wait_for(&status, "a link that says why it waits", |s| {
+        !s.detail.is_empty()
+    })
+    .await;
+    assert_eq!(s.state, "waiting", "{s:?}");
+    assert!(
+        s.detail.starts_with(&format!(
+            "agent `a` is not in team `{team_b}`: not started yet, in a team of another name"
+        )),
+        "{s:?}"
+    );
+    b.stop().await;
+    a.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_remote_queue_keeps_order_and_loses_nothing() {
     // Room for every item the test waits for and more: a queue drops its oldest items for a
     // reader that falls behind (counted, as a gap), and on a loaded machine the exporting task
