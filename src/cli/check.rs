@@ -45,11 +45,14 @@ pub(crate) fn check(
             .iter()
             .map(|m| m.links.len())
             .sum::<usize>();
+        let s = |n: usize| if n == 1 { "" } else { "s" };
         println!(
-            "{}: ok: agent `{}`, {} modules, {links} links",
+            "{}: ok: agent `{}`, {} module{}, {links} link{}",
             file.path().display(),
             agent.name,
-            agent.modules
+            agent.modules,
+            s(agent.modules),
+            s(links)
         );
     }
     ExitCode::SUCCESS

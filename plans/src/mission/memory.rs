@@ -170,6 +170,56 @@ impl MissionMemory {
     }
 }
 
+/// Why `memory` cannot be where `plan` goes on from, if it cannot: a marking that does not
+/// fit the plan, a running action the plan does not have, a time that is no clock time. A
+/// memory the mission wrote itself always fits; one from a snapshot may have been edited, or
+/// taken with another plan of the same name. `None` too for a memory of another plan (or of
+/// none), which a mission does not resume.
+pub(crate) fn memory_problem(plan: &crate::Plan, memory: &MissionMemory) -> Option<String> {
+    if memory.plan != plan.name() || memory.marking.is_empty() {
+        return None;
+    }
+    if let Err(e) = crate::PlanState::new(plan).restore(plan, &memory.marking) {
+        return Some(e);
+    }
+    let mut actions = Vec::new();
+    action_names(plan, &mut actions);
+    let clock_time = |t: f64| t.is_finite() && (0.0..=MAX_CLOCK_S).contains(&t);
+    for (name, running) in &memory.running {
+        if !actions.contains(&name.as_str()) {
+            return Some(format!(
+                "running action `{name}` is not an action of plan `{}`",
+                plan.name()
+            ));
+        }
+        let held = running.held.iter().flatten().flatten();
+        if let Some(t) = std::iter::once(&running.started_s)
+            .chain(held)
+            .find(|t| !clock_time(**t))
+        {
+            return Some(format!(
+                "running action `{name}`: {} is no mission clock time (seconds from 0 to 1e12)",
+                petrel_actors::short_number(*t)
+            ));
+        }
+    }
+    None
+}
+
+/// The latest clock time a memory may hold, s: where the expression clock stops (some 30,000
+/// years).
+const MAX_CLOCK_S: f64 = 1e12;
+
+/// The names of `plan`'s actions, sub-plans' included.
+fn action_names<'p>(plan: &'p crate::Plan, into: &mut Vec<&'p str>) {
+    for e in plan.executables() {
+        match &e.subplan {
+            Some(sub) => action_names(sub, into),
+            None => into.push(&e.name),
+        }
+    }
+}
+
 fn s(n: u32) -> &'static str {
     if n == 1 {
         ""

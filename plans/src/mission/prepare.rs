@@ -169,6 +169,21 @@ pub async fn check_mission(
     })?;
     let (bound, warnings) = prepare_all(bb, module, &setup).await;
     let (plan, _) = bound?;
+    // A snapshot's memory the mission cannot go on from: refused here, where a restart in a
+    // run (whose memory the mission wrote itself) would warn and start the plan over.
+    if let Ok(memory) = bb
+        .get::<super::MissionMemory>(&format!("{module}/state/memory"))
+        .await
+    {
+        if let Some(problem) = super::memory::memory_problem(&plan, &memory) {
+            return Err(vec![BindingProblem {
+                needle: "state/memory".into(),
+                message: format!(
+                    "{module}/state/memory: {problem}; remove it to start the plan over"
+                ),
+            }]);
+        }
+    }
     if !setup.team {
         let (actions, conditions) = super::bind::plan_names(&plan);
         let dispatch = crate::remote::Dispatch::new(

@@ -270,6 +270,9 @@ impl Run {
     /// running actions' start times, what they replaced and their `held` windows, and the
     /// team runs this mission serves or started.
     pub fn resume(&mut self, memory: &MissionMemory) -> Result<(), String> {
+        if let Some(problem) = super::memory::memory_problem(&self.plan, memory) {
+            return Err(problem);
+        }
         self.state.restore(&self.plan, &memory.marking)?;
         for (name, ra) in &memory.running {
             let Some(a) = self.bound.actions.get_mut(name) else {
