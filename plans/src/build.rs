@@ -148,6 +148,8 @@ impl Builder<'_> {
     fn pnml_err(&self, element: String, message: String) -> PlanError {
         PlanError::Pnml {
             file: self.file.to_string(),
+            line: 0,
+            column: 0,
             element,
             message,
         }
@@ -167,6 +169,8 @@ impl Builder<'_> {
         for p in raw_places {
             let l = parse_place_label(&p.label).map_err(|message| PlanError::Label {
                 file: self.file.to_string(),
+                line: 0,
+                column: 0,
                 kind: "place",
                 id: p.id.clone(),
                 label: p.label.clone(),
@@ -353,6 +357,8 @@ impl Builder<'_> {
     fn resolve_label(&mut self, t: &mut Transition, places: &[Place]) -> Result<(), PlanError> {
         let l = parse_transition_label(&t.label).map_err(|message| PlanError::Label {
             file: self.file.to_string(),
+            line: 0,
+            column: 0,
             kind: "transition",
             id: t.id.clone(),
             label: t.label.clone(),
@@ -383,6 +389,8 @@ impl Builder<'_> {
         if let Some(g) = l.guard {
             let parsed = parse_condition(&g).map_err(|e| PlanError::Guard {
                 file: self.file.to_string(),
+                line: 0,
+                column: 0,
                 id: t.id.clone(),
                 label: t.label.clone(),
                 message: e.to_string(),

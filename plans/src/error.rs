@@ -38,10 +38,14 @@ pub enum PlanError {
     },
     /// The XML is well-formed but is not a Petri net as PNP writes it
     /// (missing net, arc between two places, unknown node id, bad marking...).
-    #[error("{file}: {element}: {message}")]
+    #[error("{}{element}: {message}", at(file, *line, *column))]
     Pnml {
         /// The file.
         file: String,
+        /// 1-based line of the element (0 when unknown).
+        line: u32,
+        /// 1-based column (0 when unknown).
+        column: u32,
         /// The element concerned, e.g. `arc 'a3'` or `place 'p1'`.
         element: String,
         /// What is wrong and what was expected.
@@ -49,10 +53,14 @@ pub enum PlanError {
     },
     /// A place or transition label could not be understood
     /// (e.g. a dotted word with an unknown function, or two guards).
-    #[error("{file}: {kind} '{id}' with label '{label}': {message}")]
+    #[error("{}{kind} '{id}' with label '{label}': {message}", at(file, *line, *column))]
     Label {
         /// The file.
         file: String,
+        /// 1-based line of the node (0 when unknown).
+        line: u32,
+        /// 1-based column (0 when unknown).
+        column: u32,
         /// `place` or `transition`.
         kind: &'static str,
         /// The node id.
@@ -63,10 +71,14 @@ pub enum PlanError {
         message: String,
     },
     /// A transition guard does not parse.
-    #[error("{file}: transition '{id}' with label '{label}': bad guard: {message}")]
+    #[error("{}transition '{id}' with label '{label}': bad guard: {message}", at(file, *line, *column))]
     Guard {
         /// The file.
         file: String,
+        /// 1-based line of the transition (0 when unknown).
+        line: u32,
+        /// 1-based column (0 when unknown).
+        column: u32,
         /// The transition id.
         id: String,
         /// The full label.
@@ -119,4 +131,45 @@ pub enum PlanError {
         /// The chain of plan names, `a -> b -> a`.
         chain: String,
     },
+}
+
+/// `file:line:column: `, or `file: ` where the place is unknown.
+fn at(file: &str, line: u32, column: u32) -> String {
+    match line {
+        0 => format!("{file}: "),
+        _ => format!("{file}:{line}:{column}: "),
+    }
+}
+
+impl PlanError {
+    /// The error with the place of the node it is about filled in, where it has none:
+    /// `find` gives the line and column of the node with an id (the PNML reader knows them,
+    /// the plan builder does not).
+    pub(crate) fn located(mut self, find: impl Fn(&str) -> Option<(u32, u32)>) -> Self {
+        let (id, line, column) = match &mut self {
+            PlanError::Label {
+                id, line, column, ..
+            }
+            | PlanError::Guard {
+                id, line, column, ..
+            } => (id.clone(), line, column),
+            // `arc 'a3'`: the id is quoted in the element.
+            PlanError::Pnml {
+                element,
+                line,
+                column,
+                ..
+            } => match element.split('\'').nth(1) {
+                Some(id) => (id.to_string(), line, column),
+                None => return self,
+            },
+            _ => return self,
+        };
+        if *line == 0 {
+            if let Some((l, c)) = find(&id) {
+                (*line, *column) = (l, c);
+            }
+        }
+        self
+    }
 }

@@ -214,7 +214,7 @@ fn arc_between_two_places() {
         .to_string();
     assert_eq!(
         msg,
-        "two.pnml: arc 'a0': joins two places ('n0' -> 'n1'); an arc must join a place and a transition"
+        "two.pnml:4:1: arc 'a0': joins two places ('n0' -> 'n1'); an arc must join a place and a transition"
     );
 }
 
@@ -224,7 +224,7 @@ fn arc_to_unknown_node() {
     let msg = parse_pnml(&text, "u.pnml", "u").unwrap_err().to_string();
     assert_eq!(
         msg,
-        "u.pnml: arc 'a0' at line 3: target 'zz' is not a place or transition id"
+        "u.pnml:3:1: arc 'a0': target 'zz' is not a place or transition id"
     );
 }
 
@@ -235,7 +235,7 @@ fn unparsable_guard_names_transition_and_label() {
     assert!(
         matches!(&e, PlanError::Guard { id, label, .. } if id == "t0" && label == "go.end [and x (or y]")
     );
-    assert_eq!(e.to_string(), "g.pnml: transition 't0' with label 'go.end [and x (or y]': bad guard: column 12: expected ')'");
+    assert_eq!(e.to_string(), "g.pnml:3:1: transition 't0' with label 'go.end [and x (or y]': bad guard: column 12: expected ')'");
 }
 
 #[test]
@@ -244,7 +244,7 @@ fn unknown_function_in_label() {
     let msg = parse_pnml(&text, "f.pnml", "f").unwrap_err().to_string();
     assert_eq!(
         msg,
-        "f.pnml: transition 't0' with label 'go.stop': unknown function 'stop' in 'go.stop'; expected start, end, interrupt, interr, resume, res or fail"
+        "f.pnml:3:1: transition 't0' with label 'go.stop': unknown function 'stop' in 'go.stop'; expected start, end, interrupt, interr, resume, res or fail"
     );
 }
 
@@ -276,10 +276,14 @@ fn other_structural_errors() {
         "{e}"
     );
     let bad = pnml(&[("a", 1)], &[], &[]).replace("<value>1</value>", "<value>lots</value>");
-    assert!(parse_pnml(&bad, "m", "m")
-        .unwrap_err()
-        .to_string()
-        .contains("initial marking 'lots' is not a number"));
+    let e = parse_pnml(&bad, "m", "m").unwrap_err().to_string();
+    // At the place's line, like every PNML error.
+    let line = bad.lines().position(|l| l.contains("<place")).unwrap() + 1;
+    assert!(
+        e.starts_with(&format!("m:{line}:"))
+            && e.contains("place 'n0': initial marking 'lots' is not a number"),
+        "{e}"
+    );
     assert!(parse_pnml("<foo/>", "r", "r")
         .unwrap_err()
         .to_string()

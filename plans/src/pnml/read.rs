@@ -29,14 +29,11 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
             message: e.to_string(),
         }
     })?;
-    let err = |element: &str, message: String| PlanError::Pnml {
-        file: file.to_string(),
-        element: element.to_string(),
-        message,
-    };
     let root = doc.root_element();
     if root.tag_name().name() != "pnml" {
-        return Err(err(
+        return Err(pnml_error(
+            file,
+            root,
             root.tag_name().name(),
             "expected the root element <pnml>".into(),
         ));
@@ -44,7 +41,9 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
     // PNML's namespace, if the file names one (editors such as PIPE and JARP name none).
     if let Some(ns) = root.tag_name().namespace() {
         if !ns.starts_with("http://www.pnml.org/") {
-            return Err(err(
+            return Err(pnml_error(
+                file,
+                root,
                 "pnml",
                 format!("namespace '{ns}' is not PNML's (http://www.pnml.org/version-2009/grammar/pnml)"),
             ));
@@ -53,10 +52,9 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
     let mut nets = children(root, "net");
     let net = nets
         .next()
-        .ok_or_else(|| err("pnml", "no <net> element".into()))?;
+        .ok_or_else(|| pnml_error(file, root, "pnml", "no <net> element".into()))?;
     if let Some(second) = nets.next() {
-        let element = format!("net at line {}", line_of(second));
-        return Err(err(&element, "a second <net>: a plan file holds one net (put each plan in a file of its own; a sub-plan is an action named after its file)".into()));
+        return Err(pnml_error(file, second, "net", "a second <net>: a plan file holds one net (put each plan in a file of its own; a sub-plan is an action named after its file)".into()));
     }
     let mut raw = RawNet {
         name: default_name.to_string(),
@@ -71,7 +69,26 @@ pub fn parse_pnml(text: &str, file: &str, default_name: &str) -> Result<Plan, Pl
             break;
         }
     }
-    Plan::build(raw, file)
+    Plan::build(raw, file).map_err(|e| {
+        // The builder knows no lines: the node its error names is found here.
+        e.located(|id| {
+            let node =
+                (doc.descendants()).find(|n| n.is_element() && n.attribute("id") == Some(id))?;
+            Some(place_of(node))
+        })
+    })
+}
+
+/// An error about the element `n` (`element` says which: `arc 'a3'`), at its line and column.
+fn pnml_error(file: &str, n: Node, element: &str, message: String) -> PlanError {
+    let (line, column) = place_of(n);
+    PlanError::Pnml {
+        file: file.to_string(),
+        line,
+        column,
+        element: element.to_string(),
+        message,
+    }
 }
 
 /// Reads the nodes of `net` and of its pages, in document order. Pages may nest; they are
@@ -119,15 +136,13 @@ impl Ids {
         };
         let at = n.range().start;
         if let Some((first, first_at)) = self.seen.get(id) {
-            let line = |offset| n.document().text_pos_at(offset).row;
-            return Err(PlanError::Pnml {
-                file: file.to_string(),
-                element: format!("{kind} '{id}' at line {}", line(at)),
-                message: format!(
-                    "duplicate id: {first} '{id}' at line {} has it already",
-                    line(*first_at)
-                ),
-            });
+            let first_line = n.document().text_pos_at(*first_at).row;
+            return Err(pnml_error(
+                file,
+                n,
+                &format!("{kind} '{id}'"),
+                format!("duplicate id: {first} '{id}' at line {first_line} has it already"),
+            ));
         }
         self.seen.insert(id.to_string(), (kind, at));
         if kind == "arc" {
@@ -144,9 +159,12 @@ impl Ids {
             for (which, end) in [("source", source), ("target", target)] {
                 let node = self.seen.get(end.as_str()).map(|(kind, _)| *kind);
                 if !matches!(node, Some("place" | "transition")) && !end.is_empty() {
+                    let pos = doc.text_pos_at(*at);
                     return Err(PlanError::Pnml {
                         file: file.to_string(),
-                        element: format!("arc '{id}' at line {}", doc.text_pos_at(*at).row),
+                        line: pos.row,
+                        column: pos.col,
+                        element: format!("arc '{id}'"),
                         message: format!("{which} '{end}' is not a place or transition id"),
                     });
                 }
@@ -163,23 +181,18 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
         let need_id = |kind: &str| -> Result<String, PlanError> {
             match n.attribute("id") {
                 Some(id) if !id.is_empty() => Ok(id.to_string()),
-                _ => Err(PlanError::Pnml {
-                    file: file.to_string(),
-                    element: format!("{kind} at line {}", line_of(n)),
-                    message: "missing 'id' attribute".into(),
-                }),
+                _ => Err(pnml_error(file, n, kind, "missing 'id' attribute".into())),
             }
         };
         match n.tag_name().name() {
             "place" => {
                 let id = need_id("place")?;
                 let initial = match value(n, &["initialMarking", "value"]) {
-                    Some(v) => count(&v).ok_or_else(|| PlanError::Pnml {
-                        file: file.to_string(),
-                        element: format!("place '{id}'"),
-                        message: format!(
+                    Some(v) => count(&v).ok_or_else(|| {
+                        let message = format!(
                             "initial marking '{v}' is not a number (expected N or Default,N)"
-                        ),
+                        );
+                        pnml_error(file, n, &format!("place '{id}'"), message)
                     })?,
                     None => 0,
                 };
@@ -203,25 +216,18 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
             "arc" => {
                 let element = format!("arc '{}'", id());
                 let attr = |a: &str| {
-                    n.attribute(a)
-                        .map(str::to_string)
-                        .ok_or_else(|| PlanError::Pnml {
-                            file: file.to_string(),
-                            element: element.clone(),
-                            message: format!("missing '{a}' attribute"),
-                        })
+                    n.attribute(a).map(str::to_string).ok_or_else(|| {
+                        pnml_error(file, n, &element, format!("missing '{a}' attribute"))
+                    })
                 };
                 let (source, target) = (attr("source")?, attr("target")?);
                 let weight = match value(n, &["inscription", "value"]) {
-                    Some(v) => count(&v)
-                        .filter(|w| *w > 0)
-                        .ok_or_else(|| PlanError::Pnml {
-                            file: file.to_string(),
-                            element: element.clone(),
-                            message: format!(
-                                "weight '{v}' is not a positive number (expected N or Default,N)"
-                            ),
-                        })?,
+                    Some(v) => count(&v).filter(|w| *w > 0).ok_or_else(|| {
+                        let message = format!(
+                            "weight '{v}' is not a positive number (expected N or Default,N)"
+                        );
+                        pnml_error(file, n, &element, message)
+                    })?,
                     None => 1,
                 };
                 let arc = RawArc {
@@ -245,8 +251,10 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
     Ok(())
 }
 
-fn line_of(n: Node) -> u32 {
-    n.document().text_pos_at(n.range().start).row
+/// The line and column where element `n` starts.
+fn place_of(n: Node) -> (u32, u32) {
+    let pos = n.document().text_pos_at(n.range().start);
+    (pos.row, pos.col)
 }
 
 fn children<'a, 'i>(n: Node<'a, 'i>, tag: &'static str) -> impl Iterator<Item = Node<'a, 'i>> {
