@@ -107,8 +107,8 @@ enum Command {
     Set {
         /// The property, `petrel://agent/module/path` (or `agent/module/path`).
         url: String,
-        /// The new value (RON); a negative number is taken as it is (`-0.5`).
-        #[arg(allow_negative_numbers = true)]
+        /// The new value (RON); one that starts with `-` is taken as it is (`-0.5`, `-inf`).
+        #[arg(allow_hyphen_values = true)]
         value: String,
         #[command(flatten)]
         reach: remote::Reach,
@@ -394,4 +394,35 @@ fn bounded_duration(text: &str) -> Result<Duration, String> {
         ));
     }
     Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set_value(args: &[&str]) -> Result<String, String> {
+        match Cli::try_parse_from(args)
+            .map_err(|e| e.to_string())?
+            .command
+        {
+            Command::Set { value, .. } => Ok(value),
+            _ => Err("not a set".into()),
+        }
+    }
+
+    #[test]
+    fn a_set_value_may_start_with_a_minus_and_options_still_work_around_it() {
+        for value in ["-0.5", "-inf", "-1e3"] {
+            assert_eq!(
+                set_value(&["petrel", "set", "r/m/params/x", value]).as_deref(),
+                Ok(value)
+            );
+        }
+        let with_pid = ["petrel", "set", "--pid", "7", "r/m/params/x", "-inf"];
+        assert_eq!(set_value(&with_pid).as_deref(), Ok("-inf"));
+        let after = ["petrel", "set", "r/m/params/x", "-inf", "--pid", "7"];
+        assert_eq!(set_value(&after).as_deref(), Ok("-inf"));
+        let between = ["petrel", "set", "r/m/params/x", "--pid", "7", "-0.5"];
+        assert_eq!(set_value(&between).as_deref(), Ok("-0.5"));
+    }
 }
