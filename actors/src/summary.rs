@@ -73,15 +73,15 @@ impl fmt::Display for RunSummary {
             .max(4);
         write!(
             f,
-            "agent {}: {} modules, {} failures, {} restarts",
+            "agent {}: {}, {}, {}",
             self.agent,
-            self.modules.len(),
-            self.failures(),
-            self.restarts()
+            counted(self.modules.len() as u64, "module"),
+            counted(self.failures(), "failure"),
+            counted(self.restarts(), "restart")
         )?;
         match self.moves() {
             0 => writeln!(f)?,
-            moves => writeln!(f, ", {moves} moves")?,
+            moves => writeln!(f, ", {}", counted(moves, "move"))?,
         }
         writeln!(
             f,
@@ -99,5 +99,23 @@ impl fmt::Display for RunSummary {
             }
         }
         Ok(())
+    }
+}
+
+/// `1 restart`, `2 restarts`.
+fn counted(n: u64, noun: &str) -> String {
+    match n {
+        1 => format!("1 {noun}"),
+        n => format!("{n} {noun}s"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn one_is_said_in_the_singular() {
+        assert_eq!(super::counted(1, "restart"), "1 restart");
+        assert_eq!(super::counted(0, "restart"), "0 restarts");
+        assert_eq!(super::counted(5, "module"), "5 modules");
     }
 }
