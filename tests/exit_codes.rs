@@ -255,3 +255,85 @@ fn replay_refuses_modules_the_config_lacks_and_a_rate_of_zero() {
         assert!(err.contains(says), "{args:?}: {err}");
     }
 }
+
+/// A recording that cannot be written where it is asked to go is refused before anything runs,
+/// by `check` (a config's `record.file`) and by `run` (`--record` too), and never overwrites an
+/// input of the run.
+#[test]
+fn a_recording_is_refused_where_it_cannot_go() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in FILES {
+        std::fs::write(dir.path().join(name), text).unwrap();
+    }
+    let idle = r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter")])"#;
+    let with_file = |file: &str| {
+        format!(
+            r#"Agent(name: "r1", record: (file: "{file}"), modules: [(name: "c", type: "demo.counter")])"#
+        )
+    };
+    std::fs::write(dir.path().join("to_null.ron"), with_file("/dev/null")).unwrap();
+    std::fs::write(dir.path().join("to_itself.ron"), with_file("to_itself.ron")).unwrap();
+    std::fs::write(dir.path().join("to_nothing.ron"), with_file("")).unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["check", "to_null.ron"], "/dev/null is not a regular file"),
+        (
+            &["run", "to_null.ron", "--for", "1s"],
+            "/dev/null is not a regular file",
+        ),
+        (
+            &["run", "idle.ron", "--for", "1s", "--record", "/dev/null"],
+            "/dev/null is not a regular file",
+        ),
+        (
+            &["run", "idle.ron", "--for", "1s", "--record", "."],
+            "is a directory",
+        ),
+        (
+            &["run", "idle.ron", "--for", "1s", "--record", "idle.ron"],
+            "an input of this run",
+        ),
+        (&["check", "to_itself.ron"], "an input of this run"),
+        (
+            &["run", "to_itself.ron", "--for", "1s"],
+            "an input of this run",
+        ),
+        (&["check", "to_nothing.ron"], "an empty file name"),
+        (
+            &[
+                "run",
+                "idle.ron",
+                "--for",
+                "1s",
+                "--record",
+                "idle.ron/x.mcap",
+            ],
+            "is not a directory",
+        ),
+    ];
+    let mut wrong = Vec::new();
+    for (args, expected) in cases {
+        let out = bounded::output_within_deadline(
+            Command::new(env!("CARGO_BIN_EXE_petrel"))
+                .args(*args)
+                .current_dir(dir.path())
+                .env("PETREL_RUNTIME_DIR", dir.path())
+                .env("RUST_LOG", "warn"),
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if out.status.code() != Some(2) || !stderr.contains(expected) {
+            wrong.push(format!(
+                "petrel {}: {:?}\n{stderr}",
+                args.join(" "),
+                out.status.code()
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("idle.ron")).unwrap(),
+        idle
+    );
+    assert!(std::fs::read_to_string(dir.path().join("to_itself.ron"))
+        .unwrap()
+        .starts_with("Agent("));
+}

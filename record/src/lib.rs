@@ -12,6 +12,7 @@ pub mod encode;
 pub mod select;
 pub mod sink;
 mod taps;
+pub mod target;
 
 pub use encode::{Codec, Format, Kind, LogLevel, LogRecord, SchemaDef, Stamp};
 pub use select::{RecordOptions, Selection, SplitPolicy};

@@ -157,6 +157,14 @@ pub(crate) fn check_all(
             };
             errors.push(file.locate(&needle, e));
         }
+        if let Some(path) = &section.file {
+            let inputs: Vec<&std::path::Path> = file.files().collect();
+            if let Some(problem) =
+                petrel_record::target::target_problem(std::path::Path::new(path), &inputs)
+            {
+                errors.push(file.locate("file:", format!("record: file: {problem}")));
+            }
+        }
     }
     let without_missing_files = |module: &str| !missing.iter().any(|m| m == module);
     // What each module type checks itself (a world file that must parse, ...).

@@ -143,7 +143,14 @@ pub(crate) fn options(
     }
     let section = section.unwrap_or_default();
     let (path, format) = (file.map(PathBuf::as_path), format.map(Into::into));
+    let inputs: Vec<&std::path::Path> = configs.iter().flat_map(ConfigFile::files).collect();
     RecordOptions::from_section(&section, path, format, compression.map(Into::into))
+        .and_then(
+            |options| match petrel_record::target::target_problem(&options.path, &inputs) {
+                Some(problem) => Err(format!("record: file: {problem}")),
+                None => Ok(options),
+            },
+        )
         .map(Some)
         .map_err(|e| {
             eprintln!("error: {e}");
@@ -155,9 +162,10 @@ pub(crate) fn options(
 pub(crate) fn start(options: RecordOptions) -> Result<Recorder, ExitCode> {
     let path = options.path.clone();
     let log = options.log;
+    // The path is the user's: one the file cannot be made at is bad input.
     let mut recorder = Recorder::start(options).map_err(|e| {
         eprintln!("error: cannot record to {}: {e}", path.display());
-        ExitCode::FAILURE
+        ExitCode::from(EXIT_BAD_INPUT)
     })?;
     if log {
         super::record_log::install(Some(recorder.log_sink()));

@@ -179,6 +179,11 @@ impl ConfigFile {
         &self.sources[0].0
     }
 
+    /// The files it was loaded from: the base, then its overlays in order.
+    pub fn files(&self) -> impl Iterator<Item = &Path> {
+        self.sources.iter().map(|(path, _)| path.as_path())
+    }
+
     /// Builds the agent's blackboard registry: declares every module, applies values,
     /// capacities and links. Returns every problem found.
     pub fn build(&self, types: &ModuleRegistry) -> Result<Registry, ConfigErrors> {
