@@ -260,3 +260,22 @@ async fn tick_ms_adds_periodic_steps_for_conditions_time_alone_changes() {
     stop(ticking).await;
     stop(still).await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_sub_plan_whose_action_ends_at_once_ends_without_anything_else_waking_the_mission() {
+    // Nothing wakes the mission after `leaf` starts: no tick, no property it reads changes. The
+    // firings inside the sub-plan must count as progress, or it waits for ever.
+    let plans = Plans::new(&[("leaf.plan", "leaf"), ("top.plan", "sub")]);
+    let pnml = petrel::plans::compile_to_pnml(&plans.0.path().join("leaf.plan"), None).unwrap();
+    std::fs::write(plans.0.path().join("sub.pnml"), pnml).unwrap();
+    let agent = start(&agent_with_mission(&format!(
+        r#""params/plan": "{}", "params/is_mission": true,
+           "params/actions": {{"leaf": (finished: "true")}}"#,
+        plans.path("top.plan")
+    )))
+    .await;
+    let exit = finished(&agent).await;
+    assert_eq!(exit.code, 0, "{}", exit.reason);
+    assert!(exit.reason.contains("ended: goal"), "{}", exit.reason);
+    stop(agent).await;
+}

@@ -111,6 +111,9 @@ impl fmt::Display for CallRecord {
 pub struct StepReport {
     /// Top-level transitions fired, as indices into [`Plan::transitions`], in order.
     pub fired: Vec<usize>,
+    /// Transitions fired inside sub-plans: progress too, which may enable more in the next
+    /// step (a sub-plan's action that ends at once), though `fired` does not list them.
+    pub sub_fired: usize,
     /// Every call made, sub-plans included, in order.
     pub calls: Vec<CallRecord>,
     /// External conditions found unknown for the first time.

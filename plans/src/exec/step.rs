@@ -21,6 +21,7 @@ pub fn step_with(
     report: &mut StepReport,
 ) {
     report.fired.clear();
+    report.sub_fired = 0;
     report.calls.clear();
     report.unknown_conditions.clear();
     report.unhandled_failure = None;
@@ -93,8 +94,9 @@ fn step_into(
         for e in h.outputs(&hot.arcs) {
             state.add(e.place, e.weight);
         }
-        if top {
-            report.fired.push(ti);
+        match top {
+            true => report.fired.push(ti),
+            false => report.sub_fired += 1,
         }
         if !h.plain {
             for c in &plan.transitions()[ti].calls {

@@ -137,7 +137,7 @@ impl Module for Mission {
         if run.done {
             return Ok(());
         }
-        let mut fired = 0;
+        let (mut fired, mut sub_fired) = (0, 0);
         let stamp = ctx.now();
         let (now, secs) = (run.clock.now(stamp), run.clock.secs(stamp));
         let t = StepTime { now, secs, stamp };
@@ -184,9 +184,13 @@ impl Module for Mission {
                 relink(ctx, &mut run.bound.relinks).await;
             }
             fired += report.fired;
+            sub_fired += report.sub_fired;
             called |= report.called;
             let running = run.state.status(&run.plan) == PlanStatus::Running;
-            if report.fired == 0 || !running {
+            // A firing inside a sub-plan is progress too: the next round may end the action
+            // it started (one whose `finished` already holds), and nothing else would wake
+            // the mission for it.
+            if report.fired + report.sub_fired == 0 || !running {
                 // Nothing more fires now. A module an action has just switched on may answer
                 // at once (a quick action): let it, once per step, and go on with its answer
                 // in this step rather than stepping again for it (see `settle`).
@@ -210,7 +214,7 @@ impl Module for Mission {
         if run.clock.is_wall() {
             run.timer.set(run.bound.exprs.next_deadline());
         }
-        if fired > 0 {
+        if fired + sub_fired > 0 {
             // Once per step, however many rounds fired: what the plan left (a call counted in
             // the actions' records, so the memory changed).
             run.save_changed(&self.memory, called);

@@ -69,6 +69,8 @@ pub(super) const MAX_ROUNDS: usize = 64;
 pub(super) struct Round {
     /// Transitions fired.
     pub fired: usize,
+    /// Transitions fired inside sub-plans (not in `fired`).
+    pub sub_fired: usize,
     /// Whether it called an action (which may have enabled a module or written its input).
     pub called: bool,
 }
@@ -134,6 +136,7 @@ impl Run {
         }
         Round {
             fired,
+            sub_fired: self.report.sub_fired,
             called: !self.report.calls.is_empty(),
         }
     }
