@@ -121,6 +121,16 @@ pub enum PlanError {
         /// What was found and what was expected.
         message: String,
     },
+    /// Sub-plans nest deeper than [`MAX_DEPTH`] levels (each stepping level recurses once).
+    #[error("{file}: sub-plans nest deeper than {limit} levels ({chain}); expected a shallower hierarchy")]
+    SubPlansTooDeep {
+        /// The file whose sub-plan is one level too many.
+        file: String,
+        /// The limit, [`MAX_DEPTH`].
+        limit: usize,
+        /// The start and the end of the chain of plan names, `a -> b -> ... -> z`.
+        chain: String,
+    },
     /// Sub-plans include each other.
     #[error("{file}: sub-plan '{name}' includes itself (through {chain})")]
     SubPlanCycle {

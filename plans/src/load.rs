@@ -150,6 +150,20 @@ fn attach_subplans(
                 chain: chain.join(" -> "),
             });
         }
+        // Stepping, checking and loading recurse once per level: a chain of thousands of
+        // files overflowed the stack.
+        if chain.len() >= crate::error::MAX_DEPTH {
+            let (head, tail) = (&chain[..3], &chain[chain.len() - 2..]);
+            return Err(PlanError::SubPlansTooDeep {
+                file: path.display().to_string(),
+                limit: crate::error::MAX_DEPTH,
+                chain: format!(
+                    "{} -> ... -> {} -> {name}",
+                    head.join(" -> "),
+                    tail.join(" -> ")
+                ),
+            });
+        }
         let sub = match loaded.get(&file) {
             Some(sub) => sub.clone(),
             None => {

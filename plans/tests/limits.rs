@@ -151,3 +151,50 @@ fn pnml_guards() {
         "{e:?}"
     );
 }
+
+/// Writes `c0.pnml` .. `c{levels - 1}.pnml` into `dir`, each plan's one action the next file
+/// (the last one's an action `leaf`): sub-plans nested `levels` deep.
+fn sub_plan_chain(dir: &std::path::Path, levels: usize) -> std::path::PathBuf {
+    for i in 0..levels {
+        let action = match i + 1 == levels {
+            true => "leaf".to_string(),
+            false => format!("c{}", i + 1),
+        };
+        let plan = compile_text(&action, "c.plan", &format!("c{i}"), None).unwrap();
+        let pnml = petrel_plans::write_pnml(&plan);
+        std::fs::write(dir.join(format!("c{i}.pnml")), pnml).unwrap();
+    }
+    dir.join("c0.pnml")
+}
+
+#[test]
+fn sub_plan_chains() {
+    let dir = tempfile::tempdir().unwrap();
+    // As deep as allowed: loads, checks and runs to its goal on the small stack.
+    let top = sub_plan_chain(dir.path(), MAX_DEPTH);
+    let status = small_stack(move || {
+        let loaded = petrel_plans::load_plan(&top, None).map_err(|e| e.to_string())?;
+        let report = petrel_plans::check(&loaded.plan);
+        assert!(report.is_ok(), "{report}");
+        let script = petrel_plans::Script::parse("", "s").unwrap();
+        let mut out = Vec::new();
+        let steps = 4 * MAX_DEPTH as u64 + 10;
+        petrel_plans::simulate(&loaded.plan, &script, steps, &mut out).map_err(|e| e.to_string())
+    });
+    assert_eq!(status, Ok(petrel_plans::PlanStatus::Goal));
+    // One level more is refused, naming the chain.
+    let dir = tempfile::tempdir().unwrap();
+    let top = sub_plan_chain(dir.path(), MAX_DEPTH + 2);
+    let e = small_stack(move || {
+        petrel_plans::load_plan(&top, None)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    });
+    let e = e.unwrap_err();
+    assert!(
+        e.contains(&format!(
+            "sub-plans nest deeper than {MAX_DEPTH} levels (c0 -> c1 -> c2 -> ... ->"
+        )),
+        "{e}"
+    );
+}
