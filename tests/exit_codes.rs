@@ -190,6 +190,16 @@ const CASES: &[(&[&str], i32, &str)] = &[
         2,
         "a token too short",
     ),
+    (
+        &["console", "--listen", "127.0.0.1:0", "--pid", "999999"],
+        1,
+        "no run has that pid: nothing to wait for",
+    ),
+    (
+        &["console", "--listen", "127.0.0.1:0", "--team", ""],
+        2,
+        "an empty team name",
+    ),
     (&["get", "no-address"], 2, "bad address"),
     (&["no-such-command"], 2, "bad command"),
 ];

@@ -75,6 +75,20 @@ pub(crate) fn run(args: ConsoleArgs) -> ExitCode {
         eprintln!("error: --listen {}: {e}", args.listen);
         return ExitCode::from(EXIT_BAD_INPUT);
     }
+    if let Some(pid) = args.pid {
+        // A pid that runs nothing now never will: the console would wait for it for ever.
+        let reach = super::remote::Reach {
+            via: None,
+            pid: Some(pid),
+        };
+        if let Err(code) = super::remote::runs(&reach) {
+            return code;
+        }
+    }
+    if args.team.iter().any(|t| t.trim().is_empty()) {
+        eprintln!("error: --team: an empty team name matches no agent; expected a team's name");
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
     let via = match &args.via {
         Some(path) => {
             let reach = super::remote::Reach {
