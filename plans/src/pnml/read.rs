@@ -189,9 +189,7 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
                 let id = need_id("place")?;
                 let initial = match value(n, &["initialMarking", "value"]) {
                     Some(v) => count(&v).ok_or_else(|| {
-                        let message = format!(
-                            "initial marking '{v}' is not a number (expected N or Default,N)"
-                        );
+                        let message = format!("initial marking '{v}' {}", not_a_count(&v));
                         pnml_error(file, n, &format!("place '{id}'"), message)
                     })?,
                     None => 0,
@@ -223,9 +221,12 @@ fn read_node(n: Node, raw: &mut RawNet, file: &str) -> Result<(), PlanError> {
                 let (source, target) = (attr("source")?, attr("target")?);
                 let weight = match value(n, &["inscription", "value"]) {
                     Some(v) => count(&v).filter(|w| *w > 0).ok_or_else(|| {
-                        let message = format!(
-                            "weight '{v}' is not a positive number (expected N or Default,N)"
-                        );
+                        let message = match count(&v) {
+                            Some(_) => format!(
+                                "weight '{v}' is not a positive number (expected N or Default,N)"
+                            ),
+                            None => format!("weight '{v}' {}", not_a_count(&v)),
+                        };
                         pnml_error(file, n, &element, message)
                     })?,
                     None => 1,
@@ -282,6 +283,18 @@ fn count(v: &str) -> Option<u32> {
     v.parse().ok()
 }
 
+/// Why `v`, which [`count`] refused, is not a count: too large, or no number at all.
+fn not_a_count(v: &str) -> String {
+    let digits = v
+        .trim()
+        .rsplit_once(',')
+        .map_or(v.trim(), |(_, n)| n.trim());
+    match !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+        true => format!("is too large (at most {})", u32::MAX),
+        false => "is not a number (expected N or Default,N)".to_string(),
+    }
+}
+
 fn position(n: Node) -> Option<Position> {
     let p = children(n, "graphics")
         .next()
@@ -301,6 +314,15 @@ mod tests {
         assert_eq!(count(" Default,2 "), Some(2));
         assert_eq!(count(""), Some(0));
         assert_eq!(count("x"), None);
+        assert_eq!(
+            not_a_count("4294967296"),
+            "is too large (at most 4294967295)"
+        );
+        assert_eq!(
+            not_a_count("Default,99999999999"),
+            "is too large (at most 4294967295)"
+        );
+        assert!(not_a_count("-1").starts_with("is not a number"));
     }
 
     #[test]
