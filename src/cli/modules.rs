@@ -29,7 +29,16 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
         } else {
             format!("; did you mean {}?", near.join(", "))
         };
-        eprintln!("error: unknown module type `{type_name}`{hint} (`petrel modules` lists them)");
+        // Control characters are shown by their code: printed raw, `sim.world\x01` looked
+        // like the type it was told it is not.
+        let shown: String = type_name
+            .chars()
+            .map(|c| match c.is_control() {
+                true => format!("U+{:04X}", u32::from(c)),
+                false => c.to_string(),
+            })
+            .collect();
+        eprintln!("error: unknown module type `{shown}`{hint} (`petrel modules` lists them)");
         return ExitCode::from(super::EXIT_BAD_INPUT);
     };
     say!("{}: {}\n", t.name(), t.description());

@@ -26,6 +26,13 @@ fn modules_lists_and_describes_types() {
     let unknown = petrel(&["modules", "describe", "demo.scal"]);
     assert_eq!(unknown.status.code(), Some(2));
     assert!(text(&unknown.stderr).contains("did you mean demo.scale?"));
+    let control = petrel(&["modules", "describe", "demo.scale\u{1}"]);
+    assert_eq!(control.status.code(), Some(2));
+    assert!(
+        text(&control.stderr).contains("unknown module type `demo.scaleU+0001`"),
+        "{}",
+        text(&control.stderr)
+    );
 }
 
 #[test]
