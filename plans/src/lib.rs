@@ -70,7 +70,9 @@ pub use analysis::{check, check_with, CheckOptions, CheckReport, Finding, DEFAUL
 pub use condition::{parse_condition, Cond, CondError};
 pub use dot::to_dot;
 pub use error::{PlanError, MAX_DEPTH};
-pub use exec::{step, step_with, CallRecord, Environment, PlanState, PlanStatus, StepReport};
+pub use exec::{
+    step, step_with, CallRecord, Environment, PlanState, PlanStatus, StepReport, MAX_PLACE_TOKENS,
+};
 pub use label::{split_label, CallKind};
 pub use load::{compile_to_pnml, load_plan, LoadedPlan};
 pub use mission::register;

@@ -216,6 +216,12 @@ pub fn simulate(
             "{{\"step\":{k},\"calls\":{calls},\"marking\":{}}}",
             marking_json(plan, &state)
         )?;
+        // As a mission would: a place past the token limit stops the plan as failed.
+        if let Some(why) = state.runaway(plan) {
+            let why = serde_json::to_string(&why).expect("strings serialise");
+            writeln!(out, "{{\"result\":\"fail\",\"step\":{k},\"reason\":{why}}}")?;
+            return Ok(PlanStatus::Fail);
+        }
     }
     let status = state.status(plan);
     writeln!(out, "{{\"result\":\"{}\",\"step\":{k}}}", status.as_str())?;

@@ -211,3 +211,21 @@ fn an_unhandled_failure_is_reported_with_its_action() {
         "a key that does not fit is refused"
     );
 }
+
+#[test]
+fn a_place_past_the_token_limit_fails_the_simulation_as_it_would_a_mission() {
+    // `t0` keeps the token of P and adds one to Q at every step: Q grows without end.
+    let p = net(
+        &[("P", 1), ("Q", 0), ("goal", 0)],
+        &["[]"],
+        &[("n0", "t0", 1), ("t0", "n0", 1), ("t0", "n1", 1)],
+    );
+    let limit = u64::from(petrel_plans::MAX_PLACE_TOKENS);
+    let (out, status) = lines(&p, "", limit + 100);
+    assert_eq!(status, PlanStatus::Fail);
+    let last = out.last().unwrap();
+    assert!(
+        last.starts_with(&format!("{{\"result\":\"fail\",\"step\":{},\"reason\":\"place 'Q' holds {} tokens (more than {limit})", limit + 1, limit + 1)),
+        "{last}"
+    );
+}

@@ -123,6 +123,10 @@ pub struct StepReport {
     pub unhandled_failure: Option<String>,
 }
 
+/// Tokens one place may hold before a running plan stops as a runaway (see
+/// [`PlanState::runaway`]).
+pub const MAX_PLACE_TOKENS: u32 = 1000;
+
 /// The run-time state of a plan: marking and sub-plan states.
 #[derive(Debug, Clone)]
 pub struct PlanState {
@@ -191,6 +195,19 @@ impl PlanState {
     /// Tokens in place `place` (index into [`Plan::places`]).
     pub fn tokens(&self, place: usize) -> u32 {
         self.tokens[place]
+    }
+
+    /// Why the plan must stop, if a place holds more than [`MAX_PLACE_TOKENS`] tokens: an
+    /// unbounded net (a loop that forks a branch each time round and never joins it) would
+    /// otherwise start its actions millions of times and grow without end. `petrel plan check`
+    /// warns of it (`unbounded`) but cannot be sure, as it leaves every guard open. A mission
+    /// and `petrel plan simulate` stop it alike.
+    pub fn runaway(&self, plan: &Plan) -> Option<String> {
+        let (place, tokens) = self.marked().find(|&(_, k)| k > MAX_PLACE_TOKENS)?;
+        Some(format!(
+            "place '{}' holds {tokens} tokens (more than {MAX_PLACE_TOKENS}): the plan makes tokens faster than it uses them, e.g. a loop that starts a parallel branch each time round and never joins it (`petrel plan check` warns `unbounded`)",
+            plan.places()[place].label
+        ))
     }
 
     /// Marked places with their tokens, in document order.

@@ -58,9 +58,6 @@ pub(super) struct Run {
     pub keys: Vec<String>,
 }
 
-/// Tokens one place may hold before the mission stops as a runaway (see [`Run::runaway`]).
-pub(super) const MAX_PLACE_TOKENS: u32 = 1000;
-
 /// Plan steps run back to back in one module step at most (see [`Mission::step`]).
 pub(super) const MAX_ROUNDS: usize = 64;
 
@@ -141,16 +138,9 @@ impl Run {
         }
     }
 
-    /// Why the plan must stop, if a place holds more than [`MAX_PLACE_TOKENS`] tokens: an
-    /// unbounded net (a loop that forks a branch each time round and never joins it) would
-    /// otherwise start its actions millions of times and grow without end. `petrel plan check`
-    /// warns of it (`unbounded`) but cannot be sure, as it leaves every guard open.
+    /// Why the plan must stop, if it must (see [`PlanState::runaway`]).
     pub fn runaway(&self) -> Option<String> {
-        let (place, tokens) = self.state.marked().find(|&(_, k)| k > MAX_PLACE_TOKENS)?;
-        Some(format!(
-            "place '{}' holds {tokens} tokens (more than {MAX_PLACE_TOKENS}): the plan makes tokens faster than it uses them, e.g. a loop that starts a parallel branch each time round and never joins it (`petrel plan check` warns `unbounded`)",
-            self.plan.places()[place].label
-        ))
+        self.state.runaway(&self.plan)
     }
 
     /// Transitions `fired` as the log and `out/firings` show them (shared, not copied).
