@@ -16,6 +16,7 @@ pub mod kinematics;
 pub mod map_io;
 pub mod map_yaml;
 pub mod pgm;
+mod pgm_ascii;
 pub mod raycast;
 pub mod render;
 pub mod resume;

@@ -84,6 +84,11 @@ pub fn parse_pgm(path: &Path, bytes: &[u8]) -> Result<PgmImage, WorldFileError> 
             ));
         }
     }
+    if bytes.starts_with(b"P2") {
+        // ASCII: each sample is checked, with its line (the decoder skips extra ones).
+        let text = String::from_utf8_lossy(bytes);
+        super::pgm_ascii::check_p2_samples(path, &text)?;
+    }
     let err = |e: image::ImageError| WorldFileError::file(path, format!("cannot decode PGM: {e}"));
     let decoder = PnmDecoder::new(std::io::Cursor::new(bytes)).map_err(err)?;
     let (width, height) = decoder.dimensions();
@@ -196,7 +201,10 @@ mod tests {
             "i.pgm:1:1: expected the magic number P5 or P2 (a greyscale PGM), got \"P6\""
         );
         assert!(g(b"P2\n2 x\n").starts_with("i.pgm: cannot decode PGM:"));
-        assert!(g(b"P2\n1 1\n255\n300\n").starts_with("i.pgm: cannot decode PGM:"));
+        assert_eq!(
+            g(b"P2\n1 1\n255\n300\n"),
+            "i.pgm:4: sample 1 is 300, above the image's maxval 255"
+        );
         assert!(g(b"P5 2 2 255\n\0\0").starts_with("i.pgm: cannot decode PGM:"));
         assert_eq!(
             g(b"P5 100000 100000 255\n\0"),
