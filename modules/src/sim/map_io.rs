@@ -134,8 +134,9 @@ pub fn parse_ascii(file: &Path, text: &str) -> Result<WorldMap, WorldFileError> 
         .max()
         .unwrap_or(0);
     let height = rows.len();
+    // A world file has no `size` parameter: its rows and columns are the size.
     let mut grid = Grid::new(width, height, resolution, origin.0, origin.1)
-        .map_err(|e| WorldFileError::file(file, e.to_string()))?;
+        .map_err(|e| WorldFileError::file(file, format!("the world's size: {}", e.message)))?;
     let mut starts = Vec::new();
     let mut goals: [Option<Pose2>; 9] = [None; 9];
     let heading = heading_deg.to_radians();

@@ -27,7 +27,7 @@ pub fn load_map_yaml(path: &Path) -> Result<WorldMap, WorldFileError> {
     })?;
     let image = parse_pgm(&meta.image, &bytes)?;
     let grid = image_to_grid(&meta, &image)
-        .map_err(|e| WorldFileError::file(&meta.image, e.to_string()))?;
+        .map_err(|e| WorldFileError::file(&meta.image, format!("the map's size: {}", e.message)))?;
     let outside = meta
         .features
         .victims
