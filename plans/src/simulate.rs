@@ -52,7 +52,17 @@ impl Script {
                     let n: i64 = n.parse().ok().filter(|n| *n >= -1).ok_or_else(|| {
                         err(format!("'{n}' is not a step count; expected a number >= 0, or -1 for never"))
                     })?;
-                    let map = if *kw == "finish" { &mut s.finish } else { &mut s.fail };
+                    let (map, other, other_kw) = match *kw {
+                        "finish" => (&mut s.finish, &s.fail, "fail"),
+                        _ => (&mut s.fail, &s.finish, "finish"),
+                    };
+                    // Both at a step: the action ends at the earlier one, and the other line
+                    // never applies (with -1, never, either may stand beside the other).
+                    if let Some(&m) = other.get(*name).filter(|&&m| m >= 0 && n >= 0) {
+                        return Err(err(format!(
+                            "'{kw} {name} {n}' and '{other_kw} {name} {m}': the action ends at the first, so the other never applies; keep one"
+                        )));
+                    }
                     if map.insert(name.to_string(), n).is_some() {
                         return Err(err(format!("'{kw} {name}' is given twice; keep one")));
                     }

@@ -122,6 +122,15 @@ fn script_errors_name_the_line() {
         .unwrap_err()
         .to_string();
     assert_eq!(e, "s.txt:2: 'finish a' is given twice; keep one");
+    let e = Script::parse("finish a 3\nfail a 5", "s.txt")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "s.txt:2: 'fail a 5' and 'finish a 3': the action ends at the first, so the other never applies; keep one"
+    );
+    // Never finishing, failing at 5: both stand.
+    assert!(Script::parse("finish a -1\nfail a 5", "s.txt").is_ok());
     let plan =
         petrel_plans::compile_text("a; < c ? b : (not c) ? d >", "p.plan", "p", None).unwrap();
     let script = Script::parse("finish a 1\ncond c 0 5\n\nfinish zzz 3", "s.txt").unwrap();
