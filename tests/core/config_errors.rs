@@ -38,6 +38,17 @@ fn a_whole_number_out_of_range_names_its_field() {
 }
 
 #[test]
+fn a_negative_whole_number_names_its_field_too() {
+    let e = errors("Agent(name: \"r\", step_budget: (mean_us: -1), modules: [])");
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(
+        e[0].contains("error: `mean_us`: a whole number out of range"),
+        "{}",
+        e[0]
+    );
+}
+
+#[test]
 fn a_missing_file_is_named() {
     let e = ConfigFile::load("no/such/config.ron")
         .unwrap_err()
@@ -189,7 +200,7 @@ fn all_errors_are_reported_in_one_pass() {
 fn supervision_settings_are_checked() {
     let e = errors(
         r#"Agent(name: "r1",
-    supervision: (max_restarts: 1000000, within_s: 0.0, backoff: (min_ms: 50, max_ms: 10)),
+    supervision: (max_restarts: 1000000, within_s: 1e300, backoff: (min_ms: 50, max_ms: 10)),
     groups: [(name: "g"), (name: "g"), (name: "bad name/x")],
     modules: [(name: "a", type: "demo.counter", group: "nav"), (name: "_b", type: "demo.counter", watchdog_ms: 0)],
 )"#,
@@ -197,8 +208,8 @@ fn supervision_settings_are_checked() {
     let expected = [
         "bad.ron:3:47: error: group name `bad name/x`: expected letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)",
         "bad.ron:2:5: error: supervision: max_restarts is 1000000; expected 0..=100000",
-        "bad.ron:2:5: error: supervision: within_s is 0; expected a number of seconds in (0, 86400]",
-        "bad.ron:2:57: error: supervision backoff: min_ms (50) is above max_ms (10)",
+        "bad.ron:2:5: error: supervision: within_s is 1e300; expected a number of seconds in (0, 86400]",
+        "bad.ron:2:59: error: supervision backoff: min_ms (50) is above max_ms (10)",
         "bad.ron:3:21: error: duplicate group name `g`",
         "bad.ron:4:56: error: module `a`: unknown group `nav` (groups: g, bad name/x)",
         "bad.ron:4:71: error: module name `_b`: names starting with `_` are reserved for the runtime",

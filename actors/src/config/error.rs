@@ -74,7 +74,10 @@ impl ConfigError {
 /// The name of the struct field whose value starts at byte `at` of `text` (`name: <at>`), if
 /// one does: RON's errors about a value do not say which field it is for.
 fn field_before(text: &str, at: usize) -> Option<&str> {
-    let before = text.get(..at)?.trim_end().strip_suffix(':')?.trim_end();
+    // RON points past a minus sign, at the digits.
+    let before = text.get(..at)?.trim_end();
+    let before = before.strip_suffix('-').unwrap_or(before).trim_end();
+    let before = before.strip_suffix(':')?.trim_end();
     let start = before
         .rfind(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
         .map_or(0, |i| i + 1);

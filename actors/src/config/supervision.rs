@@ -44,7 +44,7 @@ impl ConfigFile {
                 ));
             }
             if !(within > 0.0 && within <= MAX_WINDOW_S) {
-                errors.push(at(needle, format!("{what}: within_s is {within}; expected a number of seconds in (0, {MAX_WINDOW_S}]")));
+                errors.push(at(needle, format!("{what}: within_s is {}; expected a number of seconds in (0, {MAX_WINDOW_S}]", crate::short_number(within))));
             }
         };
         intensity("supervision", s.max_restarts, s.within_s, "supervision");
@@ -71,7 +71,7 @@ impl ConfigFile {
                 "jitter",
                 format!(
                     "supervision backoff: jitter is {}; expected 0.0..=1.0",
-                    b.jitter
+                    crate::short_number(b.jitter)
                 ),
             ));
         }
