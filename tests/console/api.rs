@@ -166,6 +166,20 @@ async fn a_parameter_set_through_the_api_is_in_the_blackboard_and_other_writes_a
     }
     let unknown = set("filter/params/nope", "1").await;
     assert_eq!(unknown.status, 404, "{}", unknown.body);
+    // Requests the API cannot read are answered in its own form, as bad requests.
+    let post = |body: &'static str| http(addr, "POST", "/api/agents/robot1/set", &[], Some(body));
+    let get_value = |query: &'static str| get(addr, query);
+    for bad in [
+        post("{\"key\": 1}").await,
+        post("not json").await,
+        get_value("/api/agents/robot1/value").await,
+        get_value("/api/agents/robot1/value?key=").await,
+        get_value("/api/agents/robot1/value?key=sensor").await,
+        set("sensor", "1").await,
+    ] {
+        assert_eq!(bad.status, 400, "{}", bad.body);
+        assert!(bad.json()["error"].is_string(), "{}", bad.body);
+    }
     console.stop().await;
     agent.stop(None).await;
 }

@@ -4,6 +4,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
+use axum::extract::rejection::{JsonRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
@@ -35,6 +36,40 @@ fn error(status: StatusCode, message: impl Into<String>) -> ApiError {
     ApiError {
         status,
         message: message.into(),
+    }
+}
+
+/// A query string or body the framework could not read, answered in the API's own form
+/// (`{"error": ...}`, with the framework's status: 400, 413 for a body too large, 415 for a
+/// body without a JSON content type) rather than its plain text.
+fn unreadable(status: StatusCode, text: String) -> ApiError {
+    error(status, format!("unreadable request: {text}"))
+}
+
+fn unreadable_query(e: QueryRejection) -> ApiError {
+    unreadable(e.status(), e.body_text())
+}
+
+fn unreadable_body(e: JsonRejection) -> ApiError {
+    // A field of the wrong type is a bad request like a bad value (the framework says 422).
+    let status = match e.status() {
+        StatusCode::UNPROCESSABLE_ENTITY => StatusCode::BAD_REQUEST,
+        other => other,
+    };
+    unreadable(status, e.body_text())
+}
+
+/// A property key as the API takes it, `module/path`: one that is not such an address is a
+/// bad request (400), not a property that happens to be missing (404).
+fn property_key(key: &str) -> Result<&str, ApiError> {
+    match key.split_once('/') {
+        Some((module, path)) if !module.is_empty() && !path.is_empty() => Ok(key),
+        _ => Err(error(
+            StatusCode::BAD_REQUEST,
+            format!(
+                "`{key}` is not a property key; expected `module/path`, e.g. `scale/out/value`"
+            ),
+        )),
     }
 }
 
@@ -108,11 +143,13 @@ pub(crate) struct KeyQuery {
 pub(crate) async fn value(
     State(shared): State<Arc<Shared>>,
     Path(name): Path<String>,
-    Query(q): Query<KeyQuery>,
+    q: Result<Query<KeyQuery>, QueryRejection>,
 ) -> Api {
+    let Query(q) = q.map_err(unreadable_query)?;
+    let key = property_key(&q.key)?;
     let a = agent(&shared, &name)?;
     let v = a
-        .view(&q.key, true)
+        .view(key, true)
         .await
         .map_err(|e| error(StatusCode::NOT_FOUND, e))?;
     Ok(Json(json!(v)))
@@ -131,10 +168,11 @@ pub(crate) struct SetRequest {
 pub(crate) async fn set(
     State(shared): State<Arc<Shared>>,
     Path(name): Path<String>,
-    Json(request): Json<SetRequest>,
+    request: Result<Json<SetRequest>, JsonRejection>,
 ) -> Api {
+    let Json(request) = request.map_err(unreadable_body)?;
+    let key = property_key(&request.key)?;
     let a = agent(&shared, &name)?;
-    let key = &request.key;
     match &a.backend {
         Backend::Local(bb) => {
             let (kind, _) = bb
@@ -150,7 +188,7 @@ pub(crate) async fn set(
         }
         Backend::Remote(remote) => {
             let listing = a.listing().await.map_err(unavailable)?;
-            let Some(p) = listing.properties.iter().find(|p| &p.key == key) else {
+            let Some(p) = listing.properties.iter().find(|p| p.key == key) else {
                 return Err(error(
                     StatusCode::NOT_FOUND,
                     format!("agent `{}` has no property `{key}`", a.name),
@@ -267,8 +305,9 @@ pub(crate) struct MapQuery {
 pub(crate) async fn map(
     State(shared): State<Arc<Shared>>,
     Path(name): Path<String>,
-    Query(q): Query<MapQuery>,
+    q: Result<Query<MapQuery>, QueryRejection>,
 ) -> Api {
+    let Query(q) = q.map_err(unreadable_query)?;
     let a = agent(&shared, &name)?;
     let listing = a.listing().await.map_err(unavailable)?;
     let sources = map::pick(&listing);
