@@ -45,6 +45,18 @@ impl Script {
                 line: i as u32 + 1,
                 message,
             };
+            // A control character (a NUL) would show as nothing, or a space, in the message.
+            if let Some((col, c)) = line
+                .chars()
+                .enumerate()
+                .find(|(_, c)| c.is_control() && *c != '\t')
+            {
+                return Err(err(format!(
+                    "column {}: unexpected character U+{:04X}",
+                    col + 1,
+                    u32::from(c)
+                )));
+            }
             let words = statement(line);
             match words.as_slice() {
                 [] => {}

@@ -129,6 +129,10 @@ fn script_errors_name_the_line() {
         e,
         "s.txt:2: 'fail a 5' and 'finish a 3': the action ends at the first, so the other never applies; keep one"
     );
+    let e = Script::parse("finish a 3\0", "s.txt")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "s.txt:1: column 11: unexpected character U+0000");
     // Never finishing, failing at 5: both stand.
     assert!(Script::parse("finish a -1\nfail a 5", "s.txt").is_ok());
     let plan =
