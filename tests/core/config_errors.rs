@@ -49,6 +49,22 @@ fn a_negative_whole_number_names_its_field_too() {
 }
 
 #[test]
+fn names_written_with_escapes_are_located_and_shown_escaped() {
+    let e = errors(r#"Agent(name: "a\u{2f}b", modules: [(name: "c\td", type: "demo.counter")])"#);
+    assert_eq!(e.len(), 2, "{e:?}");
+    assert!(
+        e[0].starts_with("bad.ron:1:7: error: agent name `a/b`:"),
+        "{}",
+        e[0]
+    );
+    assert!(
+        e[1].starts_with("bad.ron:1:42: error: module name `c\\td`:"),
+        "{}",
+        e[1]
+    );
+}
+
+#[test]
 fn a_missing_file_is_named() {
     let e = ConfigFile::load("no/such/config.ron")
         .unwrap_err()

@@ -195,17 +195,22 @@ impl ConfigFile {
         errors.extend(self.check_realtime_priority());
         errors.extend(self.check_long_steps_nice());
         if !crate::url::valid_segment(&self.config.name) {
-            errors.push(self.locate(
-                &format!("\"{}\"", self.config.name),
-                format!("agent name `{}`: {NAME_RULE}", self.config.name),
+            errors.push(self.locate_name(
+                &self.config.name,
+                "name:",
+                format!(
+                    "agent name `{}`: {NAME_RULE}",
+                    self.config.name.escape_debug()
+                ),
             ));
         }
         let mut names = HashSet::new();
         for m in &self.config.modules {
             if !crate::url::valid_segment(&m.name) {
-                errors.push(self.locate(
-                    &format!("\"{}\"", m.name),
-                    format!("module name `{}`: {NAME_RULE}", m.name),
+                errors.push(self.locate_name(
+                    &m.name,
+                    "modules:",
+                    format!("module name `{}`: {NAME_RULE}", m.name.escape_debug()),
                 ));
                 continue;
             }
@@ -330,6 +335,20 @@ impl ConfigFile {
             true => Ok(registry),
             false => Err(ConfigErrors(errors)),
         }
+    }
+
+    /// An error located at the name `name` as written: quoted as it is, or with RON's escapes
+    /// (`"c\td"`, which a user may also have written so).
+    /// Written otherwise (`"a\u{2f}b"`), `fallback` is looked for instead.
+    fn locate_name(&self, name: &str, fallback: &str, message: String) -> ConfigError {
+        let plain = format!("\"{name}\"");
+        let escaped = ron::to_string(name).unwrap_or_default();
+        let written = |needle: &str| self.sources.iter().any(|(_, text)| text.contains(needle));
+        let needle = [plain.as_str(), escaped.as_str()]
+            .into_iter()
+            .find(|n| !n.is_empty() && written(n))
+            .unwrap_or(fallback);
+        self.locate(needle, message)
     }
 
     /// An error located at the first occurrence of `needle` in the last source that has it.
