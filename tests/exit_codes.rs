@@ -204,22 +204,32 @@ const CASES: &[(&[&str], i32, &str)] = &[
     (&["no-such-command"], 2, "bad command"),
 ];
 
-#[test]
-fn every_subcommand_exits_with_its_documented_code() {
+/// A temporary directory holding [`FILES`].
+fn with_files() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     for (name, text) in FILES {
         std::fs::write(dir.path().join(name), text).unwrap();
     }
+    dir
+}
+
+/// Runs `petrel args` in `dir`, where tools find no run: the directory is the test's own.
+fn petrel_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .current_dir(dir)
+            .env("PETREL_RUNTIME_DIR", dir)
+            .env("RUST_LOG", "warn"),
+    )
+}
+
+#[test]
+fn every_subcommand_exits_with_its_documented_code() {
+    let dir = with_files();
     let mut wrong = Vec::new();
     for (args, expected, meaning) in CASES {
-        let out = bounded::output_within_deadline(
-            Command::new(env!("CARGO_BIN_EXE_petrel"))
-                .args(*args)
-                .current_dir(dir.path())
-                // Tools find no run here: the directory is this test's own.
-                .env("PETREL_RUNTIME_DIR", dir.path())
-                .env("RUST_LOG", "warn"),
-        );
+        let out = petrel_in(dir.path(), args);
         if out.status.code() != Some(*expected) {
             wrong.push(format!(
                 "petrel {}: expected {expected} ({meaning}), got {:?}\n{}",
@@ -236,10 +246,7 @@ fn every_subcommand_exits_with_its_documented_code() {
 /// replay at a rate nobody asked for.
 #[test]
 fn replay_refuses_modules_the_config_lacks_and_a_rate_of_zero() {
-    let dir = tempfile::tempdir().unwrap();
-    for (name, text) in FILES {
-        std::fs::write(dir.path().join(name), text).unwrap();
-    }
+    let dir = with_files();
     let cases: &[(&[&str], &str)] = &[
         (
             &["--replace", "ghost"],
@@ -253,13 +260,8 @@ fn replay_refuses_modules_the_config_lacks_and_a_rate_of_zero() {
         ),
     ];
     for (args, says) in cases {
-        let out = bounded::output_within_deadline(
-            Command::new(env!("CARGO_BIN_EXE_petrel"))
-                .args(["replay", "not.mcap", "goal.ron"])
-                .args(*args)
-                .current_dir(dir.path())
-                .env("PETREL_RUNTIME_DIR", dir.path()),
-        );
+        let replay = [&["replay", "not.mcap", "goal.ron"], *args].concat();
+        let out = petrel_in(dir.path(), &replay);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(says), "{args:?}: {err}");
@@ -271,10 +273,7 @@ fn replay_refuses_modules_the_config_lacks_and_a_rate_of_zero() {
 /// input of the run.
 #[test]
 fn a_recording_is_refused_where_it_cannot_go() {
-    let dir = tempfile::tempdir().unwrap();
-    for (name, text) in FILES {
-        std::fs::write(dir.path().join(name), text).unwrap();
-    }
+    let dir = with_files();
     let idle = r#"Agent(name: "r1", modules: [(name: "c", type: "demo.counter")])"#;
     let with_file = |file: &str| {
         format!(
@@ -322,13 +321,7 @@ fn a_recording_is_refused_where_it_cannot_go() {
     ];
     let mut wrong = Vec::new();
     for (args, expected) in cases {
-        let out = bounded::output_within_deadline(
-            Command::new(env!("CARGO_BIN_EXE_petrel"))
-                .args(*args)
-                .current_dir(dir.path())
-                .env("PETREL_RUNTIME_DIR", dir.path())
-                .env("RUST_LOG", "warn"),
-        );
+        let out = petrel_in(dir.path(), args);
         let stderr = String::from_utf8_lossy(&out.stderr);
         if out.status.code() != Some(2) || !stderr.contains(expected) {
             wrong.push(format!(
