@@ -183,7 +183,8 @@ impl Module for SimWorld {
     }
 
     /// The world file, the bodies it names, and where the robot of a single-robot world
-    /// starts (bodies are placed from their own modules' values, checked there).
+    /// starts (bodies are placed from their own modules' values: a body started in a wall is
+    /// found when the world places it, at init).
     fn check(&self, agent: &AgentView) -> Vec<CheckProblem> {
         let bodies = self.bodies.get();
         if let Some(problem) = bodies_problem(&bodies.0, |name| agent.module_type(name)) {
