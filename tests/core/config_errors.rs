@@ -223,8 +223,8 @@ fn supervision_settings_are_checked() {
     );
     let expected = [
         "bad.ron:3:47: error: group name `bad name/x`: expected letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)",
-        "bad.ron:2:5: error: supervision: max_restarts is 1000000; expected 0..=100000",
-        "bad.ron:2:5: error: supervision: within_s is 1e300; expected a number of seconds in (0, 86400]",
+        "bad.ron:2:19: error: supervision: max_restarts is 1000000; expected 0..=100000",
+        "bad.ron:2:42: error: supervision: within_s is 1e300; expected a number of seconds in (0, 86400]",
         "bad.ron:2:59: error: supervision backoff: min_ms (50) is above max_ms (10)",
         "bad.ron:3:21: error: duplicate group name `g`",
         "bad.ron:4:56: error: module `a`: unknown group `nav` (groups: g, bad name/x)",
@@ -232,6 +232,14 @@ fn supervision_settings_are_checked() {
         "bad.ron:4:99: error: module `_b`: watchdog_ms must be above 0",
     ];
     assert_eq!(e, expected);
+    // A group's field, in that group.
+    let group = errors(
+        r#"Agent(name: "r1", groups: [(name: "a", within_s: 5.0), (name: "b", within_s: 0.0)])"#,
+    );
+    assert_eq!(
+        group,
+        ["bad.ron:1:68: error: group `b`: within_s is 0; expected a number of seconds in (0, 86400]"]
+    );
     let strategy = errors(r#"Agent(name: "r1", supervision: (strategy: one_for_none))"#);
     assert!(
         strategy[0].starts_with("bad.ron:1:43: error: Unexpected variant named `one_for_none`"),

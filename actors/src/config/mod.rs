@@ -351,6 +351,18 @@ impl ConfigFile {
         self.locate(needle, message)
     }
 
+    /// An error located at the first `field` after `section` in the last source that has the
+    /// section, else at the section.
+    pub(crate) fn locate_after(&self, section: &str, field: &str, message: String) -> ConfigError {
+        for (file, text) in self.sources.iter().rev() {
+            if let Some(start) = text.find(section) {
+                let at = text[start..].find(field).map_or(start, |i| start + i);
+                return ConfigError::at(file, text, at, message);
+            }
+        }
+        ConfigError::in_file(self.path(), message)
+    }
+
     /// An error located at the first occurrence of `needle` in the last source that has it.
     pub fn locate(&self, needle: &str, message: String) -> ConfigError {
         for (file, text) in self.sources.iter().rev() {

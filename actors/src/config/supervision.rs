@@ -36,24 +36,26 @@ impl ConfigFile {
         }
         let at = |needle: &str, message: String| self.locate(&format!("{needle}:"), message);
         let s = &self.config.supervision;
-        let mut intensity = |what: &str, max: u32, within: f64, needle: &str| {
+        // At the field as written in its section (`section` starts it).
+        let mut intensity = |what: &str, max: u32, within: f64, section: &str| {
             if max > MAX_RESTARTS_LIMIT {
-                errors.push(at(
-                    needle,
+                errors.push(self.locate_after(
+                    section,
+                    "max_restarts:",
                     format!("{what}: max_restarts is {max}; expected 0..={MAX_RESTARTS_LIMIT}"),
                 ));
             }
             if !(within > 0.0 && within <= MAX_WINDOW_S) {
-                errors.push(at(needle, format!("{what}: within_s is {}; expected a number of seconds in (0, {MAX_WINDOW_S}]", crate::short_number(within))));
+                errors.push(self.locate_after(section, "within_s:", format!("{what}: within_s is {}; expected a number of seconds in (0, {MAX_WINDOW_S}]", crate::short_number(within))));
             }
         };
-        intensity("supervision", s.max_restarts, s.within_s, "supervision");
+        intensity("supervision", s.max_restarts, s.within_s, "supervision:");
         for g in &self.config.groups {
             intensity(
                 &format!("group `{}`", g.name),
                 g.max_restarts,
                 g.within_s,
-                "groups",
+                &format!("\"{}\"", g.name),
             );
         }
         let b = &s.backoff;
