@@ -189,8 +189,11 @@ impl Module for GoalSequencerModule {
             .failing_since
             .is_some_and(|since| t - since > self.give_up_s.value())
         {
+            let at = now
+                .goal
+                .map_or(String::new(), |g| format!(" ({:.2}, {:.2})", g.x(), g.y()));
             Some(format!(
-                "no path to goal {} for {:.0} s",
+                "no path to goal {}{at} for {:.0} s (outside the map, walled in, or blocked)",
                 now.index + 1,
                 self.give_up_s.value()
             ))
@@ -210,5 +213,34 @@ impl Module for GoalSequencerModule {
             );
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use super::MISSION_FAILED;
+    use crate::robot::tests::start;
+
+    // A goal no planner reaches (one outside the map, say): the mission fails, naming the goal.
+    #[tokio::test(start_paused = true)]
+    async fn a_goal_without_a_path_fails_the_mission_naming_where_it_is() {
+        let agent = start(
+            r#"(name: "goals", type: "nav.goal_sequencer",
+                values: {"params/goals": [(x: 400.5, y: 17.25)], "params/give_up_s": 2.0,
+                         "in/failed": true})"#,
+        )
+        .await;
+        let exit = tokio::time::timeout(Duration::from_secs(60), agent.finished())
+            .await
+            .expect("the mission gives up within a minute");
+        assert_eq!(exit.code, MISSION_FAILED);
+        assert_eq!(
+            exit.reason,
+            "mission failed: no path to goal 1 (400.50, 17.25) for 2 s (outside the map, walled \
+             in, or blocked); 0 of 1 goals reached"
+        );
+        agent.stop(petrel_actors::DEFAULT_STOP_TIMEOUT).await;
     }
 }
