@@ -176,7 +176,10 @@ impl Module for GoalSequencerModule {
             run.over = true;
             ctx.stop_agent(
                 0,
-                format!("mission complete: all {total} goals reached in {t:.1} s"),
+                match total {
+                    1 => format!("mission complete: the goal reached in {t:.1} s"),
+                    _ => format!("mission complete: all {total} goals reached in {t:.1} s"),
+                },
             );
             return Ok(());
         }
@@ -207,8 +210,9 @@ impl Module for GoalSequencerModule {
             ctx.stop_agent(
                 MISSION_FAILED,
                 format!(
-                    "mission failed: {why}; {} of {total} goals reached",
-                    now.reached
+                    "mission failed: {why}; {} of {total} goal{} reached",
+                    now.reached,
+                    if total == 1 { "" } else { "s" }
                 ),
             );
         }
@@ -239,7 +243,7 @@ mod tests {
         assert_eq!(
             exit.reason,
             "mission failed: no path to goal 1 (400.50, 17.25) for 2 s (outside the map, walled \
-             in, or blocked); 0 of 1 goals reached"
+             in, or blocked); 0 of 1 goal reached"
         );
         agent.stop(petrel_actors::DEFAULT_STOP_TIMEOUT).await;
     }
