@@ -2,6 +2,7 @@
 //! itself, the files it names, context rules and mission bindings — every problem at once,
 //! each located in the file it comes from.
 
+use super::stdout::sayln;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -46,7 +47,7 @@ pub(crate) fn check(
             .map(|m| m.links.len())
             .sum::<usize>();
         let s = |n: usize| if n == 1 { "" } else { "s" };
-        println!(
+        sayln!(
             "{}: ok: agent `{}`, {} module{}, {links} link{}",
             file.path().display(),
             agent.name,

@@ -1,5 +1,7 @@
 //! `petrel echo` and `petrel hz`: follow a property of a running agent as it changes.
 
+use super::interrupt::Interrupt;
+use super::stdout::{self, sayln};
 use std::collections::VecDeque;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -19,6 +21,7 @@ pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> 
         Err(code) => return code,
     };
     attached(&team, |client| async move {
+        let mut interrupt = Interrupt::new();
         let mut watch = client.watch(&url).await?;
         let agent = url.agent().unwrap_or_default();
         let mut printed = 0;
@@ -26,9 +29,12 @@ pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> 
             let update = tokio::select! {
                 update = next_update(&mut watch) => update?,
                 left = gone(&client, agent) => return Err(left),
-                _ = tokio::signal::ctrl_c() => break,
+                _ = interrupt.recv() => break,
             };
-            println!("{}", line(&update, json));
+            sayln!("{}", line(&update, json));
+            if stdout::failed() {
+                break;
+            }
             printed += 1;
         }
         if watch.dropped() > 0 {
@@ -49,6 +55,7 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
         Err(code) => return code,
     };
     attached(&team, |client| async move {
+        let mut interrupt = Interrupt::new();
         let mut watch = client.watch(&url).await?;
         let agent = url.agent().unwrap_or_default();
         // The first update is the current value, written whenever: not a change to time.
@@ -78,12 +85,17 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
                         break;
                     }
                 }
-                _ = report.tick(), if count.is_none() => print_rate(stamps.make_contiguous()),
+                _ = report.tick(), if count.is_none() => {
+                    print_rate(stamps.make_contiguous());
+                    if stdout::failed() {
+                        break;
+                    }
+                }
                 left = &mut quiet => {
                     print_rate(stamps.make_contiguous());
                     return Err(left);
                 }
-                _ = tokio::signal::ctrl_c() => break,
+                _ = interrupt.recv() => break,
             }
         }
         print_rate(stamps.make_contiguous());
@@ -93,8 +105,8 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
 
 fn print_rate(stamps: &[u64]) {
     match rate(stamps) {
-        Some(r) => println!("{r}"),
-        None => println!("no change yet"),
+        Some(r) => sayln!("{r}"),
+        None => sayln!("no change yet"),
     }
 }
 
@@ -162,6 +174,7 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
         return ExitCode::from(super::EXIT_FAILED);
     }
     super::top::with_clients(&targets, |clients| async move {
+        let mut interrupt = Interrupt::new();
         let (tx, mut rx) = tokio::sync::mpsc::channel(1024);
         let (opened_tx, mut opened) = tokio::sync::mpsc::channel(64);
         let (mut watches, mut departures) = (Vec::new(), Vec::new());
@@ -228,7 +241,12 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
         while count.is_none_or(|n| printed < n) {
             tokio::select! {
                 event = rx.recv() => match event {
-                    Some((source, u)) => println!("{source}  {}", String::from_utf8_lossy(&u.json)),
+                    Some((source, u)) => {
+                        sayln!("{source}  {}", String::from_utf8_lossy(&u.json));
+                        if stdout::failed() {
+                            break;
+                        }
+                    }
                     None => break,
                 },
                 Some(left) = left_rx.recv() => {
@@ -240,7 +258,7 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
                     eprintln!("{left}");
                     continue;
                 }
-                _ = tokio::signal::ctrl_c() => break,
+                _ = interrupt.recv() => break,
             }
             printed += 1;
         }

@@ -1,6 +1,5 @@
 //! `petrel graph CONFIG`: the agent's modules and links as a Graphviz DOT picture.
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -16,8 +15,7 @@ pub(crate) fn graph(registry: &ModuleRegistry, config: &PathBuf, overlays: &[Pat
         Err(errors) => return bad_input(&errors),
     };
     let dot = to_dot(built.agent(), &built.module_graph());
-    // A closed pipe (`petrel graph x.ron | head`) ends the output quietly, as Unix tools do.
-    let _ = std::io::stdout().lock().write_all(dot.as_bytes());
+    super::stdout::say!("{dot}");
     ExitCode::SUCCESS
 }
 

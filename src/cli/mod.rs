@@ -12,6 +12,7 @@ mod follow;
 mod foxglove;
 mod graph;
 mod hangup;
+mod interrupt;
 mod listing;
 mod load;
 pub(crate) use load::{bad_input, load};
@@ -25,6 +26,7 @@ mod record_log;
 mod remote;
 mod run;
 mod runtime;
+pub(crate) mod stdout;
 mod stop_guard;
 mod team_agent;
 mod top;
@@ -316,10 +318,23 @@ pub fn main(registry: ModuleRegistry, args: impl IntoIterator<Item = OsString>) 
             };
         }
     };
+    // A run (`run`, `replay`, the console) goes on when its standard output fails (`outln!`).
+    let ends = !matches!(
+        cli.command,
+        Command::Run(_) | Command::Replay(_) | Command::Console(_)
+    );
     if !matches!(cli.command, Command::Run(_)) {
         stop_quietly_on_a_closed_pipe();
     }
-    match cli.command {
+    let code = dispatch(registry, cli.command);
+    match ends {
+        true => stdout::finish(code),
+        false => code,
+    }
+}
+
+fn dispatch(registry: ModuleRegistry, command: Command) -> ExitCode {
+    match command {
         Command::Run(args) => run::run(&registry, args),
         Command::Check { configs, overlay } => check::check(&registry, &configs, &overlay),
         Command::Graph { config, overlay } => graph::graph(&registry, &config, &overlay),

@@ -4,20 +4,14 @@ use std::process::ExitCode;
 
 use petrel_actors::ModuleRegistry;
 
-/// Like `println!`, but a closed pipe (`petrel modules | head`) is not an error.
-macro_rules! say {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
-    }};
-}
+use super::stdout::sayln;
 
 pub(crate) fn list(registry: &ModuleRegistry) -> ExitCode {
     let width = registry.types().map(|t| t.name().len()).max().unwrap_or(0);
     for t in registry.types() {
-        say!("{:<width$}  {}", t.name(), t.description());
+        sayln!("{:<width$}  {}", t.name(), t.description());
     }
-    say!("\n`petrel modules describe TYPE` lists a type's properties.");
+    sayln!("\n`petrel modules describe TYPE` lists a type's properties.");
     ExitCode::SUCCESS
 }
 
@@ -41,7 +35,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
         eprintln!("error: unknown module type `{shown}`{hint} (`petrel modules` lists them)");
         return ExitCode::from(super::EXIT_BAD_INPUT);
     };
-    say!("{}: {}\n", t.name(), t.description());
+    sayln!("{}: {}\n", t.name(), t.description());
     // The module's own properties first, then those the runtime adds to every module.
     let (own, runtime): (Vec<_>, Vec<_>) = t
         .properties()
@@ -80,7 +74,7 @@ pub(crate) fn describe(registry: &ModuleRegistry, type_name: &str) -> ExitCode {
             .zip(&widths)
             .map(|(cell, w)| format!("{cell:<w$}"))
             .collect();
-        say!("  {}  {}", padded.join("  "), row[5]);
+        sayln!("  {}  {}", padded.join("  "), row[5]);
     }
     ExitCode::SUCCESS
 }

@@ -1,6 +1,6 @@
 //! `petrel plan ...`: load, check, draw, compile and simulate Petri Net Plans.
 
-use std::io::Write;
+use super::stdout::{say, sayln};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -77,7 +77,7 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
         } => with_plan(&plan, rules.as_deref(), |loaded| {
             let max_states = usize::try_from(max_states).unwrap_or(usize::MAX);
             let report = check_with(&loaded.plan, &CheckOptions { max_states });
-            print!("{report}");
+            say!("{report}");
             if report.is_ok() {
                 ExitCode::SUCCESS
             } else {
@@ -85,7 +85,7 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             }
         }),
         PlanCommand::Dot { plan, rules } => with_plan(&plan, rules.as_deref(), |loaded| {
-            print!("{}", to_dot(&loaded.plan));
+            say!("{}", to_dot(&loaded.plan));
             ExitCode::SUCCESS
         }),
         PlanCommand::Compile {
@@ -99,7 +99,7 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             )),
             Ok(pnml) => match petrel_actors::files::write_atomically(&output, pnml.as_bytes()) {
                 Ok(()) => {
-                    println!("wrote {}", output.display());
+                    sayln!("wrote {}", output.display());
                     ExitCode::SUCCESS
                 }
                 Err(e) => bad_input(format!("{}: cannot write: {e}", output.display())),
@@ -138,14 +138,13 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
                     }
                 }
             };
-            let mut out = std::io::stdout().lock();
-            let status = simulate(&loaded.plan, &script, steps, &mut out);
-            let _ = out.flush();
+            let status = simulate(&loaded.plan, &script, steps, &mut std::io::stdout().lock());
             match status {
                 Ok(PlanStatus::Fail) => ExitCode::from(EXIT_PLAN_FAILED),
                 Ok(PlanStatus::Running) => ExitCode::from(EXIT_STILL_RUNNING),
                 Ok(PlanStatus::Goal) => ExitCode::SUCCESS,
-                Err(e) => bad_input(format!("cannot write the simulation: {e}")),
+                // Reported by `stdout::finish`, as for every command.
+                Err(e) => super::stdout::keep_failure(e),
             }
         }),
     }

@@ -232,14 +232,7 @@ pub(crate) async fn finish(recorder: Recorder) -> Result<(), String> {
 pub(crate) fn info(file: &std::path::Path, salvage: bool) -> ExitCode {
     match Recording::open(file, salvage) {
         Ok(rec) => {
-            use std::io::Write;
-            // A closed pipe (`| head`) ends the listing, not the process.
-            let _ = write!(
-                std::io::stdout().lock(),
-                "file:      {}\n{}",
-                file.display(),
-                Info::of(&rec)
-            );
+            super::stdout::say!("file:      {}\n{}", file.display(), Info::of(&rec));
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -2,6 +2,7 @@
 //! agents. A tool finds an agent through the records every `petrel run` writes (see
 //! `petrel_team::discovery`), or through the `team:` section of a config given with `--via`.
 
+use super::stdout::{say, sayln};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -42,10 +43,10 @@ pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
     attached(&team, |client| async move {
         match &request {
             Request::Get => client.get_json(&url).await.map(|(type_name, json)| {
-                println!("{} ({type_name})", String::from_utf8_lossy(&json));
+                sayln!("{} ({type_name})", String::from_utf8_lossy(&json));
             }),
             Request::Set(value) => client.set_ron(&url, value).await.map(|()| {
-                println!("{url} = {value}");
+                sayln!("{url} = {value}");
             }),
         }
     })
@@ -102,7 +103,7 @@ pub(crate) fn list(reach: &Reach, agent: Option<&str>) -> ExitCode {
     };
     attached(&team, |client| async move {
         let info = client.info(agent).await?;
-        print!("{}", super::listing::agent(&info));
+        say!("{}", super::listing::agent(&info));
         Ok(())
     })
 }
@@ -114,7 +115,7 @@ fn list_agents(reach: &Reach) -> ExitCode {
     }
     match runs(reach) {
         Ok(records) => {
-            print!("{}", super::listing::agents(&records));
+            say!("{}", super::listing::agents(&records));
             ExitCode::SUCCESS
         }
         Err(code) => code,

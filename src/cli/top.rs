@@ -1,6 +1,7 @@
 //! `petrel top`: every module of every running agent with its status and step figures,
 //! refreshed each second like `top`, or printed once with `--once`.
 
+use super::stdout::say;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -164,18 +165,22 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
         Err(code) => return code,
     };
     with_clients(&targets, |clients| async move {
+        let mut interrupt = super::interrupt::Interrupt::new();
         let mut tick = tokio::time::interval(Duration::from_secs(1));
         loop {
             let rows = collect(&clients).await?;
             if once {
-                print!("{}", table(&rows));
+                say!("{}", table(&rows));
                 return Ok(());
             }
             // Clear the screen and go home, as `top` does.
-            print!("\x1b[2J\x1b[H{}", table(&rows));
+            say!("\x1b[2J\x1b[H{}", table(&rows));
+            if super::stdout::failed() {
+                return Ok(());
+            }
             tokio::select! {
                 _ = tick.tick() => {}
-                _ = tokio::signal::ctrl_c() => return Ok(()),
+                _ = interrupt.recv() => return Ok(()),
             }
         }
     })

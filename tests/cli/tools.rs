@@ -145,6 +145,41 @@ fn petrel_into_a_closed_pipe(args: &[&str]) -> Output {
     bounded::wait_within_deadline(child, &format!("petrel {args:?}"))
 }
 
+/// Every command that prints and ends, with its standard output on `/dev/full`: each write
+/// fails with "no space left", as on a full disk.
+#[test]
+fn a_standard_output_that_cannot_be_written_is_an_error_not_a_panic_or_a_success() {
+    for args in [
+        &["check", "configs/pipeline.ron"][..],
+        &["plan", "dot", "plans/tests/fixtures/delivery.plan"],
+        &["plan", "check", "plans/tests/fixtures/delivery.plan"],
+        &["plan", "simulate", "plans/tests/fixtures/delivery.plan"],
+        &["graph", "configs/navigate.ron"],
+        &["modules"],
+        &["modules", "describe", "sim.world"],
+    ] {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let child = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .stdin(std::process::Stdio::null())
+            .stdout(full)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = bounded::wait_within_deadline(child, &format!("petrel {args:?}"));
+        let err = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(74), "{args:?}: {err}");
+        assert!(
+            err.contains("error: cannot write to standard output: No space left on device"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
 #[test]
 fn a_closed_standard_output_ends_tools_quietly_and_a_run_goes_on() {
     use std::os::unix::process::ExitStatusExt;
