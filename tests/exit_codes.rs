@@ -299,12 +299,15 @@ fn a_recording_is_refused_where_it_cannot_go() {
         ),
         (
             &["run", "idle.ron", "--for", "1s", "--record", "idle.ron"],
-            "an input of this run",
+            "a file this run reads or writes",
         ),
-        (&["check", "to_itself.ron"], "an input of this run"),
+        (
+            &["check", "to_itself.ron"],
+            "a file this run reads or writes",
+        ),
         (
             &["run", "to_itself.ron", "--for", "1s"],
-            "an input of this run",
+            "a file this run reads or writes",
         ),
         (&["check", "to_nothing.ron"], "an empty file name"),
         (
@@ -339,4 +342,80 @@ fn a_recording_is_refused_where_it_cannot_go() {
     assert!(std::fs::read_to_string(dir.path().join("to_itself.ron"))
         .unwrap()
         .starts_with("Agent("));
+}
+
+/// What `run` and `plan compile` write (a trace, a snapshot, a recording, PNML) is refused
+/// before anything is written where it would replace a file the run uses (a config, or a plan
+/// it names), a FIFO or device, or another of its outputs; the files stay as they were.
+#[test]
+fn no_output_replaces_an_input_a_fifo_or_another_output() {
+    let dir = with_files();
+    let fifo = dir.path().join("fifo");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
+    // SAFETY: a NUL-terminated path, a plain mode.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let run = |extra: &[&'static str]| {
+        let mut args = vec!["run", "goal.ron", "--no-remote"];
+        args.extend_from_slice(extra);
+        args
+    };
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            run(&["--trace-out", "goal.ron"]),
+            "--trace-out: goal.ron is a file this run reads or writes",
+        ),
+        (
+            run(&["--trace-out", "goal.plan"]),
+            "goal.plan) is a file this run reads or writes",
+        ),
+        (
+            run(&["--snapshot-out", "./goal.plan"]),
+            "goal.plan) is a file this run reads or writes",
+        ),
+        (
+            run(&["--record", "goal.plan"]),
+            "goal.plan) is a file this run reads or writes",
+        ),
+        (
+            run(&["--snapshot-out", "fifo"]),
+            "fifo is not a regular file",
+        ),
+        (
+            run(&["--record", "out.mcap", "--trace-out", "./out.mcap"]),
+            "--trace-out and --record both name ./out.mcap",
+        ),
+        (
+            run(&["--snapshot-out", "out.ron", "--trace-out", "out.ron"]),
+            "--trace-out and --snapshot-out both name out.ron",
+        ),
+        (
+            vec!["plan", "compile", "goal.plan", "-o", "fifo"],
+            "-o: fifo is not a regular file",
+        ),
+    ];
+    let mut wrong = Vec::new();
+    for (args, expected) in &cases {
+        let out = petrel_in(dir.path(), args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if out.status.code() != Some(2) || !stderr.contains(expected) {
+            wrong.push(format!(
+                "petrel {}: {:?}\n{stderr}",
+                args.join(" "),
+                out.status.code()
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+    for (name, text) in FILES.iter().filter(|(n, _)| n.starts_with("goal.")) {
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join(name)).unwrap(),
+            *text,
+            "{name} is untouched"
+        );
+    }
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    for made in ["out.mcap", "out.ron"] {
+        assert!(!dir.path().join(made).exists(), "{made} was not written");
+    }
 }

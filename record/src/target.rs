@@ -8,53 +8,7 @@ use std::path::Path;
 /// Why a recording cannot be written to `path`, if it cannot; `inputs` are the files the run
 /// reads (its configs and overlays).
 pub fn target_problem(path: &Path, inputs: &[&Path]) -> Option<String> {
-    let shown = path.display();
-    if path.as_os_str().as_encoded_bytes().contains(&0) {
-        return Some(format!("{shown}: a file name cannot hold a NUL byte"));
-    }
-    if path.as_os_str().is_empty() {
-        return Some("an empty file name; expected a path like out/run.mcap".into());
-    }
-    if let Ok(meta) = std::fs::metadata(path) {
-        if meta.is_dir() {
-            return Some(format!(
-                "{shown} is a directory; expected a file path like out/run.mcap"
-            ));
-        }
-        if !meta.is_file() {
-            return Some(format!(
-                "{shown} is not a regular file (a device, FIFO or socket): a recording is written as a file it can seek in"
-            ));
-        }
-        let same = |input: &&&Path| {
-            let canonical = |p: &Path| std::fs::canonicalize(p).ok();
-            canonical(path).is_some_and(|c| Some(c) == canonical(input))
-        };
-        if let Some(input) = inputs.iter().find(same) {
-            return Some(format!(
-                "{shown} is {}, an input of this run: the recording would overwrite it",
-                input.display()
-            ));
-        }
-    }
-    // The first ancestor that exists must be a folder the missing ones can be made in.
-    let existing = path.ancestors().skip(1).find(|a| {
-        let a = if a.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            a
-        };
-        a.exists()
-    });
-    if let Some(dir) = existing.filter(|d| !d.as_os_str().is_empty()) {
-        if !dir.is_dir() {
-            return Some(format!(
-                "{shown}: {} is not a directory, so the file cannot be made in it",
-                dir.display()
-            ));
-        }
-    }
-    None
+    petrel_actors::files::output_problem(path, inputs, "out/run.mcap")
 }
 
 #[cfg(test)]
@@ -74,7 +28,7 @@ mod tests {
         };
         refused(Path::new("/dev/null"), "is not a regular file");
         refused(dir.path(), "is a directory");
-        refused(&config, "an input of this run");
+        refused(&config, "a file this run reads or writes");
         refused(&dir.path().join("robot.ron/x.mcap"), "is not a directory");
         refused(Path::new("out/\0x.mcap"), "NUL byte");
         refused(Path::new(""), "an empty file name");

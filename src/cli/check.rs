@@ -136,6 +136,9 @@ fn remote_link_problem(owner: &Registry, link: &petrel_actors::team::RemoteLink)
 pub(crate) struct CheckedAgent {
     pub name: String,
     pub modules: usize,
+    /// The files the agent's run uses: its config and overlays, and every file its modules'
+    /// parameters name (worlds, rules, plans). No output of the run may be one of them.
+    pub files: Vec<PathBuf>,
 }
 
 /// Builds the agent's registry and checks what a module would find wrong only at init: the files
@@ -146,6 +149,7 @@ pub(crate) fn check_all(
 ) -> Result<CheckedAgent, ConfigErrors> {
     let built = file.build(registry)?;
     let (mut errors, missing) = check_files(file, &built);
+    let used = files_used(file, &built);
     if let Some(section) = &file.config.record {
         // The file may come from `--record`: only the rest of the section is checked here.
         let path = std::path::Path::new("petrel-check.mcap");
@@ -159,7 +163,7 @@ pub(crate) fn check_all(
             errors.push(file.locate(&needle, e));
         }
         if let Some(path) = &section.file {
-            let inputs: Vec<&std::path::Path> = file.files().collect();
+            let inputs: Vec<&std::path::Path> = used.iter().map(PathBuf::as_path).collect();
             if let Some(problem) =
                 petrel_record::target::target_problem(std::path::Path::new(path), &inputs)
             {
@@ -217,6 +221,7 @@ pub(crate) fn check_all(
     let agent = CheckedAgent {
         name: built.agent().to_string(),
         modules: built.modules().len(),
+        files: used,
     };
     errors.extend(check_missions(file, built, &missions));
     match errors.is_empty() {
@@ -241,6 +246,19 @@ fn self_feeding_links(built: &Registry) -> Vec<(String, String, String)> {
         }
     }
     found
+}
+
+/// The files an agent's run uses: its config files, then each non-empty file parameter.
+fn files_used(file: &ConfigFile, built: &Registry) -> Vec<PathBuf> {
+    let mut used: Vec<PathBuf> = file.files().map(Into::into).collect();
+    for module in built.modules() {
+        for decl in built.declarations(module) {
+            if let Some(path) = file_param(built, module, &decl.path).filter(|p| !p.is_empty()) {
+                used.push(path.0);
+            }
+        }
+    }
+    used
 }
 
 /// The value of `module`'s file parameter `path`, if it has one.

@@ -18,6 +18,7 @@ mod load;
 pub(crate) use load::{bad_input, load};
 mod logging;
 mod modules;
+mod outputs;
 mod plan;
 mod rate;
 mod reach;

@@ -92,20 +92,7 @@ pub(crate) fn run(command: PlanCommand) -> ExitCode {
             plan,
             rules,
             output,
-        } => match compile_to_pnml(&plan, rules.as_deref()) {
-            Ok(_) if refuses_overwrite(&output, &plan, rules.as_deref()) => bad_input(format!(
-                "{}: -o names an input of the compilation; write the PNML elsewhere",
-                output.display()
-            )),
-            Ok(pnml) => match petrel_actors::files::write_atomically(&output, pnml.as_bytes()) {
-                Ok(()) => {
-                    sayln!("wrote {}", output.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => bad_input(format!("{}: cannot write: {e}", output.display())),
-            },
-            Err(e) => bad_input(e.to_string()),
-        },
+        } => compile(&plan, rules.as_deref(), &output),
         PlanCommand::Simulate {
             plan,
             rules,
@@ -164,6 +151,31 @@ fn with_plan(
 fn bad_input(message: String) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(EXIT_BAD_INPUT)
+}
+
+/// `plan compile`: the PNML written to `output`, which must not be an input of the
+/// compilation nor a device, FIFO or folder (it would be replaced by the file written).
+fn compile(plan: &Path, rules: Option<&Path>, output: &Path) -> ExitCode {
+    let pnml = match compile_to_pnml(plan, rules) {
+        Ok(pnml) => pnml,
+        Err(e) => return bad_input(e.to_string()),
+    };
+    if refuses_overwrite(output, plan, rules) {
+        return bad_input(format!(
+            "{}: -o names an input of the compilation; write the PNML elsewhere",
+            output.display()
+        ));
+    }
+    if let Some(problem) = petrel_actors::files::output_problem(output, &[], "out/plan.pnml") {
+        return bad_input(format!("-o: {problem}"));
+    }
+    match petrel_actors::files::write_atomically(output, pnml.as_bytes()) {
+        Ok(()) => {
+            sayln!("wrote {}", output.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => bad_input(format!("{}: cannot write: {e}", output.display())),
+    }
 }
 
 /// Whether writing `output` would replace the plan or rules file being compiled.

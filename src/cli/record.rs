@@ -130,12 +130,14 @@ pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) -> Result<(
     Ok(())
 }
 
-/// The recording a run asks for: `--record FILE`, else the first config's `record:` section.
+/// The recording a run asks for: `--record FILE`, else the first config's `record:` section;
+/// refused where it would overwrite one of `inputs`, the files the run uses.
 pub(crate) fn options(
     file: Option<&PathBuf>,
     format: Option<RecordFormat>,
     compression: Option<RecordCompression>,
     configs: &[ConfigFile],
+    inputs: &[&std::path::Path],
 ) -> Result<Option<RecordOptions>, ExitCode> {
     let section = configs.iter().find_map(|c| c.config.record.clone());
     if file.is_none() && section.is_none() {
@@ -143,10 +145,9 @@ pub(crate) fn options(
     }
     let section = section.unwrap_or_default();
     let (path, format) = (file.map(PathBuf::as_path), format.map(Into::into));
-    let inputs: Vec<&std::path::Path> = configs.iter().flat_map(ConfigFile::files).collect();
     RecordOptions::from_section(&section, path, format, compression.map(Into::into))
         .and_then(
-            |options| match petrel_record::target::target_problem(&options.path, &inputs) {
+            |options| match petrel_record::target::target_problem(&options.path, inputs) {
                 Some(problem) => Err(format!("record: file: {problem}")),
                 None => Ok(options),
             },

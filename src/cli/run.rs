@@ -17,17 +17,6 @@ use super::stop_guard::StopGuard;
 use super::{bad_input, load, logging, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED, EXIT_STILL_RUNNING};
 
 pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
-    let _trace = match logging::init(args.log_format, args.trace_out.as_deref()) {
-        Ok(guard) => guard,
-        Err(e) => {
-            let path = args
-                .trace_out
-                .as_deref()
-                .unwrap_or(std::path::Path::new(""));
-            eprintln!("error: cannot write the trace to {}: {e}", path.display());
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
-    };
     if args.configs.len() > 1 && (!args.overlay.is_empty() || args.snapshot_out.is_some()) {
         eprintln!("error: --overlay and --snapshot-out take one agent; run each agent with its own `petrel run` to use them");
         return ExitCode::from(EXIT_BAD_INPUT);
@@ -40,47 +29,56 @@ pub(crate) fn run(registry: &ModuleRegistry, args: RunArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     }
-    if let Some(out) = &args.snapshot_out {
-        if let Err(e) = check_destination(out, &args) {
-            eprintln!("error: --snapshot-out {}: {e}", out.display());
+    // Everything is loaded and checked before logging starts: the `--trace-out` file is made
+    // only once it is known not to be a file the run uses.
+    let (files, used) = match load_all(registry, &args) {
+        Ok(loaded) => loaded,
+        Err(code) => return code,
+    };
+    let used = super::outputs::borrowed(&used);
+    let recording = match super::record::options(
+        args.record.as_ref(),
+        args.record_format,
+        args.record_compression,
+        &files,
+        &used,
+    ) {
+        Ok(options) => options,
+        Err(code) => return code,
+    };
+    let recording_path = recording.as_ref().map(|o| o.path.as_path());
+    if let Some(problem) = super::outputs::problem(&args, &used, recording_path) {
+        eprintln!("error: {problem}");
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let _trace = match logging::init(args.log_format, args.trace_out.as_deref()) {
+        Ok(guard) => guard,
+        Err(e) => {
+            let path = args
+                .trace_out
+                .as_deref()
+                .unwrap_or(std::path::Path::new(""));
+            eprintln!("error: cannot write the trace to {}: {e}", path.display());
             return ExitCode::from(EXIT_BAD_INPUT);
         }
-    }
-    let files = match load_all(registry, &args) {
-        Ok(files) => files,
-        Err(code) => return code,
     };
     let runtime = match super::runtime::start(args.workers.map(Into::into)) {
         Ok(rt) => rt,
         Err(code) => return code,
     };
-    let code = runtime.block_on(run_agents(registry, &args, files));
+    let code = runtime.block_on(run_agents(registry, &args, files, recording));
     // A killed module whose step never yields still holds its worker thread: do not wait for it.
     runtime.shutdown_timeout(std::time::Duration::from_millis(100));
     code
 }
 
-/// Checked before anything runs: a snapshot that cannot be written, or would replace a file
-/// the run reads, is refused at once rather than after the whole run.
-fn check_destination(out: &std::path::Path, args: &RunArgs) -> Result<(), String> {
-    let inputs: Vec<&std::path::Path> = args
-        .configs
-        .iter()
-        .chain(&args.overlay)
-        .map(|p| p.as_path())
-        .collect();
-    if let Some(input) = files::overwrites_an_input(out, &inputs) {
-        return Err(format!(
-            "it is {}, which this run reads; write the snapshot elsewhere",
-            input.display()
-        ));
-    }
-    files::check_writable(out)
-}
-
-/// Loads and checks every config, alone and together (links between them, unique names).
-fn load_all(registry: &ModuleRegistry, args: &RunArgs) -> Result<Vec<ConfigFile>, ExitCode> {
-    let mut files = Vec::new();
+/// Loads and checks every config, alone and together (links between them, unique names);
+/// with the files their runs use.
+fn load_all(
+    registry: &ModuleRegistry,
+    args: &RunArgs,
+) -> Result<(Vec<ConfigFile>, Vec<std::path::PathBuf>), ExitCode> {
+    let (mut files, mut used) = (Vec::new(), Vec::new());
     for config in &args.configs {
         let mut file = load(config, &args.overlay).map_err(|e| bad_input(&e))?;
         if let Some(replay) = &args.replay {
@@ -89,28 +87,25 @@ fn load_all(registry: &ModuleRegistry, args: &RunArgs) -> Result<Vec<ConfigFile>
                 ExitCode::from(EXIT_BAD_INPUT)
             })?;
         }
-        check_all(&file, registry).map_err(|e| bad_input(&e))?;
+        let checked = check_all(&file, registry).map_err(|e| bad_input(&e))?;
+        used.extend(checked.files);
         files.push(file);
     }
     check_team(&files, registry).map_err(|e| bad_input(&e))?;
-    Ok(files)
+    Ok((files, used))
 }
 
-async fn run_agents(registry: &ModuleRegistry, args: &RunArgs, files: Vec<ConfigFile>) -> ExitCode {
+async fn run_agents(
+    registry: &ModuleRegistry,
+    args: &RunArgs,
+    files: Vec<ConfigFile>,
+    recording: Option<petrel_record::RecordOptions>,
+) -> ExitCode {
     // Listen before the agents start, so a SIGHUP sent as soon as the rules are loaded is a
     // reload, not the default "terminate".
     let hangups = Hangups::listen();
     let workers = tokio::runtime::Handle::current().metrics().num_workers();
     tracing::info!(workers, "modules run on {workers} worker thread(s)");
-    let recording = match super::record::options(
-        args.record.as_ref(),
-        args.record_format,
-        args.record_compression,
-        &files,
-    ) {
-        Ok(options) => options,
-        Err(code) => return code,
-    };
     let guard = match StopGuard::start(stop_limit(args, &files)) {
         Ok(guard) => guard,
         Err(e) => {

@@ -281,7 +281,7 @@ fn outputs_never_replace_inputs_and_bad_destinations_are_refused_before_running(
     let out = snapshot_to(&dir.path().join(".").join("pipeline.ron"));
     assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
     assert!(
-        text(&out.stderr).contains("which this run reads"),
+        text(&out.stderr).contains("a file this run reads or writes"),
         "{}",
         text(&out.stderr)
     );

@@ -9,6 +9,9 @@
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
+mod output;
+pub use output::{output_problem, same_file};
+
 /// Size limits per kind of file, in bytes. Far above any real file of the kind, low enough that
 /// a wrong path (a device, a huge log) is refused before it is read.
 pub mod limits {
@@ -95,7 +98,24 @@ fn describe(path: &Path, e: &std::io::Error) -> String {
 
 /// Writes `contents` to `path` through a temporary file in the same directory, renamed over
 /// `path` once complete and flushed: readers see the old file or the new one, never a part.
+/// A symlink is written through (its target replaced); a device, FIFO, socket or folder is
+/// refused, since renaming over it would replace it with a plain file.
 pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    let through;
+    let path = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => {
+            through = std::fs::canonicalize(path)?;
+            through.as_path()
+        }
+        _ => path,
+    };
+    if let Ok(meta) = std::fs::metadata(path) {
+        if !meta.is_file() {
+            return Err(std::io::Error::other(
+                "it is not a regular file (a device, FIFO, socket or folder), which a written file would replace",
+            ));
+        }
+    }
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -156,6 +176,7 @@ pub fn check_writable(path: &Path) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::os::unix::fs::FileTypeExt;
 
     #[test]
     fn only_regular_files_within_the_limit_are_read() {
@@ -231,5 +252,27 @@ mod tests {
             1,
             "the probe is gone"
         );
+    }
+
+    #[test]
+    fn atomic_writes_go_through_symlinks_and_never_replace_a_device_or_fifo() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("target.dot");
+        std::fs::write(&target, b"old").unwrap();
+        let link = tmp.path().join("link.dot");
+        std::os::unix::fs::symlink(&target, &link).unwrap();
+        write_atomically(&link, b"new").unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read(&target).unwrap(), b"new");
+
+        let fifo = tmp.path().join("fifo");
+        let c = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
+        // SAFETY: a NUL-terminated path, a plain mode.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        assert!(write_atomically(&fifo, b"x").is_err());
+        assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
     }
 }
