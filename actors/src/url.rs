@@ -115,10 +115,16 @@ impl std::str::FromStr for PropertyUrl {
     }
 }
 
-/// Whether `s` is a valid name or path segment: non-empty, ASCII letters and digits, `_`, `-`,
-/// `.` (agent and module names, and each `/`-separated part of a property path).
+/// The longest name or path segment. Names travel in every message about a property (a team's
+/// key expressions, discovery records): a name of 60,000 characters made a message larger than
+/// zenoh sends, and the agent aborted when a tool asked it for its listing.
+pub(crate) const MAX_SEGMENT: usize = 128;
+
+/// Whether `s` is a valid name or path segment: 1 to [`MAX_SEGMENT`] ASCII letters and digits,
+/// `_`, `-`, `.` (agent and module names, and each `/`-separated part of a property path).
 pub(crate) fn valid_segment(s: &str) -> bool {
     !s.is_empty()
+        && s.len() <= MAX_SEGMENT
         && s.chars()
             .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }

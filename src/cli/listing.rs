@@ -68,8 +68,13 @@ pub(crate) fn table<const N: usize>(headings: [&str; N], rows: &[[String; N]]) -
     let mut out = String::new();
     let mut line = |cells: Vec<&str>| {
         let mut text = String::new();
+        // Padded by hand: a format width is limited to 65,535 and panics beyond.
         for (cell, w) in cells.iter().zip(widths) {
-            let _ = write!(text, "{cell:<w$}  ");
+            text.push_str(cell);
+            text.extend(std::iter::repeat_n(
+                ' ',
+                w.saturating_sub(cell.chars().count()) + 2,
+            ));
         }
         out.push_str(text.trim_end());
         out.push('\n');

@@ -65,6 +65,26 @@ fn names_written_with_escapes_are_located_and_shown_escaped() {
 }
 
 #[test]
+fn a_name_longer_than_an_address_can_carry_is_refused_and_shown_short() {
+    let (fine, long) = ("m".repeat(128), "m".repeat(60_000));
+    let config = |agent: &str| {
+        format!(r#"Agent(name: "{agent}", modules: [(name: "{fine}", type: "demo.counter")])"#)
+    };
+    let fine = ConfigFile::parse("fine.ron", &config(&fine)).unwrap();
+    assert!(fine.build(&registry()).is_ok(), "128 characters are a name");
+    let e = errors(&config(&long));
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(
+        e[0].starts_with(&format!(
+            "bad.ron:1:13: error: agent name `{}…` (60000 characters): expected 1 to 128 letters",
+            "m".repeat(48)
+        )),
+        "{}",
+        e[0]
+    );
+}
+
+#[test]
 fn a_missing_file_is_named() {
     let e = ConfigFile::load("no/such/config.ron")
         .unwrap_err()
@@ -222,7 +242,7 @@ fn supervision_settings_are_checked() {
 )"#,
     );
     let expected = [
-        "bad.ron:3:47: error: group name `bad name/x`: expected letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)",
+        "bad.ron:3:47: error: group name `bad name/x`: expected 1 to 128 letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)",
         "bad.ron:2:19: error: supervision: max_restarts is 1000000; expected 0..=100000",
         "bad.ron:2:42: error: supervision: within_s is 1e300; expected a number of seconds in (0, 86400]",
         "bad.ron:2:59: error: supervision backoff: min_ms (50) is above max_ms (10)",

@@ -138,7 +138,22 @@ pub struct ConfigFile {
 }
 
 /// What agent and module names may hold: they are segments of every property address.
-const NAME_RULE: &str = "expected letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)";
+/// A name as an error shows it, in backticks: escaped, and cut short when it is far too long
+/// to read.
+pub(super) fn shown_name(name: &str) -> String {
+    const SHOWN: usize = 48;
+    let escaped = name.escape_debug().to_string();
+    match escaped.chars().count() > SHOWN {
+        true => format!(
+            "`{}…` ({} characters)",
+            escaped.chars().take(SHOWN).collect::<String>(),
+            name.chars().count()
+        ),
+        false => format!("`{escaped}`"),
+    }
+}
+
+const NAME_RULE: &str = "expected 1 to 128 letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)";
 
 impl ConfigFile {
     /// Reads and parses a config file.
@@ -198,10 +213,7 @@ impl ConfigFile {
             errors.push(self.locate_name(
                 &self.config.name,
                 "name:",
-                format!(
-                    "agent name `{}`: {NAME_RULE}",
-                    self.config.name.escape_debug()
-                ),
+                format!("agent name {}: {NAME_RULE}", shown_name(&self.config.name)),
             ));
         }
         let mut names = HashSet::new();
@@ -210,7 +222,7 @@ impl ConfigFile {
                 errors.push(self.locate_name(
                     &m.name,
                     "modules:",
-                    format!("module name `{}`: {NAME_RULE}", m.name.escape_debug()),
+                    format!("module name {}: {NAME_RULE}", shown_name(&m.name)),
                 ));
                 continue;
             }

@@ -30,7 +30,11 @@ impl ConfigFile {
             if !crate::url::valid_segment(&g.name) {
                 errors.push(self.locate(
                     &format!("\"{}\"", g.name),
-                    format!("group name `{}`: {}", g.name, super::NAME_RULE),
+                    format!(
+                        "group name {}: {}",
+                        super::shown_name(&g.name),
+                        super::NAME_RULE
+                    ),
                 ));
             }
         }
