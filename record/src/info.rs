@@ -121,8 +121,8 @@ impl fmt::Display for Info {
             (Some(p), _) => format!("damaged: {p}; figures below cover what comes before"),
             (None, true) => "finished (summary and index written)".into(),
             (None, false) => match self.interrupted_at {
-                Some(at) => format!("unfinished (no summary: the recording was killed); readable up to its last whole chunk, the chunk at byte {at} was being written"),
-                None => "unfinished (no summary: the recording was killed); readable up to its last whole chunk".into(),
+                Some(at) => format!("unfinished (no summary: the recording is still being written, or was killed); readable up to its last whole chunk, the chunk at byte {at} was being written"),
+                None => "unfinished (no summary: the recording is still being written, or was killed); readable up to its last whole chunk".into(),
             },
         };
         writeln!(f, "size:      {} bytes", self.bytes)?;

@@ -171,3 +171,28 @@ async fn following_a_queue_input_names_the_queue_it_reads() {
     assert!(alone.ends_with("(it is not linked to one)"), "{alone}");
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
+
+/// `petrel get` of a queue asks its agent for the queue's one value: the answer says a queue
+/// carries items (it said the queue "cannot be set", about a read).
+#[tokio::test(start_paused = true)]
+async fn a_queue_asked_for_one_value_says_it_carries_items() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "producer", type: "demo.producer"),
+            (name: "linked", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard();
+    for (key, kind) in [
+        ("producer/out/items", "queue output"),
+        ("linked/in/items", "queue input"),
+    ] {
+        let refused = bb.any_handle(key).await.err().unwrap().to_string();
+        assert_eq!(
+            refused,
+            format!("`{key}` is a {kind}: it carries items, not one value; `petrel echo` prints them as they come")
+        );
+    }
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}

@@ -190,7 +190,7 @@ impl Registry {
         let key = self.key_of(address)?;
         match &self.entries[&key].handle {
             Handle::Value(ep) => Ok(ep.clone()),
-            _ => Err(BlackboardError::NotSettable {
+            _ => Err(BlackboardError::NotAValue {
                 kind: self.entries[&key].decl.kind,
                 key,
             }),
