@@ -43,6 +43,10 @@ async fn an_unhandled_failure_ends_the_run_in_fail_within_a_step() {
         .await
         .unwrap();
     assert_eq!(memory.failed_action.as_deref(), Some("a"));
+    // The run summary's line: the failure counted, though no plan transition fired for it.
+    let a = &memory.actions["a"];
+    assert_eq!((a.starts, a.ends, a.failures, a.interrupts), (1, 0, 1, 0));
+    assert!(memory.running.is_empty(), "{:?}", memory.running);
     assert!(!memory.actions.contains_key("b"), "b never started");
     stop(agent).await;
 }

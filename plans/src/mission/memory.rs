@@ -147,6 +147,17 @@ pub struct ActionStats {
 }
 
 impl MissionMemory {
+    /// `action` failed and no execution rule handled it (the plan failed with it): a failure
+    /// in its record like a handled one, its run ended at `secs`. No plan transition fired for
+    /// it, so the step did not count it.
+    pub(crate) fn count_unhandled_failure(&mut self, action: &str, secs: f64) {
+        let stats = self.actions.entry(action.to_string()).or_default();
+        stats.failures += 1;
+        if let Some(run) = self.running.remove(action) {
+            stats.time_s += (secs - run.started_s).max(0.0);
+        }
+    }
+
     /// One line per action: `goto_A: 2 starts, 2 ends, 0 failures, 0 interrupts, 12.3 s`.
     pub fn report(&self) -> String {
         self.actions

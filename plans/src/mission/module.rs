@@ -259,6 +259,7 @@ impl Module for Mission {
                     "{reason}: action `{action}` failed{why} and no execution rule handles its failure"
                 );
                 tracing::error!(action = %action, "{reason}");
+                run.memory.count_unhandled_failure(&action, secs);
                 run.memory.failed_action = Some(action);
             } else {
                 tracing::info!(result = status.as_str(), "{reason}");
