@@ -173,6 +173,16 @@ const CASES: &[(&[&str], i32, &str)] = &[
         1,
         "no such agent",
     ),
+    (
+        &["set", "petrel://nobody/c/params/x", "big"],
+        2,
+        "a bare word is no value, whatever the property",
+    ),
+    (
+        &["set", "petrel://nobody/c/params/x", "(1.0"],
+        2,
+        "unclosed: no value",
+    ),
     (&["echo", "petrel://nobody/c/out/value"], 1, "no such agent"),
     (
         &["hz", "petrel://nobody/c/out/value", "-n", "1"],

@@ -49,8 +49,8 @@ pub use agent::{
     Agent, AgentExit, ModuleControl, PreparedAgent, StartError, DEFAULT_STOP_TIMEOUT, EXIT_DIED,
 };
 pub use blackboard::{
-    AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph, ModuleListing,
-    PropertyListing, Registry, WatchedTap,
+    parse_set_text, AgentListing, Blackboard, BlackboardError, GraphLink, GraphNode, ModuleGraph,
+    ModuleListing, PropertyListing, Registry, WatchedTap,
 };
 pub use config::{AgentConfig, ConfigError, ConfigErrors, ConfigFile, ModuleConfig};
 pub use handle::{

@@ -36,6 +36,14 @@ pub(crate) enum Request {
 
 /// Carries out `request` on `url`.
 pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
+    // Text that is no value whatever the property's type is bad input, found before any agent
+    // is asked; a value the agent refuses (its type, its range) is its answer.
+    if let Request::Set(value) = &request {
+        if let Err(why) = petrel_actors::parse_set_text(value) {
+            eprintln!("error: cannot set `{url}`: {why}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
     let (url, team) = match target(reach, url) {
         Ok(t) => t,
         Err(code) => return code,

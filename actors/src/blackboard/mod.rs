@@ -342,27 +342,11 @@ impl Blackboard {
     /// person's write while the agent runs (`petrel set`, the console): a parameter its module
     /// reads only when it starts is refused.
     pub async fn set_text(&self, address: &str, ron_text: &str) -> Result<(), BlackboardError> {
-        let bad = |reason: String| BlackboardError::BadValue {
+        let value = parse_set_text(ron_text).map_err(|reason| BlackboardError::BadValue {
             key: address.to_string(),
             expected: "a RON value",
             reason,
-        };
-        let value: ron::Value = ron::from_str(ron_text).map_err(|e| {
-            bad(match e.code {
-                // ron's own text names its options, which a person setting a value cannot use.
-                ron::Error::ExceededRecursionLimit => {
-                    "nested too deeply (lists or structures within each other)".into()
-                }
-                _ => e.to_string(),
-            })
         })?;
-        // RON reads a bare word as a unit value: text takes quotes.
-        let word = ron_text.trim();
-        if value == ron::Value::Unit && !word.is_empty() && word != "()" {
-            return Err(bad(format!(
-                "`{word}` is a bare word, which is no value (text takes double quotes: `\"{word}\"`, in a shell '\"{word}\"')"
-            )));
-        }
         self.call(|r| BlackboardMsg::SetRon(address.to_string(), value, r))
             .await
     }
@@ -469,4 +453,25 @@ impl Blackboard {
     pub(crate) fn stop(&self) {
         self.actor.stop(None);
     }
+}
+/// A value as a person writes it to set a property (RON, as in a config), read before its
+/// property's type is known: why it is no value at all, if it is none. `petrel set` asks this
+/// before it reaches the agent (bad input), and the agent the same when it is reached another
+/// way.
+pub fn parse_set_text(ron_text: &str) -> Result<ron::Value, String> {
+    let value: ron::Value = ron::from_str(ron_text).map_err(|e| match e.code {
+        // ron's own text names its options, which a person setting a value cannot use.
+        ron::Error::ExceededRecursionLimit => {
+            "nested too deeply (lists or structures within each other)".to_string()
+        }
+        _ => e.to_string(),
+    })?;
+    // RON reads a bare word as a unit value: text takes quotes.
+    let word = ron_text.trim();
+    if value == ron::Value::Unit && !word.is_empty() && word != "()" {
+        return Err(format!(
+            "`{word}` is a bare word, which is no value (text takes double quotes: `\"{word}\"`, in a shell '\"{word}\"')"
+        ));
+    }
+    Ok(value)
 }
