@@ -25,6 +25,11 @@ pub struct Grid {
     cells: Vec<u8>,
 }
 
+/// The cell sizes a world or map may have, in metres: a millimetre to ten metres. Beyond, a
+/// world is nothing a robot drives in (a resolution of 1e300 passed and printed poses of 300
+/// digits).
+pub const RESOLUTION: std::ops::RangeInclusive<f64> = 0.001..=10.0;
+
 impl Grid {
     /// An all-free grid of `width x height` cells of `resolution` metres, lower-left corner at
     /// `(origin_x, origin_y)`.

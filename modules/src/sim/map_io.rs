@@ -14,7 +14,7 @@
 //! ##########
 //! ```
 //!
-//! * Header keys (all optional): `resolution` metres per cell (default 0.1), `origin` world
+//! * Header keys (all optional): `resolution` metres per cell (0.001 to 10, default 0.1), `origin` world
 //!   `x, y` of the grid's lower-left corner (default `0, 0`), `heading` start heading of the
 //!   `R` robots in degrees (default 0 = +x); `dark` and `rough` (repeatable) a rectangle
 //!   `x0, y0, x1, y1` in metres of dark area or rough floor.
@@ -272,8 +272,8 @@ impl Header<'_> {
         match key {
             "resolution" => {
                 let r = self.numbers(key, value, column, "a number of metres per cell", 1)?[0];
-                if r <= 0.0 {
-                    return Err(self.error(column, format!("`resolution`: expected metres per cell > 0, got {}", petrel_actors::short_number(r))));
+                if !super::grid::RESOLUTION.contains(&r) {
+                    return Err(self.error(column, format!("`resolution`: expected metres per cell in 0.001..=10, got {}", petrel_actors::short_number(r))));
                 }
                 *self.resolution = r;
             }
@@ -344,7 +344,11 @@ mod tests {
         );
         assert_eq!(
             parse("# resolution: -2\n#\n").unwrap_err(),
-            "w.txt:1:15: `resolution`: expected metres per cell > 0, got -2"
+            "w.txt:1:15: `resolution`: expected metres per cell in 0.001..=10, got -2"
+        );
+        assert_eq!(
+            parse("# resolution: 1e300\n#\n").unwrap_err(),
+            "w.txt:1:15: `resolution`: expected metres per cell in 0.001..=10, got 1e300"
         );
         assert_eq!(
             parse("# resolution: fine\n#\n").unwrap_err(),

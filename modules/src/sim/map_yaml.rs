@@ -118,11 +118,11 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
         ));
     }
     let resolution = raw.resolution.ok_or_else(|| missing("resolution"))?;
-    if !(resolution.value.is_finite() && resolution.value > 0.0) {
+    if !super::grid::RESOLUTION.contains(&resolution.value) {
         return Err(at(
             &resolution.referenced,
             format!(
-                "`resolution`: expected metres per pixel > 0, got {}",
+                "`resolution`: expected metres per pixel in 0.001..=10, got {}",
                 petrel_actors::short_number(resolution.value)
             ),
         ));

@@ -58,7 +58,7 @@ fn rescue_keys_give_victims_and_areas() {
 fn bad_values_name_file_line_column_and_expectation() {
     assert_eq!(
         parse(&YAML.replace("0.5", "-2")).unwrap_err(),
-        "m.yaml:2:13: `resolution`: expected metres per pixel > 0, got -2"
+        "m.yaml:2:13: `resolution`: expected metres per pixel in 0.001..=10, got -2"
     );
     let e = parse(&YAML.replace("0.5", "big")).unwrap_err();
     assert!(e.starts_with("m.yaml:2:13: "), "{e}");
