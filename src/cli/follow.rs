@@ -20,6 +20,7 @@ pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> 
         Ok(t) => t,
         Err(code) => return code,
     };
+    let recorded = reach.via.is_none();
     attached(&team, |client| async move {
         let mut interrupt = Interrupt::new();
         let mut watch = client.watch(&url).await?;
@@ -28,7 +29,7 @@ pub(crate) fn echo(reach: &Reach, url: &str, count: Option<u64>, json: bool) -> 
         while count.is_none_or(|n| printed < n) {
             let update = tokio::select! {
                 update = next_update(&mut watch) => update?,
-                left = gone(&client, agent) => return Err(left),
+                left = gone(&client, agent, recorded) => return Err(left),
                 _ = interrupt.recv() => break,
             };
             sayln!("{}", line(&update, json));
@@ -54,6 +55,7 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
         Ok(t) => t,
         Err(code) => return code,
     };
+    let recorded = reach.via.is_none();
     attached(&team, |client| async move {
         let mut interrupt = Interrupt::new();
         let mut watch = client.watch(&url).await?;
@@ -61,7 +63,7 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
         // The first update is the current value, written whenever: not a change to time.
         tokio::select! {
             update = next_update(&mut watch) => update.map(drop)?,
-            left = gone(&client, agent) => return Err(left),
+            left = gone(&client, agent, recorded) => return Err(left),
         }
         let window = usize::try_from(window).unwrap_or(usize::MAX);
         let mut stamps = VecDeque::with_capacity(window);
@@ -70,12 +72,12 @@ pub(crate) fn hz(reach: &Reach, url: &str, window: u64, count: Option<u64>) -> E
         let mut seen = 0;
         // Kept across the reports (each second too, like the quiet it waits for): made again
         // only when a value comes.
-        let mut quiet = std::pin::pin!(gone(&client, agent));
+        let mut quiet = std::pin::pin!(gone(&client, agent, recorded));
         loop {
             tokio::select! {
                 update = next_update(&mut watch) => {
                     let update = update?;
-                    quiet.set(gone(&client, agent));
+                    quiet.set(gone(&client, agent, recorded));
                     if stamps.len() == window {
                         stamps.pop_front();
                     }
@@ -116,12 +118,13 @@ const QUIET: Duration = Duration::from_secs(1);
 /// Resolves with an error once `agent` has gone quiet for [`QUIET`] and then does not answer
 /// (its run ended, it was killed, or its thread is held). A follower would otherwise wait
 /// without end, saying nothing, for an agent that may never come back. Made again at each
-/// value, so an agent that keeps writing is never asked.
-async fn gone(client: &Client, agent: &str) -> TeamError {
+/// value, so an agent that keeps writing is never asked. `recorded`: the agent was found in
+/// the records of the runs on this machine, which then tell whether its run ended.
+async fn gone(client: &Client, agent: &str, recorded: bool) -> TeamError {
     loop {
         tokio::time::sleep(QUIET).await;
         if let Err(e) = client.info(agent).await {
-            return e;
+            return super::remote::left_or(e, agent, recorded);
         }
     }
 }
@@ -173,6 +176,7 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
         eprintln!("error: no `petrel run` is running on this machine for this user");
         return ExitCode::from(super::EXIT_FAILED);
     }
+    let recorded = reach.via.is_none();
     super::top::with_clients(&targets, |clients| async move {
         let mut interrupt = Interrupt::new();
         let (tx, mut rx) = tokio::sync::mpsc::channel(1024);
@@ -188,7 +192,9 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
                     .find(|(a, _)| *a == agent_name)
                     .map(|(_, c)| c);
                 if let Some(client) = client {
-                    let _ = left_tx.send(gone(client, &agent_name).await).await;
+                    let _ = left_tx
+                        .send(gone(client, &agent_name, recorded).await)
+                        .await;
                 }
             }));
             for p in &info.properties {

@@ -194,6 +194,26 @@ where
     })
 }
 
+/// `e`, or, for an agent that no longer answers because its run ended, that: when it was found
+/// in the records of the runs on this machine (`recorded`) and none has it any more. A run
+/// that ended reads otherwise as an agent outside the team.
+pub(crate) fn left_or(e: TeamError, agent: &str, recorded: bool) -> TeamError {
+    match run_ended(&e, agent, recorded) {
+        true => TeamError::Refused(format!("agent `{agent}` left: its run ended")),
+        false => e,
+    }
+}
+
+/// Whether `e`, no answer from `agent`, is because its run ended (see [`left_or`]).
+pub(crate) fn run_ended(e: &TeamError, agent: &str, recorded: bool) -> bool {
+    recorded
+        && matches!(e, TeamError::NoAnswer { .. })
+        && !discovery::running(&discovery::directory())
+            .iter()
+            .flat_map(|r| &r.agents)
+            .any(|a| a.agent == agent)
+}
+
 pub(crate) fn failed(e: TeamError) -> ExitCode {
     eprintln!("error: {e}");
     ExitCode::from(EXIT_REFUSED)

@@ -164,11 +164,13 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
         Ok(t) => t,
         Err(code) => return code,
     };
+    let recorded = reach.via.is_none();
     with_clients(&targets, |clients| async move {
         let mut interrupt = super::interrupt::Interrupt::new();
         let mut tick = tokio::time::interval(Duration::from_secs(1));
+        let mut left = Vec::new();
         loop {
-            let rows = collect(&clients).await?;
+            let rows = collect(&clients, &mut left, recorded).await?;
             if once {
                 say!("{}", table(&rows));
                 return Ok(());
@@ -186,24 +188,48 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
     })
 }
 
-async fn collect(clients: &[(String, Client)]) -> Result<Vec<ModuleRow>, TeamError> {
+/// The rows of every agent of `clients` but those in `left`; an agent whose run ended (see
+/// `remote::run_ended`) joins `left`, and the others are still shown. An error once all left.
+async fn collect(
+    clients: &[(String, Client)],
+    left: &mut Vec<String>,
+    recorded: bool,
+) -> Result<Vec<ModuleRow>, TeamError> {
     let mut all = Vec::new();
     for (agent, client) in clients {
-        let info = client.info(agent).await?;
-        let modules: Vec<(String, String)> = info
-            .modules
-            .iter()
-            .map(|m| (m.clone(), info.types.get(m).cloned().unwrap_or_default()))
-            .collect();
-        let stats: Vec<(String, Vec<u8>)> = client
-            .get_matching(agent, "*/stats/**")
-            .await?
-            .into_iter()
-            .map(|(key, _, json)| (key, json))
-            .collect();
-        all.extend(rows(agent, &modules, &stats));
+        if left.contains(agent) {
+            continue;
+        }
+        match agent_rows(agent, client).await {
+            Ok(rows) => all.extend(rows),
+            Err(e) if super::remote::run_ended(&e, agent, recorded) => left.push(agent.clone()),
+            Err(e) => return Err(e),
+        }
+    }
+    if !clients.is_empty() && left.len() == clients.len() {
+        return Err(TeamError::Refused(match left.as_slice() {
+            [one] => format!("agent `{one}` left: its run ended"),
+            _ => "every agent shown left: their runs ended".to_string(),
+        }));
     }
     Ok(all)
+}
+
+/// The rows of one agent.
+async fn agent_rows(agent: &str, client: &Client) -> Result<Vec<ModuleRow>, TeamError> {
+    let info = client.info(agent).await?;
+    let modules: Vec<(String, String)> = info
+        .modules
+        .iter()
+        .map(|m| (m.clone(), info.types.get(m).cloned().unwrap_or_default()))
+        .collect();
+    let stats: Vec<(String, Vec<u8>)> = client
+        .get_matching(agent, "*/stats/**")
+        .await?
+        .into_iter()
+        .map(|(key, _, json)| (key, json))
+        .collect();
+    Ok(rows(agent, &modules, &stats))
 }
 
 #[cfg(test)]

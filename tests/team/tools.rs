@@ -91,16 +91,22 @@ fn petrel(records: &Path, args: &[&str]) -> (i32, String, String) {
 
 /// Starts a run of agent `lonely` (no `team:` section) recording itself in `dir/records`.
 fn lonely(dir: &Path) -> (Run, std::path::PathBuf) {
+    agent_run(dir, "lonely")
+}
+
+/// Starts a run of agent `name` (no `team:` section) recording itself in `dir/records`.
+fn agent_run(dir: &Path, name: &str) -> (Run, std::path::PathBuf) {
     let records = dir.join("records");
-    let config = dir.join("lonely.ron");
+    let config = dir.join(format!("{name}.ron"));
     std::fs::write(
         &config,
-        r#"Agent(name: "lonely", modules: [
+        r#"Agent(name: "NAME", modules: [
             (name: "signal", type: "demo.signal", values: {"params/sample_ms": 5}),
             (name: "scale", type: "demo.scale", values: {"params/factor": 2.0},
              links: {"in/value": "signal/out/value"}),
             (name: "producer", type: "demo.producer", values: {"params/period_ms": 5, "params/batch": 3}),
-        ])"#,
+        ])"#
+        .replace("NAME", name),
     )
     .unwrap();
     let mut run = Run::start(&config, &records);
@@ -242,6 +248,8 @@ fn echo_follows_values_and_queue_items_and_hz_reports_a_rate() {
 /// end for an agent that cannot come back; hz too while it reports every second.
 #[test]
 fn followers_end_with_an_error_once_the_agent_is_gone() {
+    // Said as such: the run is gone (its record is a dead process's), not "did not answer ...
+    // is it a member of the team?".
     let dir = tempfile::tempdir().unwrap();
     let (mut run, records) = lonely(dir.path());
     let follower = |args: &[&str]| {
@@ -285,20 +293,83 @@ fn followers_end_with_an_error_once_the_agent_is_gone() {
     let hz_said = String::from_utf8_lossy(&hz.stderr).into_owned();
     assert_eq!(hz.status.code(), Some(1), "{hz_said}");
     assert!(
-        hz_said.contains("agent `lonely` did not answer"),
+        hz_said.contains("agent `lonely` left: its run ended"),
         "{hz_said}"
     );
     let events_said = events_rest.join().unwrap().join("\n");
     let echo_said = String::from_utf8_lossy(&echo.stderr).into_owned();
     assert_eq!(echo.status.code(), Some(1), "{echo_said}");
     assert!(
-        echo_said.contains("agent `lonely` did not answer"),
+        echo_said.contains("agent `lonely` left: its run ended"),
         "{echo_said}"
     );
     assert_eq!(events.status.code(), Some(1), "{events_said}");
     assert!(
-        events_said.contains("agent `lonely` did not answer"),
+        events_said.contains("agent `lonely` left: its run ended"),
         "{events_said}"
+    );
+}
+
+/// `petrel top` over two runs: when one ends it shows the other, and ends itself (exit 1,
+/// saying so) only when both have.
+#[test]
+fn top_keeps_showing_the_runs_that_go_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut first, records) = agent_run(dir.path(), "lonely");
+    let (mut second, _) = agent_run(dir.path(), "other");
+    let mut top = Command::new(env!("CARGO_BIN_EXE_petrel"))
+        .arg("top")
+        .env("PETREL_RUNTIME_DIR", &records)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("petrel starts");
+    // Each frame: the clear-screen sequence and the header, then a row per module. Read on a
+    // thread so that a top that stopped printing fails the wait below instead of hanging.
+    let (tx, frames) = std::sync::mpsc::channel::<Vec<String>>();
+    let stdout = top.stdout.take().unwrap();
+    std::thread::spawn(move || {
+        let mut frame = Vec::new();
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if line.contains("AGENT") && !frame.is_empty() {
+                let _ = tx.send(std::mem::take(&mut frame));
+            }
+            frame.push(line);
+        }
+        let _ = tx.send(frame);
+    });
+    let agents = |frame: &[String]| -> Vec<String> {
+        let mut names: Vec<String> = frame[1..]
+            .iter()
+            .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+            .collect();
+        names.dedup();
+        names.sort();
+        names.dedup();
+        names
+    };
+    let wait_for = |want: &[&str]| {
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+        loop {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            let frame = frames
+                .recv_timeout(left)
+                .unwrap_or_else(|_| panic!("no frame showing {want:?} within 30 s"));
+            if agents(&frame) == want {
+                return;
+            }
+        }
+    };
+    wait_for(&["lonely", "other"]);
+    second.kill();
+    wait_for(&["lonely"]);
+    first.kill();
+    let top = crate::bounded::wait_within_deadline(top, "petrel top");
+    let said = String::from_utf8_lossy(&top.stderr).into_owned();
+    assert_eq!(top.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("every agent shown left: their runs ended"),
+        "{said}"
     );
 }
 
