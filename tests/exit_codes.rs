@@ -265,6 +265,10 @@ fn replay_refuses_modules_the_config_lacks_and_a_rate_of_zero() {
         (&["--replace", "m,ghost"], "--replace ghost: "),
         (&["--replace", "replay"], "has no module `replay`"),
         (
+            &["--replace", "m,m"],
+            "--replace names `m` twice; expected each module to replace once",
+        ),
+        (
             &["--replace", "m", "--rate", "0"],
             "expected a factor in [0.001, 1000] or `max`, got `0`",
         ),

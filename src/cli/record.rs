@@ -95,6 +95,16 @@ pub(crate) fn apply_replay(file: &mut ConfigFile, spec: &ReplaySpec) -> Result<(
             "{config}: has a module named `{REPLAY_MODULE}`, the name of the playback module `petrel replay` adds; rename it to replay this config"
         ));
     }
+    let twice = spec
+        .replace
+        .iter()
+        .enumerate()
+        .find(|(i, r)| spec.replace[..*i].contains(r));
+    if let Some((_, twice)) = twice {
+        return Err(format!(
+            "--replace names `{twice}` twice; expected each module to replace once"
+        ));
+    }
     if let Some(missing) = spec.replace.iter().find(|r| !names.contains(&r.as_str())) {
         return Err(format!(
             "--replace {missing}: {config} has no module `{missing}`; expected one of its modules: {}",
