@@ -223,6 +223,27 @@ fn with_files() -> tempfile::TempDir {
     dir
 }
 
+/// Asserts that each `petrel args` run in `dir` exits 2 saying `expected`; lists every one that
+/// does not.
+fn assert_refused<'a>(
+    dir: &std::path::Path,
+    cases: impl Iterator<Item = (&'a [&'a str], &'a str)>,
+) {
+    let mut wrong = Vec::new();
+    for (args, expected) in cases {
+        let out = petrel_in(dir, args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        if out.status.code() != Some(2) || !stderr.contains(expected) {
+            wrong.push(format!(
+                "petrel {}: {:?}\n{stderr}",
+                args.join(" "),
+                out.status.code()
+            ));
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+}
+
 /// Runs `petrel args` in `dir`, where tools find no run: the directory is the test's own.
 fn petrel_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
     bounded::output_within_deadline(
@@ -336,19 +357,7 @@ fn a_recording_is_refused_where_it_cannot_go() {
             "is not a directory",
         ),
     ];
-    let mut wrong = Vec::new();
-    for (args, expected) in cases {
-        let out = petrel_in(dir.path(), args);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        if out.status.code() != Some(2) || !stderr.contains(expected) {
-            wrong.push(format!(
-                "petrel {}: {:?}\n{stderr}",
-                args.join(" "),
-                out.status.code()
-            ));
-        }
-    }
-    assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+    assert_refused(dir.path(), cases.iter().map(|(a, e)| (&a[..], *e)));
     assert_eq!(
         std::fs::read_to_string(dir.path().join("idle.ron")).unwrap(),
         idle
@@ -407,19 +416,7 @@ fn no_output_replaces_an_input_a_fifo_or_another_output() {
             "-o: fifo is not a regular file",
         ),
     ];
-    let mut wrong = Vec::new();
-    for (args, expected) in &cases {
-        let out = petrel_in(dir.path(), args);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        if out.status.code() != Some(2) || !stderr.contains(expected) {
-            wrong.push(format!(
-                "petrel {}: {:?}\n{stderr}",
-                args.join(" "),
-                out.status.code()
-            ));
-        }
-    }
-    assert!(wrong.is_empty(), "{}", wrong.join("\n\n"));
+    assert_refused(dir.path(), cases.iter().map(|(a, e)| (&a[..], *e)));
     for (name, text) in FILES.iter().filter(|(n, _)| n.starts_with("goal.")) {
         assert_eq!(
             std::fs::read_to_string(dir.path().join(name)).unwrap(),
