@@ -2,7 +2,6 @@
 //! itself, the files it names, context rules and mission bindings — every problem at once,
 //! each located in the file it comes from.
 
-use super::stdout::sayln;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -10,6 +9,7 @@ use petrel_actors::{
     ConfigError, ConfigErrors, ConfigFile, FilePath, Module, ModuleRegistry, PropertyKind, Registry,
 };
 
+use super::stdout::sayln;
 use super::{bad_input, load};
 
 /// `petrel check CONFIG... [--overlay ...]`.

@@ -1,15 +1,15 @@
 //! `petrel echo` and `petrel hz`: follow a property of a running agent as it changes.
 
-use super::interrupt::Interrupt;
-use super::stdout::{self, sayln};
 use std::collections::VecDeque;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use petrel_team::{Client, TeamError, Update, Watch, WatchEvent};
 
+use super::interrupt::Interrupt;
 use super::rate::rate;
 use super::remote::{attached, target, Reach};
+use super::stdout::{self, sayln};
 
 /// Stamps `hz` keeps by default: its figures are over the last this many changes.
 pub(crate) const DEFAULT_WINDOW: u64 = 100;

@@ -1,6 +1,5 @@
 //! `petrel plan ...`: load, check, draw, compile and simulate Petri Net Plans.
 
-use super::stdout::{say, sayln};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -12,6 +11,7 @@ use petrel_plans::{
 
 use super::EXIT_BAD_INPUT;
 
+use super::stdout::{say, sayln};
 use super::{EXIT_FAILED as EXIT_PLAN_FAILED, EXIT_STILL_RUNNING};
 
 #[derive(Subcommand)]

@@ -2,7 +2,6 @@
 //! agents. A tool finds an agent through the records every `petrel run` writes (see
 //! `petrel_team::discovery`), or through the `team:` section of a config given with `--via`.
 
-use super::stdout::{say, sayln};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -11,6 +10,7 @@ use petrel_actors::{ConfigFile, PropertyKind, PropertyUrl};
 use petrel_team::discovery;
 use petrel_team::{Client, TeamError};
 
+use super::stdout::{say, sayln};
 use super::{bad_input, EXIT_BAD_INPUT};
 
 /// Exit code when the agent refused or did not answer.

@@ -1,7 +1,6 @@
 //! `petrel top`: every module of every running agent with its status and step figures,
 //! refreshed each second like `top`, or printed once with `--once`.
 
-use super::stdout::say;
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -9,6 +8,7 @@ use petrel_team::discovery::{self, Reachable};
 use petrel_team::{Client, TeamError};
 
 use super::remote::{failed, team_of, Reach};
+use super::stdout::say;
 use super::EXIT_BAD_INPUT;
 
 /// One row: a module's figures, from its `stats/` properties.
