@@ -85,6 +85,24 @@ fn a_name_longer_than_an_address_can_carry_is_refused_and_shown_short() {
 }
 
 #[test]
+fn an_empty_or_cut_short_config_says_so() {
+    assert_eq!(
+        errors("\n   \n"),
+        ["bad.ron:1:1: error: the file is empty (nothing but whitespace); expected an agent config; see the example in the README"]
+    );
+    let e = errors("Agent(name: \"r\", modules: [\n");
+    assert_eq!(e.len(), 1, "{e:?}");
+    assert!(
+        e[0].starts_with("bad.ron:1:28: error: the file ends too early: "),
+        "{}",
+        e[0]
+    );
+    // An error in the middle is no end of file.
+    let e = errors("Agent(name: \"r\" modules: [])\n");
+    assert!(!e[0].contains("ends too early"), "{}", e[0]);
+}
+
+#[test]
 fn a_missing_file_is_named() {
     let e = ConfigFile::load("no/such/config.ron")
         .unwrap_err()

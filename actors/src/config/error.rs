@@ -61,7 +61,17 @@ impl ConfigError {
             }
             other => other.to_string(),
         };
-        let message = format!("{code} (RON syntax of {what})");
+        // At the end of the text the point of an error is that the text ended: a truncated
+        // file, or one that holds nothing.
+        let at = crate::text_position::offset_of(text, error.span.start.line, error.span.start.col);
+        let at_end = at.is_none_or(|at| text.get(at..).is_none_or(|rest| rest.trim().is_empty()));
+        let message = match () {
+            _ if text.trim().is_empty() => {
+                format!("the file is empty (nothing but whitespace); expected {what}")
+            }
+            _ if at_end => format!("the file ends too early: {code} (RON syntax of {what})"),
+            _ => format!("{code} (RON syntax of {what})"),
+        };
         ConfigError {
             file: file.into(),
             line: error.span.start.line,
