@@ -1,4 +1,5 @@
-//! Ctrl-C for the commands that follow values until it (`echo`, `hz`, `events`, `top`).
+//! Ctrl-C (and SIGTERM, as `run` and `console` take it) for the commands that follow values
+//! until it (`echo`, `hz`, `events`, `top`): they end cleanly, exit code 0.
 //!
 //! `tokio::signal::ctrl_c()` made anew at each wait of a loop hears only signals that come
 //! while that wait is polled: a Ctrl-C while the command printed or asked its agents (`top`
@@ -7,28 +8,37 @@
 
 use tokio::signal::unix::{signal, Signal, SignalKind};
 
-/// SIGINT, heard from creation on.
+/// SIGINT and SIGTERM, heard from creation on.
 pub(crate) struct Interrupt {
-    /// `None` when the handler could not be installed: Ctrl-C then ends the process as it
+    /// `None` where a handler could not be installed: that signal then ends the process as it
     /// would without one.
-    signal: Option<Signal>,
+    int: Option<Signal>,
+    term: Option<Signal>,
 }
 
 impl Interrupt {
-    /// Listens for SIGINT from now on. Within a tokio runtime.
+    /// Listens for SIGINT and SIGTERM from now on. Within a tokio runtime.
     pub(crate) fn new() -> Interrupt {
         Interrupt {
-            signal: signal(SignalKind::interrupt()).ok(),
+            int: signal(SignalKind::interrupt()).ok(),
+            term: signal(SignalKind::terminate()).ok(),
         }
     }
 
-    /// Resolves at the next SIGINT, or at once for one that came since the last call.
+    /// Resolves at the next signal, or at once for one that came since the last call.
     pub(crate) async fn recv(&mut self) {
-        match &mut self.signal {
-            Some(s) => {
-                s.recv().await;
-            }
-            None => std::future::pending().await,
+        tokio::select! {
+            _ = next(&mut self.int) => {}
+            _ = next(&mut self.term) => {}
         }
+    }
+}
+
+async fn next(signal: &mut Option<Signal>) {
+    match signal {
+        Some(s) => {
+            s.recv().await;
+        }
+        None => std::future::pending().await,
     }
 }

@@ -310,6 +310,34 @@ fn followers_end_with_an_error_once_the_agent_is_gone() {
     );
 }
 
+/// SIGTERM ends a follower as Ctrl-C does, cleanly (exit 0), as it ends `run` and `console`.
+#[test]
+fn sigterm_ends_a_follower_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_run, records) = lonely(dir.path());
+    for args in [&["echo", "petrel://lonely/signal/out/value"][..], &["top"]] {
+        let mut follower = Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(args)
+            .env("PETREL_RUNTIME_DIR", &records)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("petrel starts");
+        let mut out = BufReader::new(follower.stdout.take().unwrap()).lines();
+        assert!(out.next().is_some(), "{args:?} printed");
+        unsafe { libc::kill(follower.id() as libc::pid_t, libc::SIGTERM) };
+        let rest = std::thread::spawn(move || out.count());
+        let ended = crate::bounded::wait_within_deadline(follower, "a follower");
+        rest.join().unwrap();
+        assert_eq!(
+            ended.status.code(),
+            Some(0),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&ended.stderr)
+        );
+    }
+}
+
 /// `petrel top` over two runs: when one ends it shows the other, and ends itself (exit 1,
 /// saying so) only when both have.
 #[test]
