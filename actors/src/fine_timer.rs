@@ -13,8 +13,6 @@
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
-use std::future::Future;
-use std::pin::Pin;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 use std::task::{Context, Poll, Waker};
@@ -143,69 +141,51 @@ impl Timer {
     }
 }
 
-/// Sleeps until `deadline` (a wall-clock instant) on the fine timer.
-pub(crate) struct FineSleep {
-    deadline: Instant,
-    id: u64,
-    registered: bool,
+/// A fresh id to register deadlines under.
+fn new_id() -> u64 {
+    static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+    NEXT_ID.fetch_add(1, Ordering::Relaxed)
 }
 
-impl FineSleep {
-    pub fn until(deadline: Instant) -> Self {
-        static NEXT_ID: AtomicU64 = AtomicU64::new(1);
-        FineSleep {
-            deadline,
-            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
-            registered: false,
+/// Registers `deadline` and `waker` under `id`, or moves `id`'s registration there; wakes the
+/// timer thread when the deadline is the earliest.
+fn register(id: u64, deadline: Instant, waker: &Waker) {
+    let timer = timer();
+    let mut d = timer.deadlines.lock();
+    let first = d.heap.peek().is_none_or(|Reverse((at, _))| deadline < *at);
+    match d.waiting.get_mut(&id) {
+        Some((at, w)) if *at == deadline => w.clone_from(waker),
+        _ => {
+            d.waiting.insert(id, (deadline, waker.clone()));
+            d.heap.push(Reverse((deadline, id)));
         }
+    }
+    drop(d);
+    if first {
+        timer.earlier.notify_one();
     }
 }
 
-impl Future for FineSleep {
-    type Output = ();
-
-    fn poll(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<()> {
-        if Instant::now() >= self.deadline {
-            return Poll::Ready(());
-        }
-        let timer = timer();
-        let mut d = timer.deadlines.lock();
-        let first = d
-            .heap
-            .peek()
-            .is_none_or(|Reverse((at, _))| self.deadline < *at);
-        match d.waiting.get_mut(&self.id) {
-            Some((_, waker)) => waker.clone_from(cx.waker()),
-            None => {
-                d.waiting
-                    .insert(self.id, (self.deadline, cx.waker().clone()));
-                d.heap.push(Reverse((self.deadline, self.id)));
-            }
-        }
-        drop(d);
-        self.registered = true;
-        if first {
-            timer.earlier.notify_one();
-        }
-        Poll::Pending
-    }
-}
-
-impl Drop for FineSleep {
-    fn drop(&mut self) {
-        if self.registered {
-            // Its heap entry is skipped when it comes up.
-            timer().deadlines.lock().waiting.remove(&self.id);
-        }
-    }
+/// Forgets `id`'s registration; its heap entry is skipped when it comes up.
+fn deregister(id: u64) {
+    timer().deadlines.lock().waiting.remove(&id);
 }
 
 /// A period on the fine timer, like tokio's `interval` with `MissedTickBehavior::Skip`: the
 /// first tick one period from now, ticks missed while the module was busy are skipped, and the
 /// ticks stay on the grid of the start time.
+///
+/// Its registration with the timer outlives a wait that is given up: a periodic module that
+/// data woke between two ticks waits again for the same tick without touching the timer.
+/// (A sleep per wait cost a lock, a table insert and a heap entry at every wake-up, and the
+/// heap grew by one entry per wake-up until the tick: millions for a module woken at a high
+/// rate with a long period.)
 pub(crate) struct FineTicker {
     next: Instant,
     period: Duration,
+    id: u64,
+    /// The deadline registered under `id` and the waker given with it, if any.
+    registered: Option<(Instant, Waker)>,
 }
 
 impl FineTicker {
@@ -213,13 +193,38 @@ impl FineTicker {
         FineTicker {
             next: Instant::now() + period,
             period,
+            id: new_id(),
+            registered: None,
         }
     }
 
     /// Waits for the next tick.
     pub async fn tick(&mut self) {
-        FineSleep::until(self.next).await;
+        std::future::poll_fn(|cx| self.poll_due(cx)).await;
         self.next = next_tick(self.next, self.period, Instant::now());
+    }
+
+    fn poll_due(&mut self, cx: &mut Context<'_>) -> Poll<()> {
+        if Instant::now() >= self.next {
+            return Poll::Ready(());
+        }
+        let current = self
+            .registered
+            .as_ref()
+            .is_some_and(|(at, waker)| *at == self.next && waker.will_wake(cx.waker()));
+        if !current {
+            register(self.id, self.next, cx.waker());
+            self.registered = Some((self.next, cx.waker().clone()));
+        }
+        Poll::Pending
+    }
+}
+
+impl Drop for FineTicker {
+    fn drop(&mut self) {
+        if self.registered.is_some() {
+            deregister(self.id);
+        }
     }
 }
 
@@ -270,37 +275,55 @@ mod tests {
     }
 
     #[test]
-    fn a_sleep_ends_at_its_deadline_not_before() {
+    fn a_tick_comes_at_its_time_not_before() {
         let rt = tokio::runtime::Builder::new_current_thread()
             .build()
             .unwrap();
-        for micros in [0, 300, 1500] {
-            let deadline = Instant::now() + Duration::from_micros(micros);
-            rt.block_on(FineSleep::until(deadline));
-            assert!(Instant::now() >= deadline);
+        for micros in [1, 300, 1500] {
+            let period = Duration::from_micros(micros);
+            let start = Instant::now();
+            let mut ticker = FineTicker::new(period);
+            rt.block_on(ticker.tick());
+            assert!(Instant::now() >= start + period);
         }
     }
 
+    /// The entries of the timer's heap registered under `id`.
+    fn heap_entries(id: u64) -> usize {
+        let d = timer().deadlines.lock();
+        d.heap.iter().filter(|Reverse((_, i))| *i == id).count()
+    }
+
     #[test]
-    fn a_dropped_sleep_leaves_the_others_on_time() {
+    fn a_wait_given_up_and_taken_again_registers_once_and_a_dropped_ticker_none() {
         let rt = tokio::runtime::Builder::new_current_thread()
             .enable_time()
             .build()
             .unwrap();
         rt.block_on(async {
-            let soon = Instant::now() + Duration::from_millis(1);
-            let late = Instant::now() + Duration::from_secs(3600);
-            // The late sleep registers, then is dropped when the earlier one ends the select.
-            tokio::select! {
-                _ = FineSleep::until(late) => panic!("an hour passed"),
-                _ = FineSleep::until(soon) => {}
+            let mut hourly = FineTicker::new(Duration::from_secs(3600));
+            let late = hourly.next;
+            // As a module woken by data between two ticks: each wait is given up.
+            for _ in 0..1000 {
+                tokio::select! {
+                    biased;
+                    _ = hourly.tick() => panic!("an hour passed"),
+                    _ = std::future::ready(()) => {}
+                }
+                tokio::select! {
+                    _ = hourly.tick() => panic!("an hour passed"),
+                    _ = tokio::task::yield_now() => {}
+                }
             }
-            assert!(timer()
-                .deadlines
-                .lock()
-                .waiting
-                .values()
-                .all(|(at, _)| *at != late));
+            assert_eq!(heap_entries(hourly.id), 1, "one registration for one tick");
+            // A ticker dropped leaves no waiting deadline behind; the others stay on time.
+            let mut soon = FineTicker::new(Duration::from_millis(1));
+            let id = hourly.id;
+            drop(hourly);
+            soon.tick().await;
+            let d = timer().deadlines.lock();
+            assert!(!d.waiting.contains_key(&id));
+            assert!(d.waiting.values().all(|(at, _)| *at != late));
         });
     }
 }
