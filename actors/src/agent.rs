@@ -121,6 +121,10 @@ impl Agent {
         let events = registry.events_writer();
         let hold_events = registry.events_writer();
         let cfg = &config.config;
+        // Before any module reads the clock: a resumed agent's time goes on from its snapshot.
+        if let Some(secs) = cfg.clock_s {
+            crate::expr::continue_from(secs);
+        }
         let ms = Duration::from_millis;
         let groups = cfg
             .groups

@@ -31,6 +31,9 @@ pub(crate) fn write(registry: &Registry) -> String {
     for field in registry.agent_settings() {
         let _ = writeln!(out, "    {field},");
     }
+    // The wall clock now: a run from this snapshot goes on from it (`AgentConfig::clock_s`).
+    let clock = crate::expr::Clock::Wall.secs(tokio::time::Instant::now());
+    let _ = writeln!(out, "    clock_s: {clock:?},");
     let _ = writeln!(out, "    modules: [");
     for module in registry.modules() {
         let prefix = format!("{module}/");

@@ -79,6 +79,11 @@ pub struct AgentConfig {
     /// modules run on the shared runtime, at the process's priority.
     #[serde(default)]
     pub long_steps_nice: Option<u8>,
+    /// The agent's wall clock, in seconds, when the snapshot this config is was taken: an agent
+    /// started from it goes on from that time (see [`crate::expr::continue_from`]), so the
+    /// times its modules' memories keep still count what ran before. Written by snapshots.
+    #[serde(default)]
+    pub clock_s: Option<f64>,
     /// Module instances, started in this order and stopped in reverse.
     #[serde(default)]
     pub modules: Vec<ModuleConfig>,
@@ -209,6 +214,7 @@ impl ConfigFile {
         errors.extend(self.check_step_budget());
         errors.extend(self.check_realtime_priority());
         errors.extend(self.check_long_steps_nice());
+        errors.extend(self.check_clock());
         if !crate::url::valid_segment(&self.config.name) {
             errors.push(self.locate_name(
                 &self.config.name,

@@ -5,7 +5,7 @@ use super::ConfigFile;
 impl ConfigFile {
     /// Applies `overlay` (e.g. a snapshot) on top: every field it writes replaces this
     /// config's (`supervision`, `groups`, `contexts`, `team`, `name`, `scheduler`, `step_budget`,
-    /// `realtime_priority`, `long_steps_nice`; per module
+    /// `realtime_priority`, `long_steps_nice`, `clock_s`; per module
     /// `type` if given, `group`, `restart`, `watchdog_ms`, `shutdown_timeout_ms`, `long_steps`), while modules match by name
     /// and their `values`, `links` and `capacities` are merged key by key (a value the overlay
     /// gives replaces the base's link of that property, a link it gives the base's value);
@@ -39,6 +39,9 @@ impl ConfigFile {
         }
         if wrote("long_steps_nice") {
             self.config.long_steps_nice = overlay.config.long_steps_nice;
+        }
+        if wrote("clock_s") {
+            self.config.clock_s = overlay.config.clock_s;
         }
         if wrote("name") && !overlay.config.name.is_empty() {
             self.config.name = overlay.config.name.clone();

@@ -6,6 +6,7 @@
 //! `base() + seconds`, so `held`, `age`, `elapsed` and deadlines all count clock seconds. Start
 //! times are kept as clock seconds (numbers survive a restart and a snapshot; instants do not).
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 use std::time::Duration;
 
@@ -20,6 +21,37 @@ fn base() -> Instant {
     *BASE.get_or_init(Instant::now)
 }
 
+/// The most seconds a clock reading stands for (some 30,000 years): beyond, a clock property
+/// gone wild (`1e300`) stands at this limit rather than overflowing an instant.
+pub const MAX_CLOCK_S: f64 = 1e12;
+
+/// Seconds added to every wall-clock reading of this process (an `f64`'s bits; 0 at first):
+/// what [`continue_from`] moved the wall clock forward by.
+static OFFSET: AtomicU64 = AtomicU64::new(0);
+
+fn offset() -> f64 {
+    f64::from_bits(OFFSET.load(Ordering::Relaxed))
+}
+
+/// Moves this process's wall clock forward so that it reads at least `secs` now, never back.
+///
+/// An agent resumed from a snapshot taken when its clock read `secs` goes on from there: the
+/// start times its modules' memories keep in clock seconds (a mission's running actions, a
+/// context manager's active contexts) then count the time that passed before the snapshot,
+/// where a new process's clock, starting again near 0, made a wait that had run 2 s of 6 wait
+/// 6 s more, and a context whose dwell was spent hold on. Property clocks (a simulator's
+/// `out/simTime`, kept in its state) are not affected.
+pub fn continue_from(secs: f64) {
+    let now = Clock::Wall.secs(Instant::now());
+    if !(secs.is_finite() && secs > now) {
+        return;
+    }
+    let add = secs - now;
+    let _ = OFFSET.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |bits| {
+        Some((f64::from_bits(bits) + add).to_bits())
+    });
+}
+
 /// Where a module evaluating expressions reads the time.
 pub enum Clock {
     /// Wall time (tokio's clock, so a paused test clock drives it).
@@ -32,7 +64,7 @@ impl Clock {
     /// The time now, in clock seconds; `step_now` is the module step's time (wall clock).
     pub fn secs(&self, step_now: Instant) -> f64 {
         match self {
-            Clock::Wall => step_now.saturating_duration_since(base()).as_secs_f64(),
+            Clock::Wall => step_now.saturating_duration_since(base()).as_secs_f64() + offset(),
             Clock::Property(h) => h.get::<f64>().map_or(0.0, |v| *v),
         }
     }
@@ -48,20 +80,29 @@ impl Clock {
 
     /// The instant standing for clock seconds `secs`.
     pub fn instant(secs: f64) -> Instant {
-        // An instant cannot hold any number: beyond some 30,000 years (a clock property gone
-        // wild, `1e300`), time stands at that limit rather than overflowing.
-        const MAX_SECS: f64 = 1e12;
         let secs = if secs.is_finite() {
-            secs.clamp(0.0, MAX_SECS)
+            secs.clamp(0.0, MAX_CLOCK_S)
         } else {
             0.0
         };
-        base() + Duration::from_secs_f64(secs)
+        // Seconds from before a resume (see `continue_from`) lie before this process's base;
+        // an instant before the machine's boot cannot be made, and stands at the base.
+        let since_base = secs - offset();
+        match since_base >= 0.0 {
+            true => base() + Duration::from_secs_f64(since_base),
+            false => base()
+                .checked_sub(Duration::from_secs_f64(-since_base))
+                .unwrap_or_else(base),
+        }
     }
 
     /// Clock seconds of an instant made by [`Clock::instant`].
     pub fn secs_of(t: Instant) -> f64 {
-        t.saturating_duration_since(base()).as_secs_f64()
+        let base = base();
+        match t >= base {
+            true => t.duration_since(base).as_secs_f64() + offset(),
+            false => offset() - base.duration_since(t).as_secs_f64(),
+        }
     }
 
     /// The clock of module `module`: the property its `in/clock` input is linked to, or wall

@@ -42,7 +42,7 @@ mod value;
 
 use std::fmt;
 
-pub use clock::Clock;
+pub use clock::{continue_from, Clock, MAX_CLOCK_S};
 pub use engine::{ExprId, ExprSet, PropId};
 pub use never::never_true;
 pub use parse::{parse, Ast, AstKind, BinOp, Func};
