@@ -86,13 +86,21 @@ pub(crate) fn check_team(
     }
     for (file, reader) in &built {
         for link in reader.remote_links().links() {
-            let Some((_, owner)) = built
+            let Some((owner_file, owner)) = built
                 .iter()
                 .find(|(f, _)| Some(f.config.name.as_str()) == link.source.agent())
             else {
                 continue;
             };
-            if let Some(problem) = remote_link_problem(owner, &link) {
+            let team = |f: &ConfigFile| f.config.team.as_ref().map(|t| t.name.clone());
+            let problem = match (team(file), team(owner_file)) {
+                (Some(mine), Some(theirs)) if mine != theirs => Some(format!(
+                    "but agent `{}` is in team `{theirs}` and this agent in team `{mine}`: links reach only agents of the same team",
+                    owner_file.config.name
+                )),
+                _ => remote_link_problem(owner, &link),
+            };
+            if let Some(problem) = problem {
                 let (module, path) = link.input.split_once('/').unwrap_or_default();
                 let message = format!(
                     "module `{module}`, `{path}`: links to `{}`, {problem}",

@@ -250,3 +250,34 @@ fn configs_work_from_any_directory() {
         assert!(out.status.success(), "{config}: {}", text(&out.stderr));
     }
 }
+
+/// Configs checked together: a link to an agent of another team can never connect (links
+/// reach only agents of one team), and is refused where it is written.
+#[test]
+fn a_link_to_an_agent_of_another_team_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = |name: &str, edit: &dyn Fn(String) -> String| {
+        let text = std::fs::read_to_string(format!("configs/team/{name}.ron")).unwrap();
+        let path = dir.path().join(format!("{name}.ron"));
+        std::fs::write(&path, edit(text)).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let filter = copy("filter", &|t| t);
+    let sensor = copy("sensor", &|t| t);
+    let display = copy("display", &|t| {
+        t.replacen(r#"name: "demo""#, r#"name: "demo2""#, 1)
+    });
+    let same = petrel(&["check", "configs/team/display.ron", &filter, &sensor]);
+    assert!(same.status.success(), "{}", text(&same.stderr));
+    let out = petrel(&["check", &display, &filter, &sensor]);
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("but agent `filter` is in team `demo` and this agent in team `demo2`: links reach only agents of the same team"),
+        "{err}"
+    );
+    assert!(
+        err.starts_with(&format!("{display}:")),
+        "located in display.ron: {err}"
+    );
+}
