@@ -26,6 +26,25 @@ pub(crate) struct ModuleRow {
     pub failures: i64,
     /// Items its queue inputs lost by lagging (`stats/dropped/...`, summed).
     pub dropped: i64,
+    /// Steps per second seen between two refreshes (`top` without `--once`): a module whose
+    /// steps stopped (one that hangs) shows 0, where its last steps' mean interval said on.
+    pub seen_rate: Option<f64>,
+}
+
+/// Each row's [`ModuleRow::seen_rate`]: its steps since `previous` (the rows of the refresh
+/// before, `elapsed` ago).
+pub(crate) fn seen_rates(rows: &mut [ModuleRow], previous: &[ModuleRow], elapsed: f64) {
+    for row in rows.iter_mut() {
+        let before = previous
+            .iter()
+            .find(|p| p.agent == row.agent && p.module == row.module);
+        row.seen_rate = match before {
+            Some(p) if elapsed > 0.0 && row.steps >= p.steps => {
+                Some((row.steps - p.steps) as f64 / elapsed)
+            }
+            _ => None,
+        };
+    }
 }
 
 /// The rows of one agent from its module types and its `*/stats/**` values (key, JSON).
@@ -77,9 +96,10 @@ pub(crate) fn table(rows: &[ModuleRow]) -> String {
             // The mean interval is what the module's last steps had: of a module that no
             // longer runs (failed, stopped, disabled) it is no rate.
             let running = r.status == petrel_actors::status::RUNNING;
-            let rate = match r.mean_interval_ms > 0.0 && running {
-                true => format!("{:.1}", 1000.0 / r.mean_interval_ms),
-                false => "-".into(),
+            let rate = match (r.seen_rate, r.mean_interval_ms > 0.0 && running) {
+                (Some(seen), _) => format!("{seen:.1}"),
+                (None, true) => format!("{:.1}", 1000.0 / r.mean_interval_ms),
+                (None, false) => "-".into(),
             };
             [
                 r.agent.clone(),
@@ -169,8 +189,12 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
         let mut interrupt = super::interrupt::Interrupt::new();
         let mut tick = tokio::time::interval(Duration::from_secs(1));
         let mut left = Vec::new();
+        let mut previous: (Vec<ModuleRow>, tokio::time::Instant) =
+            (Vec::new(), tokio::time::Instant::now());
         loop {
-            let rows = collect(&clients, &mut left, recorded).await?;
+            let mut rows = collect(&clients, &mut left, recorded).await?;
+            let now = tokio::time::Instant::now();
+            seen_rates(&mut rows, &previous.0, (now - previous.1).as_secs_f64());
             if once {
                 say!("{}", table(&rows));
                 return Ok(());
@@ -180,6 +204,7 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
             if super::stdout::failed() {
                 return Ok(());
             }
+            previous = (rows, now);
             tokio::select! {
                 _ = tick.tick() => {}
                 _ = interrupt.recv() => return Ok(()),
@@ -284,5 +309,40 @@ mod tests {
             ["failed", "42", "-"],
             "no rate once it no longer runs"
         );
+    }
+
+    #[test]
+    fn between_refreshes_the_rate_is_the_steps_seen_so_a_hung_module_shows_none() {
+        let row = |steps, mean_interval_ms| ModuleRow {
+            agent: "a".into(),
+            module: "m".into(),
+            type_name: "t".into(),
+            status: petrel_actors::status::RUNNING.into(),
+            steps,
+            mean_interval_ms,
+            ..ModuleRow::default()
+        };
+        // Its last steps came every 100 ms, then it hung at step 16.
+        let before = [row(16, 100.0)];
+        let mut now = [row(16, 100.0)];
+        seen_rates(&mut now, &before, 1.0);
+        let rate = |rows: &[ModuleRow]| {
+            let shown = table(rows);
+            let line = shown.lines().nth(1).unwrap().to_string();
+            line.split_whitespace().nth(5).unwrap().to_string()
+        };
+        assert_eq!(rate(&now), "0.0", "no step seen in a second");
+        assert_eq!(
+            rate(&before),
+            "10.0",
+            "before any refresh: the mean interval"
+        );
+        let mut going = [row(36, 100.0)];
+        seen_rates(&mut going, &before, 2.0);
+        assert_eq!(rate(&going), "10.0");
+        // Another instance (fewer steps than before, after a restart): the mean interval.
+        let mut restarted = [row(3, 50.0)];
+        seen_rates(&mut restarted, &before, 1.0);
+        assert_eq!(rate(&restarted), "20.0");
     }
 }
