@@ -272,3 +272,75 @@ fn run_for(config: &std::path::Path, duration: &str) -> (std::process::Output, S
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     (out, stdout)
 }
+
+/// A mission whose `state/memory` is of another plan (a snapshot whose plan file was renamed
+/// or replaced) starts the plan over, and says so rather than drop the memory in silence.
+#[test]
+fn a_memory_of_another_plan_is_not_used_and_the_run_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("b.plan"), "say_hello").unwrap();
+    let config = dir.path().join("r.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", modules: [(name: "m", type: "mission.pnp", values: {
+            "params/plan": "b.plan", "params/is_mission": true,
+            "state/memory": (plan: "a", marking: [1, 0]),
+        })])"#,
+    )
+    .unwrap();
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", config.to_str().unwrap(), "--no-remote"])
+            .env("PETREL_RUNTIME_DIR", dir.path())
+            .env("RUST_LOG", "warn"),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "the plan ran anew: {stderr}");
+    assert!(
+        stderr.contains("state/memory is of another plan: not used; the plan starts over")
+            && stderr.contains("kept=a")
+            && stderr.contains("plan=b"),
+        "{stderr}"
+    );
+}
+
+/// The same for a context manager: a memory of another rules file is not used, and the run
+/// says so (the values its contexts set stay as they are).
+#[test]
+fn a_context_memory_of_other_rules_is_not_used_and_the_run_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("r.rules.ron"),
+        r#"Contexts(contexts: [(name: "high", when: "c/out/value > 1000000", set: {"c/params/period_ms": "50"})])"#,
+    )
+    .unwrap();
+    let config = dir.path().join("r.ron");
+    std::fs::write(
+        &config,
+        r#"Agent(name: "r1", modules: [
+            (name: "c", type: "demo.counter"),
+            (name: "ctx", type: "context.manager", values: {"params/rules": "r.rules.ron",
+             "state/memory": (rules: "/elsewhere/old.rules.ron", engine: (active: [("high", 1.0)]))}),
+        ])"#,
+    )
+    .unwrap();
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args([
+                "run",
+                config.to_str().unwrap(),
+                "--no-remote",
+                "--for",
+                "300ms",
+            ])
+            .env("PETREL_RUNTIME_DIR", dir.path())
+            .env("RUST_LOG", "warn"),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("state/memory is of another rules file: not used")
+            && stderr.contains("kept=/elsewhere/old.rules.ron"),
+        "{stderr}"
+    );
+}

@@ -80,7 +80,16 @@ impl ContextManager {
     pub(super) async fn resume_memory(&mut self, ctx: &Context) {
         let memory = self.memory.get();
         let rules = self.rules.get();
-        if memory.rules != *rules || *memory == ContextMemory::default() {
+        if *memory == ContextMemory::default() {
+            return;
+        }
+        if memory.rules != *rules {
+            // What the other rules changed stays as they left it: say so, for a person to see.
+            tracing::warn!(
+                kept = %memory.rules,
+                rules = %rules,
+                "state/memory is of another rules file: not used; values its contexts set stay as they are"
+            );
             return;
         }
         for (target, value) in &memory.original_values {

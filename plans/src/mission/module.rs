@@ -366,6 +366,13 @@ impl Mission {
             keys: Vec::new(),
         };
         let memory = self.memory.get();
+        if memory.plan != run.plan.name() && !memory.marking.is_empty() {
+            tracing::warn!(
+                kept = %memory.plan,
+                plan = %run.plan.name(),
+                "state/memory is of another plan: not used; the plan starts over"
+            );
+        }
         if memory.plan == run.plan.name() && !memory.marking.is_empty() {
             match run.resume(&memory) {
                 Ok(()) => tracing::info!(
