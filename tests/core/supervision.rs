@@ -184,6 +184,24 @@ async fn beyond_the_intensity_stop_agent_ends_the_run_naming_the_module() {
     );
 }
 
+/// A module stopped while its restart waits out a backoff is summed up as `failed` (what it
+/// last did), not `restarting` (a restart that will not come).
+#[tokio::test(start_paused = true)]
+async fn a_module_stopped_while_its_restart_waits_is_summed_up_as_failed() {
+    let agent = start(
+        r#"Agent(name: "r1",
+            supervision: (max_restarts: 10, within_s: 60.0,
+                          backoff: (min_ms: 60000, max_ms: 60000, jitter: 0.0)),
+            modules: [(name: "laser", type: "test.faulty", values: {"params/mode": "init"})])"#,
+    )
+    .await;
+    advance(100).await;
+    assert_eq!(text(&agent, "laser/stats/status").await, status::RESTARTING);
+    let summary = agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    let laser = summary.module("laser").unwrap();
+    assert_eq!((laser.status.as_str(), laser.failures), (status::FAILED, 1));
+}
+
 #[tokio::test(start_paused = true)]
 async fn beyond_the_intensity_disable_module_keeps_the_agent_running() {
     let agent = start(&format!(

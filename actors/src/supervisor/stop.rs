@@ -48,9 +48,14 @@ impl SupervisorState {
 
     pub(super) async fn stop_all(&mut self, timeout: Option<Duration>) {
         self.stopping = true;
-        for slot in &mut self.slots {
+        for i in 0..self.slots.len() {
+            let slot = &mut self.slots[i];
             if slot.actor.is_none() && slot.state == SlotState::Waiting {
                 slot.state = SlotState::Stopped;
+                // Its last word was a failure, and the restart it waited for will not come:
+                // the summary says `failed`, not `restarting`.
+                self.set_stat(i, "stats/status", crate::status::FAILED.to_string())
+                    .await;
             }
         }
         let order: Vec<usize> = (0..self.slots.len()).rev().collect();
