@@ -273,6 +273,21 @@ fn run_for(config: &std::path::Path, duration: &str) -> (std::process::Output, S
     (out, stdout)
 }
 
+/// `petrel run CONFIG --no-remote ARGS` with warnings logged, in the config's directory (which
+/// holds its runtime records too); its exit code and standard error.
+fn run_warning(config: &std::path::Path, args: &[&str]) -> (Option<i32>, String) {
+    let dir = config.parent().unwrap();
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", config.to_str().unwrap(), "--no-remote"])
+            .args(args)
+            .env("PETREL_RUNTIME_DIR", dir)
+            .env("RUST_LOG", "warn"),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code(), stderr)
+}
+
 /// A mission whose `state/memory` is of another plan (a snapshot whose plan file was renamed
 /// or replaced) starts the plan over, and says so rather than drop the memory in silence.
 #[test]
@@ -288,14 +303,8 @@ fn a_memory_of_another_plan_is_not_used_and_the_run_says_so() {
         })])"#,
     )
     .unwrap();
-    let out = crate::bounded::output_within_deadline(
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args(["run", config.to_str().unwrap(), "--no-remote"])
-            .env("PETREL_RUNTIME_DIR", dir.path())
-            .env("RUST_LOG", "warn"),
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "the plan ran anew: {stderr}");
+    let (code, stderr) = run_warning(&config, &[]);
+    assert_eq!(code, Some(0), "the plan ran anew: {stderr}");
     assert!(
         stderr.contains("state/memory is of another plan: not used; the plan starts over")
             && stderr.contains("kept=a")
@@ -324,20 +333,8 @@ fn a_context_memory_of_other_rules_is_not_used_and_the_run_says_so() {
         ])"#,
     )
     .unwrap();
-    let out = crate::bounded::output_within_deadline(
-        Command::new(env!("CARGO_BIN_EXE_petrel"))
-            .args([
-                "run",
-                config.to_str().unwrap(),
-                "--no-remote",
-                "--for",
-                "300ms",
-            ])
-            .env("PETREL_RUNTIME_DIR", dir.path())
-            .env("RUST_LOG", "warn"),
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let (code, stderr) = run_warning(&config, &["--for", "300ms"]);
+    assert_eq!(code, Some(0), "{stderr}");
     assert!(
         stderr.contains("state/memory is of another rules file: not used")
             && stderr.contains("kept=/elsewhere/old.rules.ron"),
