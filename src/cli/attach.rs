@@ -138,13 +138,12 @@ pub(crate) fn run(args: ConsoleArgs) -> ExitCode {
             },
         };
         let mut tick = tokio::time::interval(ROSTER_PERIOD);
-        let stop = stop_requested();
-        tokio::pin!(stop);
+        let mut interrupt = super::interrupt::Interrupt::new();
         loop {
             tokio::select! {
                 _ = tick.tick() => attached.update(&console, &finder).await,
                 _ = finder.changed() => attached.update(&console, &finder).await,
-                _ = &mut stop => break,
+                _ = interrupt.recv() => break,
             }
         }
         drop(finder);
@@ -152,15 +151,6 @@ pub(crate) fn run(args: ConsoleArgs) -> ExitCode {
         attached.close().await;
         ExitCode::SUCCESS
     })
-}
-
-/// Resolves on Ctrl-C or SIGTERM.
-async fn stop_requested() {
-    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
-    tokio::select! {
-        _ = tokio::signal::ctrl_c() => {}
-        _ = async { match term.as_mut() { Some(t) => { t.recv().await; } None => std::future::pending().await } } => {}
-    }
 }
 
 /// Where the agents to show are found.

@@ -1,5 +1,5 @@
-//! Ctrl-C (and SIGTERM, as `run` and `console` take it) for the commands that follow values
-//! until it (`echo`, `hz`, `events`, `top`): they end cleanly, exit code 0.
+//! Ctrl-C (and SIGTERM, as `run` takes it) for the commands that go on until it (`echo`, `hz`,
+//! `events`, `top`, `console`): they end cleanly, exit code 0.
 //!
 //! `tokio::signal::ctrl_c()` made anew at each wait of a loop hears only signals that come
 //! while that wait is polled: a Ctrl-C while the command printed or asked its agents (`top`

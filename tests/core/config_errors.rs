@@ -85,6 +85,22 @@ fn a_name_longer_than_an_address_can_carry_is_refused_and_shown_short() {
 }
 
 #[test]
+fn a_snapshot_clock_that_no_clock_reads_is_refused_at_its_field() {
+    for bad in ["-1.0", "1e300", "NaN"] {
+        let e = errors(&format!(
+            "Agent(name: \"r\",\n    clock_s: {bad},\n    modules: [])"
+        ));
+        assert_eq!(e.len(), 1, "{e:?}");
+        assert!(
+            e[0].starts_with("bad.ron:2:5: error: clock_s is ")
+                && e[0].ends_with("expected the seconds of a snapshot's clock, 0..=1e12"),
+            "{}",
+            e[0]
+        );
+    }
+}
+
+#[test]
 fn an_empty_or_cut_short_config_says_so() {
     assert_eq!(
         errors("\n   \n"),

@@ -25,6 +25,7 @@ use crate::module_types::ModuleRegistry;
 use crate::supervision::{GroupConfig, RestartPolicy, SupervisionConfig};
 use crate::team::{LinkTarget, TeamConfig};
 
+mod clock;
 mod error;
 mod overlay;
 mod record;

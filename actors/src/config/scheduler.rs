@@ -158,22 +158,6 @@ impl ConfigFile {
         )
     }
 
-    /// `clock_s` (a snapshot's clock), if given: seconds a clock can read.
-    pub(super) fn check_clock(&self) -> Vec<ConfigError> {
-        match self.config.clock_s {
-            Some(s) if !(s.is_finite() && (0.0..=crate::expr::MAX_CLOCK_S).contains(&s)) => {
-                vec![self.locate(
-                    "clock_s:",
-                    format!(
-                        "clock_s is {}; expected the seconds of a snapshot's clock, 0..=1e12",
-                        crate::short_number(s)
-                    ),
-                )]
-            }
-            _ => Vec::new(),
-        }
-    }
-
     /// A setting `field` of the agent's own thread, `value` if given: refused outside
     /// `low..=high` (`expected` says what the number is) or without such a thread (`does`
     /// says what the setting needs it for), where it is written.
