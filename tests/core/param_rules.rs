@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use petrel::actors::types::Path2;
-use petrel::actors::{AnyValue, BlackboardError, ConfigFile, DEFAULT_STOP_TIMEOUT};
+use petrel::actors::{AnyValue, BlackboardError, ConfigFile, FilePath, DEFAULT_STOP_TIMEOUT};
 
 use crate::support::{registry, start};
 
@@ -130,5 +130,57 @@ async fn a_value_that_does_not_fit_its_rule_is_refused_in_the_config_and_while_r
     bb.set_text("explorer/params/area", "[1.0, 1.0, 2.0, 2.0]")
         .await
         .unwrap();
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
+/// A file path set while the agent runs names a file that exists, or is refused and the old
+/// one stays: a typo in `petrel set .../params/rules` was taken in silence, and the manager's
+/// next restart (a crash) then failed on it again and again. A relative path is taken from
+/// the agent's working directory and kept absolute.
+#[tokio::test(start_paused = true)]
+async fn a_file_path_set_while_running_must_name_a_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let rules = dir.path().join("rules.ron");
+    std::fs::write(&rules, r#"Contexts(contexts: [])"#).unwrap();
+    let config = format!(
+        r#"Agent(name: "r1", modules: [(name: "contexts", type: "context.manager", values: {{"params/rules": {:?}}})])"#,
+        rules.display().to_string()
+    );
+    let agent = start(&config).await;
+    let bb = agent.blackboard();
+    let key = "contexts/params/rules";
+    let missing = dir.path().join("nope.ron");
+    for text in [
+        format!("{:?}", missing.display().to_string()),
+        "\"nope.ron\"".into(),
+    ] {
+        let refused = bb.set_text(key, &text).await.unwrap_err().to_string();
+        assert!(
+            refused.contains("nope.ron`: it does not exist"),
+            "{refused}"
+        );
+        assert!(refused.contains("expected the path of a file"), "{refused}");
+    }
+    let dir_refused = bb
+        .set_text(key, &format!("{:?}", dir.path().display().to_string()))
+        .await
+        .unwrap_err();
+    assert!(
+        dir_refused.to_string().contains("it is a directory"),
+        "{dir_refused}"
+    );
+    assert_eq!(bb.get::<FilePath>(key).await.unwrap().as_path(), rules);
+
+    // Integration tests run in the package's directory.
+    bb.set_text(key, "\"configs/contexts-demo.rules.ron\"")
+        .await
+        .unwrap();
+    let set = bb.get::<FilePath>(key).await.unwrap();
+    let expected = std::env::current_dir()
+        .unwrap()
+        .join("configs/contexts-demo.rules.ron");
+    assert_eq!(set.as_path(), expected);
+    // None at all is a value the manager reports itself, as in a config.
+    bb.set_text(key, "\"\"").await.unwrap();
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }

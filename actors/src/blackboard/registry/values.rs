@@ -8,6 +8,7 @@ use super::{Entry, Registry, MAX_QUEUE_CAPACITY};
 use crate::blackboard::error::BlackboardError;
 use crate::cell::Endpoint;
 use crate::ports::Handle;
+use crate::types::FilePath;
 use crate::value::{AnyValue, TypeInfo};
 
 impl Registry {
@@ -96,6 +97,10 @@ impl Registry {
         if self.entries[&key].decl.read_at_start {
             return Err(BlackboardError::ReadAtStart { key });
         }
+        let value = match self.entries[&key].decl.type_info.is::<FilePath>() {
+            true => live_file_path(&key, value)?,
+            false => value,
+        };
         self.set_from_ron(&key, value)
     }
 
@@ -262,5 +267,33 @@ impl Registry {
     pub(crate) fn input_capacity(entry: &Entry) -> Option<usize> {
         let own = entry.own_queue.as_ref()?;
         (own.capacity() != crate::queue::DEFAULT_CAPACITY).then(|| own.capacity())
+    }
+}
+
+/// A file path a person sets while the agent runs: made absolute against the agent's working
+/// directory (so a later reload or restart reads the same file), and refused unless it names a
+/// regular file. Without this a typo was taken in silence and found only when the module next
+/// read it: at a reload, or at a restart after a crash, which then failed again and again.
+/// An empty path (none) and values that are not text (refused by the type) pass unchanged.
+fn live_file_path(key: &str, value: ron::Value) -> Result<ron::Value, BlackboardError> {
+    let ron::Value::String(text) = &value else {
+        return Ok(value);
+    };
+    let path = FilePath::from(text.as_str());
+    if path.is_empty() {
+        return Ok(value);
+    }
+    let cwd = std::env::current_dir().unwrap_or_default();
+    let path = path.resolved_against(&cwd);
+    match crate::files::regular_file(path.as_path()) {
+        Ok(_) => Ok(ron::Value::String(path.to_string())),
+        Err(problem) => Err(BlackboardError::BadValue {
+            key: key.to_string(),
+            expected: "the path of a file",
+            reason: format!(
+                "`{path}`: {problem} (a relative path is taken from the agent's working directory, {})",
+                cwd.display()
+            ),
+        }),
     }
 }
