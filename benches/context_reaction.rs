@@ -6,6 +6,7 @@
 //! Like `property_wake`, it is driven from inside the runtime: module `a` (bench.ping) flips
 //! `a/out/ping` between 0 and 1; the rule follows it into `target/in/value`; `target` (an echo)
 //! answers into `a/in/pong`. One round trip = three wake-ups (a → contexts → target → a).
+//! `three_wakes_floor` makes the same three wake-ups with an echo where the manager is.
 
 mod common;
 
@@ -39,6 +40,13 @@ fn config(rules_path: &std::path::Path) -> String {
     )
 }
 
+/// `a` → `relay` → `target` → `a`: three echoes' hand-overs, as a context reaction makes.
+const THREE_WAKES: &str = r#"Agent(name: "bench", modules: [
+    (name: "a", type: "bench.ping", values: {"params/alternate": true}, links: {"in/pong": "target/out/value"}),
+    (name: "relay", type: "bench.echo", links: {"in/value": "a/out/ping"}),
+    (name: "target", type: "bench.echo", links: {"in/value": "relay/out/value"}),
+])"#;
+
 fn bench(c: &mut Criterion) {
     let rt = common::runtime();
     let mut group = c.benchmark_group("context_reaction");
@@ -53,6 +61,13 @@ fn bench(c: &mut Criterion) {
         });
         rt.block_on(rig.agent.stop(Duration::from_secs(1)));
     }
+    // The same three wake-ups with an echo in the manager's place: what a reaction costs
+    // before the manager's own step (its floor while the manager is a module of its own).
+    let three = rt.block_on(common::PingPong::start_with(THREE_WAKES));
+    group.bench_function("three_wakes_floor", |b| {
+        b.iter_custom(|iters| rt.block_on(three.round_trips(iters)))
+    });
+    rt.block_on(three.agent.stop(Duration::from_secs(1)));
     let ping_pong = rt.block_on(common::PingPong::start());
     group.bench_function("property_wake_baseline", |b| {
         b.iter_custom(|iters| rt.block_on(ping_pong.round_trips(iters)))
