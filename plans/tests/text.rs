@@ -239,6 +239,22 @@ fn execution_rules() {
         typo,
         "t.er:2:30: `*during* goot`: the plan has no action `goot` (nor `goot_...`); its actions: goto_A, goto_B"
     );
+    // Each rule applies to every occurrence it names: a net that rules would grow past a
+    // million transitions is refused at the rule that passes it (a thousand rules over a
+    // 20,000-step plan ran out of memory). 20,000 actions make 40,000 transitions, and each
+    // rule adds 4 per occurrence: the 13th passes.
+    let plan = (0..20_000)
+        .map(|i| format!("a_{i}"))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let rule = "*if* c *during* a *do* b; skip_action\n";
+    let refused = error(&plan, Some(&rule.repeat(20)));
+    assert!(
+        refused.starts_with("t.er:13:17: the net would pass 1000000 transitions with this rule (20000 occurrences of the actions it names, 4 transitions each, after 1000000 already)"),
+        "{refused}"
+    );
+    let twelve = compile(&plan, Some(&rule.repeat(12)));
+    assert_eq!(twelve.transitions().len(), 1_000_000);
 }
 
 #[test]
@@ -371,6 +387,25 @@ fn a_block_repeats_n_times() {
             && huge.contains("writes out 1000000 steps; a plan may have at most 100000"),
         "{huge}"
     );
+    // Written out, or in repeats that are each under the limit, a plan is counted whole: a
+    // 17-million-action plan ran the analysis out of memory.
+    let long = vec!["a"; 100_001].join("; ");
+    let refused = error(&long, None);
+    let column = 100_000 * 3 + 1;
+    assert!(
+        refused.starts_with(&format!("t.plan:1:{column}: the plan passes 100000 steps")),
+        "{refused}"
+    );
+    let repeats = vec!["{ a; b } * 1000"; 51].join("; ");
+    let refused = error(&repeats, None);
+    assert!(
+        refused.contains("the plan passes 100000 steps")
+            && refused.contains("split it into sub-plans"),
+        "{refused}"
+    );
+    // At the limit, it compiles.
+    let at_limit = compile(&vec!["a"; 100_000].join("; "), None);
+    assert_eq!(at_limit.transitions().len(), 200_000);
     assert_eq!(
         structure(&compile("{ { a } * 100 } * 100", None))
             .1

@@ -280,6 +280,29 @@ impl Net<'_> {
         }
     }
 
+    /// Refuses `rule` (of rules file `f`, `text`) if applying it would take the net past
+    /// [`MAX_TRANSITIONS`]: a rule applies to every occurrence of the actions it names, so a
+    /// thousand rules on an action of a 20,000-step plan wrote twenty million recoveries and ran
+    /// out of memory.
+    fn check_growth(&self, rule: &Rule, text: &str, f: &str) -> Result<(), PlanError> {
+        let matches = self
+            .occurrences
+            .iter()
+            .filter(|o| rule.matches(&o.name))
+            .count();
+        // The interrupt, the return, and each recovery action's start and end.
+        let each = 2 + 2 * rule.recovery.len();
+        let grown = self.raw.transitions.len() + matches.saturating_mul(each);
+        if grown <= MAX_TRANSITIONS {
+            return Ok(());
+        }
+        let message = format!(
+            "the net would pass {MAX_TRANSITIONS} transitions with this rule ({matches} occurrences of the actions it names, {each} transitions each, after {} already); a plan with its rules may have at most {MAX_TRANSITIONS} (name fewer actions, or split the plan into sub-plans)",
+            self.raw.transitions.len()
+        );
+        Err(syntax_error(text, f, rule.during_at, message))
+    }
+
     fn apply_rule(&mut self, occ: usize, rule: &Rule) {
         let (name, before, exec, after) = {
             let o = &self.occurrences[occ];
@@ -315,6 +338,10 @@ impl Net<'_> {
         self.sources.mark(first, last + 1, origin);
     }
 }
+
+/// The most transitions a text plan's net may have once its execution rules are applied:
+/// far above a 100,000-step plan's own net (about 200,000), low enough to be analysed.
+pub(crate) const MAX_TRANSITIONS: usize = 1_000_000;
 
 /// Compiles a text plan into a [`Plan`] with PNPgen's net structure (see the
 /// `text` module docs for the language and the choices made).
@@ -379,6 +406,9 @@ pub fn compile_text(
         net.arc(ArcEnd::Transition(t as u32), ArcEnd::Place(p as u32));
     }
     for rule in &parsed {
+        if let Some((text, f)) = rules {
+            net.check_growth(rule, text, f)?;
+        }
         let mut applied = false;
         for occ in 0..net.occurrences.len() {
             if rule.matches(&net.occurrences[occ].name) {

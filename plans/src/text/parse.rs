@@ -44,6 +44,8 @@ pub(crate) struct Parser<'a> {
     /// Blocks and conditionals open around the current item, at most [`MAX_DEPTH`] (the
     /// compiler recurses once per level).
     depth: usize,
+    /// Steps written so far, repeats written out: at most [`MAX_STEPS`].
+    written: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -52,7 +54,19 @@ impl<'a> Parser<'a> {
             lx: Lexer::new(src),
             file,
             depth: 0,
+            written: 0,
         }
+    }
+
+    /// Counts `more` steps written at byte `at`: a plan of more than [`MAX_STEPS`] is refused
+    /// where it passes the limit, before its net is built (a few million written-out actions
+    /// took gigabytes, and the analysis then ran out of memory).
+    fn count(&mut self, more: usize, at: usize) -> Result<(), PlanError> {
+        self.written = self.written.saturating_add(more);
+        if self.written > MAX_STEPS {
+            return self.err(at, format!("the plan passes {MAX_STEPS} steps (actions, labels and gotos, repeats written out) here; a plan may have at most {MAX_STEPS} (split it into sub-plans, or loop with a label and a goto)"));
+        }
+        Ok(())
     }
 
     /// Opens one more level at byte `at` (a `{` or a `<`); closed by `leave`.
@@ -136,6 +150,7 @@ impl<'a> Parser<'a> {
                         Tok::Word(w) => self.word(at, w)?,
                         _ => unreachable!("peeked a word, '<' or '{{'"),
                     };
+                    self.count(1, at)?;
                     self.push(&mut items, item, at)?;
                     more = self.eat(";")?;
                     continue;
@@ -171,10 +186,13 @@ impl<'a> Parser<'a> {
                         let body = branches.pop().unwrap_or_default();
                         match self.repeat()? {
                             Some((n, n_at)) => {
-                                let steps = steps(&body).saturating_mul(n as usize);
+                                let once = steps(&body);
+                                let steps = once.saturating_mul(n as usize);
                                 if steps > MAX_STEPS {
                                     return self.err(n_at, format!("'{{ ... }} * {n}' writes out {steps} steps; a plan may have at most {MAX_STEPS} (repeat less, or loop with a label and a goto)"));
                                 }
+                                // The body's steps were counted once as they were read.
+                                self.count(steps - once, n_at)?;
                                 Item::Block(repeated(body, n))
                             }
                             None => Item::Block(body),
