@@ -68,6 +68,11 @@ impl Markings {
         self.start.len()
     }
 
+    /// The words the keys take, together.
+    pub fn words(&self) -> usize {
+        self.words.len()
+    }
+
     pub fn get(&self, id: u32) -> &[u32] {
         let from = self.start[id as usize];
         let to = self
@@ -148,6 +153,10 @@ struct Decisions<'p> {
     never: Vec<u32>,
     /// Atoms answered in this run, in the order asked (atom = name * 3 + kind).
     path: Vec<(u32, bool)>,
+    /// Where each atom of the plan's names is in `path`, plus one (0: not asked in this run):
+    /// a step over a plan of thousands of parallel branches asks thousands of atoms, and a
+    /// search of `path` for each made one run quadratic.
+    asked: Vec<u32>,
     mode: Mode,
 }
 
@@ -173,6 +182,7 @@ impl<'p> Decisions<'p> {
                 never.extend((!can_fail).then_some(n * 3 + 2));
             }
         }
+        let names_count = names.len();
         let base = |name: &str| atom_base(&names, name);
         let conditions = plan.conditions().iter().map(|c| base(c)).collect();
         let executables = plan.executables().iter().map(|e| base(&e.name)).collect();
@@ -183,6 +193,7 @@ impl<'p> Decisions<'p> {
             executables,
             never,
             path: Vec::new(),
+            asked: vec![0; 3 * names_count],
             mode: Mode::Record,
         }
     }
@@ -196,12 +207,20 @@ impl<'p> Decisions<'p> {
         if self.never.contains(&atom) {
             return false;
         }
-        if let Some(&(_, v)) = self.path.iter().find(|(a, _)| *a == atom) {
+        let asked = match self.asked.get(atom as usize) {
+            Some(&at) => at.checked_sub(1).map(|i| self.path[i as usize]),
+            // A name the plan does not have (rare): looked for in the path.
+            None => self.path.iter().find(|(a, _)| *a == atom).copied(),
+        };
+        if let Some((_, v)) = asked {
             return v;
         }
         match self.mode {
             Mode::Record => {
                 self.path.push((atom, false));
+                if let Some(at) = self.asked.get_mut(atom as usize) {
+                    *at = self.path.len() as u32;
+                }
                 false
             }
             Mode::Only(a) => a == atom,
@@ -214,6 +233,24 @@ impl<'p> Decisions<'p> {
 /// of its own, beyond every name's.
 fn atom_base(names: &foldhash::HashMap<&str, u32>, name: &str) -> u32 {
     names.get(name).map_or(u32::MAX - 3, |n| n * 3)
+}
+
+impl Decisions<'_> {
+    /// Forgets the last atom of the path.
+    fn pop(&mut self) {
+        if let Some((atom, _)) = self.path.pop() {
+            if let Some(at) = self.asked.get_mut(atom as usize) {
+                *at = 0;
+            }
+        }
+    }
+
+    /// Forgets the whole path, for a run afresh.
+    fn clear(&mut self) {
+        while !self.path.is_empty() {
+            self.pop();
+        }
+    }
 }
 
 impl Environment for Decisions<'_> {
@@ -296,17 +333,20 @@ impl<'p> Stepper<'p> {
     }
 
     /// Calls `visit(successor key, transitions fired)` for every answer combination of the
-    /// atoms a step from `key` asks (successors may repeat).
-    pub fn expand(&mut self, key: &[u32], visit: &mut dyn FnMut(&[u32], &[usize])) {
-        self.env.path.clear();
+    /// atoms a step from `key` asks (successors may repeat), until `visit` says to stop
+    /// (returns false: the exploration's budget is spent).
+    pub fn expand(&mut self, key: &[u32], visit: &mut dyn FnMut(&[u32], &[usize]) -> bool) {
+        self.env.clear();
         self.env.mode = Mode::Record;
         loop {
-            self.run(key, visit);
+            if !self.run(key, visit) {
+                return;
+            }
             if self.env.path.len() > MAX_ATOMS {
                 break;
             }
             while self.env.path.last().is_some_and(|d| d.1) {
-                self.env.path.pop();
+                self.env.pop();
             }
             match self.env.path.last_mut() {
                 Some(last) => last.1 = true,
@@ -318,21 +358,23 @@ impl<'p> Stepper<'p> {
         atoms.sort_unstable();
         atoms.dedup();
         for a in atoms {
-            self.env.path.clear();
+            self.env.clear();
             self.env.mode = Mode::Only(a);
-            self.run(key, visit);
+            if !self.run(key, visit) {
+                return;
+            }
         }
-        self.env.path.clear();
+        self.env.clear();
         self.env.mode = Mode::All;
         self.run(key, visit);
     }
 
-    fn run(&mut self, key: &[u32], visit: &mut dyn FnMut(&[u32], &[usize])) {
+    fn run(&mut self, key: &[u32], visit: &mut dyn FnMut(&[u32], &[usize]) -> bool) -> bool {
         self.state.decode(key);
         step_with(self.plan, &mut self.state, &mut self.env, &mut self.report);
         self.next.clear();
         self.state.encode(&mut self.next);
-        visit(&self.next, &self.report.fired);
+        visit(&self.next, &self.report.fired)
     }
 }
 
@@ -350,11 +392,28 @@ pub(super) struct Explored {
     pub fired: Vec<bool>,
     /// Whether the budget stopped the exploration.
     pub budget_hit: bool,
+    /// Whether it was the markings' memory ([`MAX_MARKING_WORDS`]) rather than their number.
+    pub memory_hit: bool,
 }
 
-/// Explores `plan` breadth-first, interning at most `max_states` markings; stops at the first
-/// marking beyond.
+/// The most words (4 bytes each) the kept markings may take together: 256 MiB. The number of
+/// markings alone did not bound a check's memory: a marking of a plan of 1,000 parallel
+/// branches holds a token per branch, and 500,000 of them took 4 GB.
+pub(super) const MAX_MARKING_WORDS: usize = 64 << 20;
+
+/// Explores `plan` breadth-first, interning at most `max_states` markings, together at most
+/// [`MAX_MARKING_WORDS`] long; stops at the first marking beyond.
 pub(super) fn explore(plan: &Plan, outcomes: &Outcomes, max_states: usize) -> Explored {
+    explore_within(plan, outcomes, max_states, MAX_MARKING_WORDS)
+}
+
+/// [`explore`] with the markings' words at most `max_words`.
+fn explore_within(
+    plan: &Plan,
+    outcomes: &Outcomes,
+    max_states: usize,
+    max_words: usize,
+) -> Explored {
     let mut stepper = Stepper::new(plan, outcomes);
     // A plan usually reaches about as many markings as it has places (a sequence of actions:
     // two places and two markings each); room for that many, within the budget, spares the
@@ -369,6 +428,7 @@ pub(super) fn explore(plan: &Plan, outcomes: &Outcomes, max_states: usize) -> Ex
         parent,
         fired: vec![false; plan.transitions().len()],
         budget_hit: false,
+        memory_hit: false,
     };
     ex.markings.add(stepper.initial());
     ex.graph.add_node(());
@@ -385,6 +445,11 @@ pub(super) fn explore(plan: &Plan, outcomes: &Outcomes, max_states: usize) -> Ex
                 fired.iter().for_each(|&t| ex.fired[t] = true);
                 let n = match ex.markings.find(next) {
                     Some(n) => n,
+                    None if ex.markings.words() + next.len() > max_words => {
+                        ex.budget_hit = true;
+                        ex.memory_hit = true;
+                        return false;
+                    }
                     None if ex.markings.len() < max_states => {
                         ex.graph.add_node(());
                         ex.parent.push(id);
@@ -392,13 +457,18 @@ pub(super) fn explore(plan: &Plan, outcomes: &Outcomes, max_states: usize) -> Ex
                     }
                     None => {
                         ex.budget_hit = true;
-                        return;
+                        return false;
                     }
                 };
-                if n != id && !succ.contains(&n) {
+                if n != id {
                     succ.push(n);
                 }
+                true
             });
+            // Deduplicated once: a marking of a choice among thousands of branches has
+            // thousands of successors, and a search of the list for each was quadratic.
+            succ.sort_unstable();
+            succ.dedup();
             for &n in &succ {
                 ex.graph
                     .add_edge(NodeIndex::new(id as usize), NodeIndex::new(n as usize), ());
@@ -433,8 +503,61 @@ pub(super) fn witness(plan: &Plan, outcomes: &Outcomes, ex: &Explored, to: u32) 
                 if found.is_empty() && next == target {
                     found = fired.to_vec();
                 }
+                found.is_empty()
             });
             found
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The markings' memory bounds a check as their number does: a marking of a wide parallel
+    /// plan holds a token per branch.
+    #[test]
+    fn the_markings_memory_stops_the_exploration_and_says_so() {
+        let branches: Vec<String> = (0..12).map(|i| format!("{{ a{i} }}")).collect();
+        let plan = crate::compile_text(&branches.join(" || "), "t.plan", "t", None).unwrap();
+        let whole = explore_within(&plan, &Outcomes::new(), 1_000_000, usize::MAX);
+        assert!(!whole.budget_hit && !whole.memory_hit);
+        let words = whole.markings.words();
+        let cut = explore_within(&plan, &Outcomes::new(), 1_000_000, words / 4);
+        assert!(cut.budget_hit && cut.memory_hit);
+        assert!(cut.markings.words() <= words / 4);
+        assert!(cut.markings.len() < whole.markings.len());
+        // A spent budget stops a marking's expansion at once: a step of a plan of 100,000
+        // branches asks each branch's atom, and running the step once per atom to the end
+        // took minutes after the budget was spent.
+        let mut stepper = Stepper::new(&plan, &Outcomes::new());
+        let initial = stepper.initial().to_vec();
+        // The first successors, up to a marking where every action runs (each asks whether
+        // it ended).
+        let (mut marking, mut answers) = (initial, 0);
+        for _ in 0..5 {
+            let mut first = None;
+            answers = 0;
+            stepper.expand(&marking, &mut |next, _| {
+                first.get_or_insert_with(|| next.to_vec());
+                answers += 1;
+                true
+            });
+            if answers > 12 {
+                break;
+            }
+            marking = first.unwrap();
+        }
+        let mut calls = 0;
+        // The budget spent at the second successor (the first taking each atom alone).
+        stepper.expand(&marking, &mut |_, _| {
+            calls += 1;
+            calls < 2
+        });
+        assert!(answers > 12, "{answers}");
+        assert_eq!(calls, 2);
+        // The number of markings, when it comes first, is not the memory.
+        let few = explore_within(&plan, &Outcomes::new(), 10, usize::MAX);
+        assert!(few.budget_hit && !few.memory_hit);
+    }
 }

@@ -282,7 +282,16 @@ fn behaviour(
     });
     r.states = ex.markings.len();
     r.complete = !ex.budget_hit && !unbounded;
-    if ex.budget_hit {
+    if ex.memory_hit {
+        r.warnings.push(finding(
+            "incomplete",
+            format!(
+                "stopped after exploring {} markings: they filled the {} MiB a check may keep (a plan with many parallel branches has many interleavings); the findings below may be partial",
+                ex.markings.len(),
+                (explore::MAX_MARKING_WORDS * 4) >> 20
+            ),
+        ));
+    } else if ex.budget_hit {
         r.warnings.push(finding(
             "incomplete",
             format!(
