@@ -40,6 +40,31 @@ struct ReaderEntry {
     acked: u64,
     signal: Option<Arc<Signal>>,
     dropped: Arc<Endpoint>,
+    lag: LagReport,
+}
+
+/// When a lagging reader's drops are logged: at most once a second, with the count since the
+/// last line. A reader that lags for good drops at every push, and a line per push flooded the
+/// log (thousands in seconds); `stats/dropped/...` counts every one.
+#[derive(Debug, Default)]
+struct LagReport {
+    warned_at: Option<Instant>,
+    unreported: u64,
+}
+
+impl LagReport {
+    const EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+    /// Notes `lost` items dropped at `now`; the number to log now, if a line is due.
+    fn note(&mut self, lost: u64, now: Instant) -> Option<u64> {
+        self.unreported += lost;
+        let due = (self.warned_at).is_none_or(|t| now.saturating_duration_since(t) >= Self::EVERY);
+        if !due {
+            return None;
+        }
+        self.warned_at = Some(now);
+        Some(std::mem::take(&mut self.unreported))
+    }
 }
 
 struct Inner {
@@ -161,8 +186,10 @@ impl QueueCore {
                     // Delivered but unacknowledged items can no longer be redelivered.
                     r.acked = r.acked.max(head);
                     if r.cursor < head {
-                        lagging.push((r.dropped.clone(), head - r.cursor));
+                        let lost = head - r.cursor;
                         r.cursor = head;
+                        let reported = r.lag.note(lost, stamp);
+                        lagging.push((r.dropped.clone(), lost, reported));
                     }
                 }
             }
@@ -172,10 +199,12 @@ impl QueueCore {
                 }
             }
         }
-        for (dropped, lost) in lagging {
+        for (dropped, lost, reported) in lagging {
             let total = *dropped.value().downcast_ref::<i64>().unwrap_or(&0) + lost as i64;
             dropped.write(Arc::new(total));
-            tracing::warn!(queue = %self.key, reader = %dropped.key, lost, total, "queue reader lagged: oldest items dropped");
+            if let Some(lost) = reported {
+                tracing::warn!(queue = %self.key, reader = %dropped.key, lost, total, "queue reader lagged: oldest items dropped (logged at most once a second; stats/dropped counts every one)");
+            }
         }
     }
 
@@ -189,6 +218,7 @@ impl QueueCore {
             acked: cursor,
             signal,
             dropped,
+            lag: LagReport::default(),
         });
     }
 

@@ -63,6 +63,21 @@ fn lagging_reader_loses_oldest_items_and_counts_them() {
     assert_eq!(*r.dropped.value().downcast_ref::<i64>().unwrap(), 7);
 }
 
+/// A reader that lags for good is logged once a second with the count since, not once per push.
+#[test]
+fn a_lagging_reader_is_logged_at_most_once_a_second() {
+    let start = Instant::now();
+    let at = |ms: u64| start + std::time::Duration::from_millis(ms);
+    let mut lag = LagReport::default();
+    assert_eq!(lag.note(1, at(0)), Some(1));
+    for ms in 1..1000 {
+        assert_eq!(lag.note(2, at(ms)), None, "{ms} ms");
+    }
+    assert_eq!(lag.note(1, at(1000)), Some(2 * 999 + 1));
+    assert_eq!(lag.note(1, at(1500)), None);
+    assert_eq!(lag.note(3, at(2000)), Some(4));
+}
+
 #[test]
 fn subscribed_reader_is_signalled_and_retarget_starts_at_tail() {
     let q1 = QueueCore::new("p/out/a", TypeInfo::of::<i64>(), 8);
