@@ -111,3 +111,34 @@ async fn runtime_links_are_checked_like_config_links() {
     );
     agent.stop(petrel::actors::DEFAULT_STOP_TIMEOUT).await;
 }
+
+/// The cycle a looping module is reported through is worked out from the links as they are
+/// now: a module on none gets none (answered from the modules on cycles, kept until the links
+/// change), and linking or unlinking changes the answer.
+#[test]
+fn the_feedback_cycle_follows_the_links_as_they_change() {
+    let file = crate::support::config(
+        r#"Agent(name: "r1", modules: [
+            (name: "a", type: "test.echo", links: {"in/value": "b/out/value"}),
+            (name: "b", type: "test.echo", links: {"in/value": "a/out/value"}),
+            (name: "c", type: "test.echo", links: {"in/value": "b/out/value"}),
+        ])"#,
+    );
+    let mut built = file.build(&crate::support::registry()).unwrap();
+    let through_a = vec![
+        "a/out/value → b/in/value".to_string(),
+        "b/out/value → a/in/value".to_string(),
+    ];
+    assert_eq!(built.feedback_cycle("a"), Some(through_a.clone()));
+    assert_eq!(built.feedback_cycle("c"), None);
+    built.unlink("a/in/value").unwrap();
+    assert_eq!(built.feedback_cycle("a"), None);
+    assert_eq!(built.feedback_cycle("b"), None);
+    built.link("c/in/value", "c/out/value").unwrap();
+    assert_eq!(
+        built.feedback_cycle("c"),
+        Some(vec!["c/out/value → c/in/value".to_string()])
+    );
+    built.link("a/in/value", "b/out/value").unwrap();
+    assert_eq!(built.feedback_cycle("a"), Some(through_a));
+}

@@ -15,6 +15,9 @@ use petgraph::Direction;
 pub(crate) struct LinkGraph {
     graph: StableDiGraph<String, ()>,
     nodes: HashMap<String, NodeIndex>,
+    /// Counts the changes, for what is worked out from the links and kept (see
+    /// `Registry::feedback_cycle`).
+    generation: u64,
 }
 
 impl LinkGraph {
@@ -55,8 +58,14 @@ impl LinkGraph {
         }
     }
 
+    /// Counts the changes made so far.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
     /// Links `from` to `to`, or unlinks it with `None`. The caller has ruled out cycles.
     pub fn set(&mut self, from: &str, to: Option<&str>) {
+        self.generation += 1;
         if let Some(&f) = self.nodes.get(from) {
             let old: Vec<_> = self
                 .graph
@@ -109,6 +118,7 @@ impl LinkGraph {
 
     /// Drops every property under `prefix` and its links.
     pub fn remove_prefix(&mut self, prefix: &str) {
+        self.generation += 1;
         let gone: Vec<String> = self
             .nodes
             .keys()

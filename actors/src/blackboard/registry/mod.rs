@@ -76,6 +76,9 @@ pub struct Registry {
     /// Counts the modules added and removed, shared with the [`Blackboard`](crate::Blackboard)
     /// handle: a step that settles the agent looks the modules up again when it moved.
     modules_changed: Arc<AtomicU64>,
+    /// The modules on a cycle of links, with the link and module generations they were worked
+    /// out at (see [`feedback_cycle`](Self::feedback_cycle)).
+    cyclic: parking_lot::Mutex<Option<module_graph::Cyclic>>,
 }
 
 /// The most items an output queue may be configured to hold (items are shared, so this
@@ -98,6 +101,7 @@ impl Registry {
             tapped_outboxes: Default::default(),
             tap_watches: Vec::new(),
             modules_changed: Arc::default(),
+            cyclic: Default::default(),
         }
     }
 

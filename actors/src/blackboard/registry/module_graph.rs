@@ -1,7 +1,7 @@
 //! An agent's modules and the links between them as a graph, for pictures (`petrel graph`).
 
 use petgraph::graph::{DiGraph, NodeIndex};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use super::Registry;
 use crate::url::PropertyUrl;
@@ -42,7 +42,45 @@ pub struct GraphLink {
 /// Modules as nodes, links as edges from the module read to the module reading.
 pub type ModuleGraph = DiGraph<GraphNode, GraphLink>;
 
+/// The modules on a cycle of links, as of a generation of the links and of the modules.
+pub(crate) struct Cyclic {
+    links: u64,
+    modules: u64,
+    names: HashSet<String>,
+}
+
 impl Registry {
+    /// Whether some cycle of links passes through `module`.
+    fn on_a_cycle(&self, module: &str) -> bool {
+        let links = self.links.generation();
+        let modules = self
+            .modules_changed
+            .load(std::sync::atomic::Ordering::Acquire);
+        let mut cyclic = self.cyclic.lock();
+        let current = cyclic
+            .as_ref()
+            .is_some_and(|c| c.links == links && c.modules == modules);
+        if !current {
+            let graph = self.module_graph();
+            let mut names = HashSet::new();
+            for component in petgraph::algo::tarjan_scc(&graph) {
+                let looped =
+                    component.len() > 1 || component.iter().any(|&n| graph.contains_edge(n, n));
+                for n in component.into_iter().filter(|_| looped) {
+                    if let GraphNode::Module { name, .. } = &graph[n] {
+                        names.insert(name.clone());
+                    }
+                }
+            }
+            *cyclic = Some(Cyclic {
+                links,
+                modules,
+                names,
+            });
+        }
+        cyclic.as_ref().is_some_and(|c| c.names.contains(module))
+    }
+
     /// The agent's modules and links as a graph (the runtime's own `_...` modules left out).
     pub fn module_graph(&self) -> ModuleGraph {
         let mut graph = ModuleGraph::new();
@@ -97,7 +135,16 @@ impl Registry {
 
     /// The shortest cycle of links that leads from `module`'s outputs back to its inputs, as
     /// `writer/out/x → reader/in/y` steps, or `None` when no link cycle passes through it.
+    ///
+    /// Asked by every module whose wake-ups chain further than the loop watch allows: in a
+    /// chain of thousands of linked modules, every one past the limit. The modules on some
+    /// cycle are worked out once per change of the links or modules (strongly connected
+    /// components), so a module on none is answered without building the graph; building it
+    /// per question made the start of a 2,000-module chain take seconds.
     pub fn feedback_cycle(&self, module: &str) -> Option<Vec<String>> {
+        if !self.on_a_cycle(module) {
+            return None;
+        }
         let graph = self.module_graph();
         let start = graph
             .node_indices()
