@@ -274,9 +274,10 @@ impl Ports {
             ));
             return;
         }
+        // Shown short: numbers as people read them (1e308, not 309 digits), long lists cut.
         let refuses = move |value: &AnyValue| {
-            let value = value.downcast_ref::<T>()?;
-            (!accepts(value)).then(|| format!("{value:?}"))
+            let typed = value.downcast_ref::<T>()?;
+            (!accepts(typed)).then(|| TypeInfo::of::<T>().short(value))
         };
         if let Some(default) = &decl.default {
             if refuses(default).is_some() {

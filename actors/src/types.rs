@@ -116,6 +116,19 @@ impl From<&str> for FilePath {
     }
 }
 
+/// A coordinate shown to the millimetre (`1.250`), or in exponent form when that would take
+/// more than a dozen digits (`1.000e308`, where a value a check refuses would print 309).
+struct Milli(f64);
+
+impl std::fmt::Display for Milli {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0.abs() < 1e9 || !self.0.is_finite() {
+            true => write!(f, "{:.3}", self.0),
+            false => write!(f, "{:.3e}", self.0),
+        }
+    }
+}
+
 /// A planar pose (position and heading), an [`Isometry2`] written as `(x: 1.0, y: 2.0, theta: 0.5)`.
 #[derive(Clone, Copy, PartialEq, Default)]
 pub struct Pose2(pub Isometry2<f64>);
@@ -124,10 +137,10 @@ impl Debug for Pose2 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "Pose2(x: {:.3}, y: {:.3}, theta: {:.3})",
-            self.x(),
-            self.y(),
-            self.theta()
+            "Pose2(x: {}, y: {}, theta: {})",
+            Milli(self.x()),
+            Milli(self.y()),
+            Milli(self.theta())
         )
     }
 }
@@ -187,7 +200,7 @@ pub struct Point2(pub NaPoint2<f64>);
 
 impl Debug for Point2 {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Point2(x: {:.3}, y: {:.3})", self.0.x, self.0.y)
+        write!(f, "Point2(x: {}, y: {})", Milli(self.0.x), Milli(self.0.y))
     }
 }
 

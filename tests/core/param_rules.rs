@@ -116,6 +116,14 @@ async fn a_value_that_does_not_fit_its_rule_is_refused_in_the_config_and_while_r
             "{bad}: {errors}"
         );
     }
+    // A map's corner as a world's: within a thousand kilometres, shown short when refused.
+    let far = crate::support::refused(
+        r#"Agent(name: "r1", modules: [(name: "mapper", type: "nav.mapper", values: {"params/origin": (x: 1e308, y: 0.0)})])"#,
+    );
+    assert!(
+        far.contains("= Point2(x: 1.000e308, y: 0.000): expected `(x: .., y: ..)` in metres, each within -1e6..=1e6"),
+        "{far}"
+    );
     let agent = start(&config("[0.0, 0.0, 5.0, 5.0]")).await;
     let bb = agent.blackboard();
     let refused = bb

@@ -48,11 +48,19 @@ impl Module for MapperModule {
                 Point2::new(20.0, 20.0),
                 "extent of the map (x: width, y: height), m",
             ),
-            origin: ports.param(
-                "params/origin",
-                Point2::new(0.0, 0.0),
-                "world position of the map's lower-left corner",
-            ),
+            origin: {
+                let origin = ports.param(
+                    "params/origin",
+                    Point2::new(0.0, 0.0),
+                    "world position of the map's lower-left corner",
+                );
+                // As a world's: beyond, the cells' positions are lost in the rounding.
+                ports.accept_last(
+                    |o: &Point2| crate::sim::grid::origin_problem(o.0.x, o.0.y).is_none(),
+                    "`(x: .., y: ..)` in metres, each within -1e6..=1e6",
+                );
+                origin
+            },
             laser_mount: ports.param(
                 "params/laser_mount",
                 Pose2::default(),

@@ -30,6 +30,24 @@ pub struct Grid {
 /// digits).
 pub const RESOLUTION: std::ops::RangeInclusive<f64> = 0.001..=10.0;
 
+/// How far from (0, 0) a world or map's corner may lie, in metres on each axis: a thousand
+/// kilometres. An origin of 1e308 passed, and the start pose was then refused as outside a
+/// world `1e308..=1e308` wide (the cells' extent lost in the rounding).
+pub const ORIGIN: std::ops::RangeInclusive<f64> = -1e6..=1e6;
+
+/// Why `origin` (x, y) is no corner a world may have, if it is not.
+pub fn origin_problem(x: f64, y: f64) -> Option<String> {
+    let inside = |v: f64| ORIGIN.contains(&v);
+    (!inside(x) || !inside(y)).then(|| {
+        let n = petrel_actors::short_number;
+        format!(
+            "expected `x, y` in metres within -1e6..=1e6 (a thousand kilometres), got {}, {}",
+            n(x),
+            n(y)
+        )
+    })
+}
+
 impl Grid {
     /// An all-free grid of `width x height` cells of `resolution` metres, lower-left corner at
     /// `(origin_x, origin_y)`.

@@ -15,7 +15,7 @@
 //! ```
 //!
 //! * Header keys (all optional): `resolution` metres per cell (0.001 to 10, default 0.1), `origin` world
-//!   `x, y` of the grid's lower-left corner (default `0, 0`), `heading` start heading of the
+//!   `x, y` of the grid's lower-left corner (default `0, 0`, each within ±1e6 m), `heading` start heading of the
 //!   `R` robots in degrees (default 0 = +x); `dark` and `rough` (repeatable) a rectangle
 //!   `x0, y0, x1, y1` in metres of dark area or rough floor.
 //! * Header lines come before the grid, start with `# ` and contain at least one character
@@ -279,6 +279,9 @@ impl Header<'_> {
             }
             "origin" => {
                 let v = self.numbers(key, value, column, "`x, y` in metres", 2)?;
+                if let Some(problem) = super::grid::origin_problem(v[0], v[1]) {
+                    return Err(self.error(column, format!("`origin`: {problem}")));
+                }
                 *self.origin = (v[0], v[1]);
             }
             "heading" => *self.heading_deg = self.numbers(key, value, column, "degrees", 1)?[0],
@@ -350,6 +353,11 @@ mod tests {
             parse("# resolution: 1e300\n#\n").unwrap_err(),
             "w.txt:1:15: `resolution`: expected metres per cell in 0.001..=10, got 1e300"
         );
+        assert_eq!(
+            parse("# origin: 1e308, 0\n#\n").unwrap_err(),
+            "w.txt:1:11: `origin`: expected `x, y` in metres within -1e6..=1e6 (a thousand kilometres), got 1e308, 0"
+        );
+        assert!(parse("# origin: -1e6, 1e6\n#\n").is_ok());
         assert_eq!(
             parse("# resolution: fine\n#\n").unwrap_err(),
             "w.txt:1:15: `resolution`: expected a number of metres per cell, got \"fine\""

@@ -129,6 +129,10 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
     }
     let origin = raw.origin.ok_or_else(|| missing("origin"))?;
     let origin_value = match origin.value.as_slice() {
+        [x, y, _] if super::grid::origin_problem(*x, *y).is_some() => {
+            let problem = super::grid::origin_problem(*x, *y).unwrap_or_default();
+            return Err(at(&origin.referenced, format!("`origin`: {problem}")));
+        }
         [x, y, yaw] if [x, y, yaw].iter().all(|v| v.is_finite()) && *yaw == 0.0 => [*x, *y, 0.0],
         [_, _, yaw] if yaw.is_finite() => {
             return Err(at(
@@ -234,7 +238,28 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
 
 /// serde-saphyr's error as `file:line:column: message` (its own text ends in the position).
 fn yaml_error(path: &Path, e: &serde_saphyr::Error) -> WorldFileError {
-    let text = e.without_snippet().to_string();
+    let text = match e {
+        // The library names its own limits (`budget breached: Nodes { nodes: 250001 }`).
+        serde_saphyr::Error::Budget { breach, location } => {
+            let message = budget_breach(breach);
+            return match location.line() > 0 {
+                true => WorldFileError::at_column(
+                    path,
+                    location.line() as usize,
+                    location.column() as usize,
+                    message,
+                ),
+                false => WorldFileError::file(path, message),
+            };
+        }
+        _ => e.without_snippet().to_string(),
+    };
+    let text = match text.starts_with("recursion limit exceeded") {
+        true => {
+            format!("nested too deeply: a map file nests lists and keys at most {MAX_DEPTH} levels")
+        }
+        false => text,
+    };
     // The library's advice is to its programmers (an option of its parser), not to a person
     // writing a map file.
     let text = match text.split_once(", set DuplicateKeyPolicy") {
@@ -249,6 +274,24 @@ fn yaml_error(path: &Path, e: &serde_saphyr::Error) -> WorldFileError {
         }
         None => WorldFileError::file(path, text),
     }
+}
+
+/// What a map file went beyond, in words: the parser's limits on its size, which no map
+/// file comes near.
+fn budget_breach(breach: &serde_saphyr::budget::BudgetBreach) -> String {
+    use serde_saphyr::budget::BudgetBreach as B;
+    let limits = Budget::default();
+    let (what, limit) = match breach {
+        B::Nodes { .. } => ("values (keys, lists and numbers)", limits.max_nodes),
+        B::Events { .. } => ("parser events", limits.max_events),
+        B::Depth { .. } => ("levels of nesting", MAX_DEPTH),
+        B::Aliases { .. } => ("aliases (`*name`)", limits.max_aliases),
+        B::Anchors { .. } => ("anchors (`&name`)", limits.max_anchors),
+        B::Documents { .. } => ("documents (`---`)", limits.max_documents),
+        B::MergeKeys { .. } => ("merge keys (`<<`)", limits.max_merge_keys),
+        other => return format!("the file is too large for a map file ({other:?})"),
+    };
+    format!("the file has more than {limit} {what}, the most a map file may have")
 }
 
 #[cfg(test)]

@@ -110,7 +110,38 @@ fn deep_nesting_is_refused_not_overflowed() {
         "]".repeat(100_000)
     );
     let e = parse(&deep).unwrap_err();
-    assert!(e.starts_with("m.yaml"), "{e}");
+    assert!(e.starts_with("m.yaml:7:"), "{e}");
+    assert!(
+        e.contains("nested too deeply: a map file nests lists and keys at most 16 levels"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_origin_beyond_a_thousand_kilometres_is_refused() {
+    let far = YAML.replace("origin: [-1.0, 2.0, 0.0]", "origin: [-1.0, 2e6, 0.0]");
+    assert_eq!(
+        parse(&far).unwrap_err(),
+        "m.yaml:3:9: `origin`: expected `x, y` in metres within -1e6..=1e6 (a thousand kilometres), got -1, 2000000"
+    );
+}
+
+/// The parser's size limits are said as what the file went beyond, not as the library's
+/// debug form (`budget breached: Nodes { nodes: 250001 }`).
+#[test]
+fn a_file_beyond_the_parsers_limits_is_told_so_in_words() {
+    let victims = vec!["[1, 2]"; 90_000].join(", ");
+    let e = parse(&format!(
+        "{YAML}victims: [{victims}]
+"
+    ))
+    .unwrap_err();
+    assert!(e.starts_with("m.yaml:7:"), "{e}");
+    assert!(
+        e.ends_with("the file has more than 250000 values (keys, lists and numbers), the most a map file may have"),
+        "{e}"
+    );
+    assert!(!e.contains("budget"), "{e}");
 }
 
 #[test]
