@@ -96,10 +96,23 @@ fn link_mission_clocks(file: &mut ConfigFile) {
 /// The name of the context manager that an agent's `contexts:` field adds.
 const CONTEXTS_MODULE: &str = "contexts";
 
-/// Prints config errors, one per line, and returns the bad-input exit code.
+/// The most config errors printed: beyond, a count (a generated config with a typo in a
+/// module type repeated 100,000 times printed 11 MB).
+const MAX_SHOWN_ERRORS: usize = 200;
+
+/// Prints config errors, one per line (the first [`MAX_SHOWN_ERRORS`]), and returns the
+/// bad-input exit code.
 pub(crate) fn bad_input(errors: &ConfigErrors) -> ExitCode {
-    eprintln!("{errors}");
+    for e in errors.0.iter().take(MAX_SHOWN_ERRORS) {
+        eprintln!("{e}");
+    }
     let n = errors.0.len();
+    if n > MAX_SHOWN_ERRORS {
+        eprintln!(
+            "... and {} more errors, not shown (fix the first ones: often one mistake repeated)",
+            n - MAX_SHOWN_ERRORS
+        );
+    }
     eprintln!(
         "{n} error{} found; nothing was started",
         if n == 1 { "" } else { "s" }

@@ -44,6 +44,41 @@ fn check_lists_every_error_of_a_broken_config_and_exits_2() {
     assert!(!err.contains("panicked"), "{err}");
 }
 
+/// Thousands of errors (one mistake repeated by a generator) are counted, and the first 200
+/// shown located: 100,000 took a minute to locate and printed megabytes.
+#[test]
+fn check_shows_the_first_200_errors_and_counts_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("many.ron");
+    let values: Vec<String> = (0..1500).map(|i| format!("\"params/x{i}\": 1")).collect();
+    std::fs::write(
+        &path,
+        format!(
+            "Agent(name: \"r1\", modules: [\n(name: \"s\", type: \"demo.scale\", values: {{{}}})])",
+            values.join(", ")
+        ),
+    )
+    .unwrap();
+    let out = petrel(&["check", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 202, "{err}");
+    let p = path.display().to_string();
+    assert!(
+        lines[..200]
+            .iter()
+            .all(|l| l.starts_with(&format!("{p}:2:"))),
+        "{err}"
+    );
+    assert!(lines[0].contains("`params/x0`"), "{}", lines[0]);
+    assert_eq!(
+        lines[200],
+        "... and 1300 more errors, not shown (fix the first ones: often one mistake repeated)"
+    );
+    assert_eq!(lines[201], "1500 errors found; nothing was started");
+}
+
 #[test]
 fn check_validates_context_rules_with_the_config() {
     let ok = petrel(&["check", "configs/contexts-demo.ron"]);

@@ -159,6 +159,9 @@ pub(super) fn shown_name(name: &str) -> String {
     }
 }
 
+/// The most errors of one config located at their line and column (see `build`).
+const MAX_LOCATED_ERRORS: usize = 1000;
+
 const NAME_RULE: &str = "expected 1 to 128 letters, digits, `_`, `-` or `.` (a name is part of every property address, `petrel://agent/module/path`)";
 
 impl ConfigFile {
@@ -348,7 +351,14 @@ impl ConfigFile {
             );
         }
         for (m, path, e) in failed {
-            errors.push(self.error(&m.name, Some(path), describe(&m.name, path, e)));
+            let message = describe(&m.name, path, e);
+            // Locating an error searches the text; past a thousand (a generated config with
+            // one mistake repeated) the file alone is named, which the CLI does not show
+            // anyway, so that 100,000 bad values take a second, not a minute.
+            errors.push(match errors.len() < MAX_LOCATED_ERRORS {
+                true => self.error(&m.name, Some(path), message),
+                false => ConfigError::in_file(self.path(), message),
+            });
         }
         match errors.is_empty() {
             true => Ok(registry),
