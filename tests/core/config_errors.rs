@@ -489,3 +489,27 @@ fn a_value_beside_a_link_to_another_agent_is_the_input_until_the_first_sample() 
     .unwrap();
     assert!(file.build(&registry()).is_ok());
 }
+
+/// A value megabytes long is not echoed whole in its error: the message is cut at 2,000
+/// characters, saying how many more there were.
+#[test]
+fn a_huge_value_is_cut_short_in_its_error() {
+    let long = "a".repeat(100_000);
+    let errors = crate::support::refused(&format!(
+        r#"Agent(name: "r1", modules: [(name: "s", type: "demo.scale", values: {{"params/factor": "{long}"}})])"#
+    ));
+    assert!(errors.starts_with("bad.ron:1:"), "{errors}");
+    assert!(errors.contains("`params/factor` (f64)"), "{errors}");
+    assert!(
+        errors.chars().count() < 2_200,
+        "{} characters",
+        errors.len()
+    );
+    let tail = errors.rsplit('…').next().unwrap();
+    let more: usize = tail
+        .trim_start_matches(" (")
+        .trim_end_matches(" more characters)")
+        .parse()
+        .unwrap_or_else(|_| panic!("{tail}"));
+    assert!(more > 97_000, "{more}");
+}

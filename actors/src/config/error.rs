@@ -102,15 +102,31 @@ impl ConfigError {
     }
 
     fn show(&self, severity: &str) -> String {
+        let message = shown_message(&self.message);
         match self.line {
-            0 => format!("{}: {severity}: {}", self.file.display(), self.message),
+            0 => format!("{}: {severity}: {message}", self.file.display()),
             _ => format!(
-                "{}:{}:{}: {severity}: {}",
+                "{}:{}:{}: {severity}: {message}",
                 self.file.display(),
                 self.line,
                 self.column,
-                self.message
             ),
+        }
+    }
+}
+
+/// The most characters of a message shown: a value or name that is megabytes long (a 20 MB
+/// string parameter, a 100,000-digit number, a property path of 100,000 segments) was echoed
+/// whole in its error.
+const MAX_SHOWN_MESSAGE: usize = 2000;
+
+/// `message`, cut at [`MAX_SHOWN_MESSAGE`] characters with what was left out counted.
+fn shown_message(message: &str) -> std::borrow::Cow<'_, str> {
+    match message.char_indices().nth(MAX_SHOWN_MESSAGE) {
+        None => message.into(),
+        Some((cut, _)) => {
+            let left = message[cut..].chars().count();
+            format!("{}… ({left} more characters)", &message[..cut]).into()
         }
     }
 }
