@@ -1,6 +1,6 @@
 //! Building an engine from a rules file: every check `petrel check` reports.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::time::Duration;
 
 use petrel_actors::expr::{never_true, parse, properties, quoted, ExprId, ExprSet, Ty, TypeEnv};
@@ -31,7 +31,8 @@ impl Engine {
             changed: Vec::new(),
             candidates: Vec::new(),
         };
-        let mut names = Vec::new();
+        // A set: 100,000 contexts were compared with each other (a minute of `petrel check`).
+        let mut names = std::collections::HashSet::new();
         for rule in &loaded.rules.contexts {
             let err = |needle: Option<&str>, offset, message| {
                 loaded.error(&rule.name, needle, offset, message)
@@ -41,7 +42,7 @@ impl Engine {
                 errors.push(err(Some("name: \"\""), None, message.into()));
                 continue;
             }
-            if names.contains(&rule.name) {
+            if !names.insert(rule.name.as_str()) {
                 errors.push(err(
                     None,
                     None,
@@ -49,7 +50,6 @@ impl Engine {
                 ));
                 continue;
             }
-            names.push(rule.name.clone());
             // A dwell is a wait: past a day it is a typo (and u64::MAX overflowed the clock).
             if rule.min_dwell_ms > MAX_DWELL_MS {
                 errors.push(err(
@@ -252,6 +252,13 @@ impl Engine {
     fn never_hold(&mut self, loaded: &LoadedRules) -> Vec<RuleError> {
         self.exprs.evaluate(Instant::now());
         let mut errors = Vec::new();
+        // Rules that failed to build are not in `self.rules`: each is found by name (in a
+        // table: a search per rule made 100,000 contexts take a minute).
+        let mut written: HashMap<&str, &str> = HashMap::new();
+        for c in &loaded.rules.contexts {
+            // The first of a name given twice is the one built.
+            written.entry(c.name.as_str()).or_insert(c.when.as_str());
+        }
         for rule in &self.rules {
             let name = &rule.name;
             if self.exprs.bool(rule.when) == Some(false) {
@@ -260,14 +267,7 @@ impl Engine {
                 errors.push(loaded.error(name, None, None, message));
                 continue;
             }
-            // Rules that failed to build are not in `self.rules`: find this one by name.
-            let Some(when) = loaded
-                .rules
-                .contexts
-                .iter()
-                .find(|c| *c.name == **name)
-                .map(|c| &c.when)
-            else {
+            let Some(&when) = written.get(&**name) else {
                 continue;
             };
             let contradiction = parse(when).ok().and_then(|ast| never_true(when, &ast));
