@@ -269,14 +269,11 @@ impl ConfigFile {
                             .join(", ")
                     ),
                 };
-                errors.push(self.error(
-                    &m.name,
-                    Some(&m.type_name),
-                    format!(
-                        "module `{}`: unknown module type `{}`; {hint}",
-                        m.name, m.type_name
-                    ),
-                ));
+                let message = format!(
+                    "module `{}`: unknown module type `{}`; {hint}",
+                    m.name, m.type_name
+                );
+                errors.push(self.error_unless_many(&errors, &m.name, Some(&m.type_name), message));
                 continue;
             };
             if let Err(e) =
@@ -352,13 +349,7 @@ impl ConfigFile {
         }
         for (m, path, e) in failed {
             let message = describe(&m.name, path, e);
-            // Locating an error searches the text; past a thousand (a generated config with
-            // one mistake repeated) the file alone is named, which the CLI does not show
-            // anyway, so that 100,000 bad values take a second, not a minute.
-            errors.push(match errors.len() < MAX_LOCATED_ERRORS {
-                true => self.error(&m.name, Some(path), message),
-                false => ConfigError::in_file(self.path(), message),
-            });
+            errors.push(self.error_unless_many(&errors, &m.name, Some(path), message));
         }
         match errors.is_empty() {
             true => Ok(registry),
@@ -400,6 +391,22 @@ impl ConfigFile {
             }
         }
         ConfigError::in_file(self.path(), message)
+    }
+
+    /// [`error`](Self::error), or past [`MAX_LOCATED_ERRORS`] already found (`errors`: a
+    /// generated config with one mistake repeated) an error naming the file alone. Locating an
+    /// error searches the text, so 100,000 of them took a minute; the CLI shows the first 200.
+    fn error_unless_many(
+        &self,
+        errors: &[ConfigError],
+        module: &str,
+        needle: Option<&str>,
+        message: String,
+    ) -> ConfigError {
+        match errors.len() < MAX_LOCATED_ERRORS {
+            true => self.error(module, needle, message),
+            false => ConfigError::in_file(self.path(), message),
+        }
     }
 
     /// An error located at the first quoted `needle` after module `module`'s name, in the
