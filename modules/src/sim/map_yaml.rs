@@ -128,11 +128,12 @@ pub fn parse_map_yaml(path: &Path, text: &str) -> Result<MapYaml, WorldFileError
         ));
     }
     let origin = raw.origin.ok_or_else(|| missing("origin"))?;
-    let origin_value = match origin.value.as_slice() {
-        [x, y, _] if super::grid::origin_problem(*x, *y).is_some() => {
-            let problem = super::grid::origin_problem(*x, *y).unwrap_or_default();
+    if let [x, y, _] = origin.value.as_slice() {
+        if let Some(problem) = super::grid::origin_problem(*x, *y) {
             return Err(at(&origin.referenced, format!("`origin`: {problem}")));
         }
+    }
+    let origin_value = match origin.value.as_slice() {
         [x, y, yaw] if [x, y, yaw].iter().all(|v| v.is_finite()) && *yaw == 0.0 => [*x, *y, 0.0],
         [_, _, yaw] if yaw.is_finite() => {
             return Err(at(
