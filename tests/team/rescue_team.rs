@@ -350,3 +350,35 @@ fn a_missed_victim_is_shown_with_the_sightings_and_frontiers_near_it() {
         "{shown}"
     );
 }
+
+/// The shipped team plan against scripted worlds (`petrel plan simulate`'s simulator): how it
+/// ends.
+fn simulate_team_plan(script: &str) -> (String, petrel::plans::PlanStatus) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/rescue/team/team.plan");
+    let plan = petrel::plans::load_plan(&path, None)
+        .unwrap_or_else(|e| panic!("team.plan should load: {e}"))
+        .plan;
+    let script = petrel::plans::Script::parse(script, "script").unwrap();
+    script.check(&plan, "script").unwrap();
+    let mut out = Vec::new();
+    let status = petrel::plans::simulate(&plan, &script, 100, &mut out).unwrap();
+    (String::from_utf8(out).unwrap(), status)
+}
+
+#[test]
+fn the_team_plan_fails_when_every_robot_left_before_the_search_was_done() {
+    // Every robot's process died: each search failed and was let go, the floor not searched.
+    let all_dead = "fail robot_1#search 3\nfail robot_2#search 4\nfail robot_3#search 5";
+    let (trace, status) = simulate_team_plan(all_dead);
+    assert_eq!(status, petrel::plans::PlanStatus::Fail, "{trace}");
+    assert!(
+        trace.contains("say_every_robot_left_before_the_search_was_done"),
+        "{trace}"
+    );
+    // Two died, the third finished the search: the goal.
+    let one_left =
+        "fail robot_1#search 3\nfail robot_2#search 4\nfinish robot_3#search 9\ncond search_done 8 100";
+    let (trace, status) = simulate_team_plan(one_left);
+    assert_eq!(status, petrel::plans::PlanStatus::Goal, "{trace}");
+    assert!(trace.contains("say_the_floor_is_searched"), "{trace}");
+}
