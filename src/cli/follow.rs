@@ -183,19 +183,26 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
         let (opened_tx, mut opened) = tokio::sync::mpsc::channel(64);
         let (mut watches, mut departures) = (Vec::new(), Vec::new());
         let (left_tx, mut left_rx) = tokio::sync::mpsc::channel(64);
-        for (agent, client) in clients.iter() {
-            let info = client.info(agent).await?;
-            let (clients, agent_name, left_tx) = (clients.clone(), agent.clone(), left_tx.clone());
-            departures.push(tokio::spawn(async move {
-                let client = clients
-                    .iter()
-                    .find(|(a, _)| *a == agent_name)
-                    .map(|(_, c)| c);
-                if let Some(client) = client {
-                    let _ = left_tx
-                        .send(gone(client, &agent_name, recorded).await)
-                        .await;
+        let mut following = 0;
+        for (k, followed) in clients.iter().enumerate() {
+            let (agent, client) = (&followed.agent, &followed.client);
+            // One agent that ended or stopped answering meanwhile (killed as the tool
+            // started) leaves the others followed.
+            let info = match client.info(agent).await {
+                Ok(info) => info,
+                Err(e) if clients.len() > 1 => {
+                    let e = super::remote::left_or(e, agent, recorded);
+                    eprintln!("not following `{}`: {e}", followed.label);
+                    continue;
                 }
+                Err(e) => return Err(e),
+            };
+            following += 1;
+            let (clients, left_tx) = (clients.clone(), left_tx.clone());
+            departures.push(tokio::spawn(async move {
+                let followed = &clients[k];
+                let left = gone(&followed.client, &followed.agent, recorded).await;
+                let _ = left_tx.send(left).await;
             }));
             for p in &info.properties {
                 if p.kind != "queue output" || !is_event_queue(&p.key) {
@@ -204,8 +211,11 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
                 let url = petrel_actors::PropertyUrl::parse(&format!("petrel://{agent}/{}", p.key))
                     .map_err(|e| TeamError::Refused(e.to_string()))?;
                 let mut watch = client.watch(&url).await?;
-                let (tx, opened, source) =
-                    (tx.clone(), opened_tx.clone(), format!("{agent}/{}", p.key));
+                let (tx, opened, source) = (
+                    tx.clone(),
+                    opened_tx.clone(),
+                    format!("{}/{}", followed.label, p.key),
+                );
                 watches.push(tokio::spawn(async move {
                     while let Some(event) = watch.next().await {
                         let update = match event {
@@ -242,7 +252,12 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
             names.join(", ")
         );
         drop(tx);
-        let (mut printed, mut following) = (0, clients.len());
+        if following == 0 {
+            return Err(TeamError::Refused(
+                "no agent answered: nothing to follow".to_string(),
+            ));
+        }
+        let mut printed = 0;
         let mut result = Ok(());
         while count.is_none_or(|n| printed < n) {
             tokio::select! {

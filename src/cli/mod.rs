@@ -149,7 +149,7 @@ enum Command {
     Top {
         /// Only this agent.
         agent: Option<String>,
-        /// Print once and exit (for scripts).
+        /// Print once and exit (for scripts); STEPS/S is then the steps seen in one second.
         #[arg(long)]
         once: bool,
         #[command(flatten)]

@@ -198,9 +198,15 @@ where
 /// in the records of the runs on this machine (`recorded`) and none has it any more. A run
 /// that ended reads otherwise as an agent outside the team.
 pub(crate) fn left_or(e: TeamError, agent: &str, recorded: bool) -> TeamError {
-    match run_ended(&e, agent, recorded) {
-        true => TeamError::Refused(format!("agent `{agent}` left: its run ended")),
-        false => e,
+    if run_ended(&e, agent, recorded) {
+        return TeamError::Refused(format!("agent `{agent}` left: its run ended"));
+    }
+    match e {
+        // Its run is still here: the team is right, the process is not answering.
+        TeamError::NoAnswer { timeout, .. } if recorded => TeamError::Refused(format!(
+            "agent `{agent}` did not answer within {timeout:?}, though its run is still here: a stopped process (`kill -STOP`, a debugger), or a thread held by a step that does not return"
+        )),
+        e => e,
     }
 }
 

@@ -26,9 +26,27 @@ pub(crate) struct ModuleRow {
     pub failures: i64,
     /// Items its queue inputs lost by lagging (`stats/dropped/...`, summed).
     pub dropped: i64,
-    /// Steps per second seen between two refreshes (`top` without `--once`): a module whose
-    /// steps stopped (one that hangs) shows 0, where its last steps' mean interval said on.
+    /// Steps per second seen between two refreshes (or, with `--once`, two samples a second
+    /// apart): a module whose steps stopped (one that hangs) shows 0, where its last steps'
+    /// mean interval said on.
     pub seen_rate: Option<f64>,
+}
+
+/// The status shown for an agent that is still running but did not answer (a stopped
+/// process, a busy thread): its one row, beside the agents that did.
+const NO_ANSWER: &str = "no answer";
+
+impl ModuleRow {
+    /// The one row of an agent that did not answer.
+    fn silent(agent: &str) -> ModuleRow {
+        ModuleRow {
+            agent: agent.to_string(),
+            module: "-".into(),
+            type_name: "-".into(),
+            status: NO_ANSWER.into(),
+            ..ModuleRow::default()
+        }
+    }
 }
 
 /// Each row's [`ModuleRow::seen_rate`]: its steps since `previous` (the rows of the refresh
@@ -47,7 +65,8 @@ pub(crate) fn seen_rates(rows: &mut [ModuleRow], previous: &[ModuleRow], elapsed
     }
 }
 
-/// The rows of one agent from its module types and its `*/stats/**` values (key, JSON).
+/// The rows of one agent (shown as `agent`) from its module types and its `*/stats/**`
+/// values (key, JSON).
 pub(crate) fn rows(
     agent: &str,
     modules: &[(String, String)],
@@ -93,6 +112,12 @@ pub(crate) fn table(rows: &[ModuleRow]) -> String {
     let cells: Vec<[String; 11]> = rows
         .iter()
         .map(|r| {
+            if r.status == NO_ANSWER {
+                let mut cells = std::array::from_fn(|_| "-".to_string());
+                cells[0] = r.agent.clone();
+                cells[3] = r.status.clone();
+                return cells;
+            }
             // The mean interval is what the module's last steps had: of a module that no
             // longer runs (failed, stopped, disabled) it is no rate.
             let running = r.status == petrel_actors::status::RUNNING;
@@ -125,31 +150,77 @@ pub(crate) fn table(rows: &[ModuleRow]) -> String {
     )
 }
 
+/// An agent a follower shows: its name, how it is shown, and where to reach it.
+pub(crate) struct Target {
+    /// The agent's name, as its run answers to it.
+    pub agent: String,
+    /// The name shown: with its run's pid when another run here has an agent of that name
+    /// (two runs of one config), so their rows and events are told apart.
+    pub label: String,
+    reach: Reachable,
+}
+
+/// An agent followed: a [`Target`] and the client connected to its team.
+pub(crate) struct Followed {
+    /// The agent's name.
+    pub agent: String,
+    /// The name shown (see [`Target::label`]).
+    pub label: String,
+    /// The client reaching it.
+    pub client: Client,
+}
+
 /// The agents a tool looks at: `agent`, or every agent running here.
-pub(crate) fn targets(reach: &Reach, agent: Option<&str>) -> Result<Vec<Reachable>, ExitCode> {
+pub(crate) fn targets(reach: &Reach, agent: Option<&str>) -> Result<Vec<Target>, ExitCode> {
     match agent {
         Some(agent) => team_of(reach, agent).map(|team| {
-            vec![Reachable {
+            let reach = Reachable {
                 agent: agent.to_string(),
                 team: team.name.clone(),
                 connect: discovery::endpoints_of(&team),
+            };
+            vec![Target {
+                agent: agent.to_string(),
+                label: agent.to_string(),
+                reach,
             }]
         }),
         None if reach.via.is_some() => {
             eprintln!("error: with --via CONFIG, name the AGENT");
             Err(ExitCode::from(EXIT_BAD_INPUT))
         }
-        None => Ok(super::remote::runs(reach)?
-            .into_iter()
-            .flat_map(|r| r.agents)
-            .collect()),
+        None => Ok(labelled(super::remote::runs(reach)?)),
     }
 }
 
-/// Connects a client to each target's team and runs `work` with (agent, client) pairs.
-pub(crate) fn with_clients<F, Fut>(targets: &[Reachable], work: F) -> ExitCode
+/// Every agent of `runs`, an agent whose name another run also has labelled with its pid.
+fn labelled(runs: Vec<discovery::Record>) -> Vec<Target> {
+    let named = |name: &str| {
+        runs.iter()
+            .filter(|r| r.agents.iter().any(|a| a.agent == name))
+            .count()
+    };
+    let mut targets = Vec::new();
+    for run in &runs {
+        for reach in &run.agents {
+            let label = match named(&reach.agent) {
+                1 => reach.agent.clone(),
+                _ => format!("{} (pid {})", reach.agent, run.pid),
+            };
+            targets.push(Target {
+                agent: reach.agent.clone(),
+                label,
+                reach: reach.clone(),
+            });
+        }
+    }
+    targets
+}
+
+/// Connects a client to each target's team and runs `work` with the agents followed.
+pub(crate) fn with_clients<F, Fut>(targets: &[Target], work: F) -> ExitCode
 where
-    F: FnOnce(std::sync::Arc<Vec<(String, Client)>>) -> Fut,
+    F: FnOnce(std::sync::Arc<Vec<Followed>>) -> Fut,
     Fut: std::future::Future<Output = Result<(), TeamError>>,
 {
     let runtime = match super::runtime::start(Some(1)) {
@@ -159,16 +230,20 @@ where
     runtime.block_on(async {
         let mut clients = Vec::new();
         for target in targets {
-            match Client::connect(&target.tool_config()).await {
-                Ok(c) => clients.push((target.agent.clone(), c)),
+            match Client::connect(&target.reach.tool_config()).await {
+                Ok(client) => clients.push(Followed {
+                    agent: target.agent.clone(),
+                    label: target.label.clone(),
+                    client,
+                }),
                 Err(e) => return failed(e),
             }
         }
         let clients = std::sync::Arc::new(clients);
         let result = work(clients.clone()).await;
         if let Ok(clients) = std::sync::Arc::try_unwrap(clients) {
-            for (_, client) in clients {
-                client.close().await;
+            for followed in clients {
+                followed.client.close().await;
             }
         }
         match result {
@@ -191,14 +266,22 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
         let mut left = Vec::new();
         let mut previous: (Vec<ModuleRow>, tokio::time::Instant) =
             (Vec::new(), tokio::time::Instant::now());
+        if once {
+            // A rate from the steps seen, not from the last steps' mean interval: a module
+            // that hangs has a mean interval as good as ever.
+            let first = collect(&clients, &mut left, recorded).await?;
+            let at = tokio::time::Instant::now();
+            tick.tick().await;
+            tick.tick().await;
+            let mut rows = collect(&clients, &mut left, recorded).await?;
+            seen_rates(&mut rows, &first, at.elapsed().as_secs_f64());
+            say!("{}", table(&rows));
+            return Ok(());
+        }
         loop {
             let mut rows = collect(&clients, &mut left, recorded).await?;
             let now = tokio::time::Instant::now();
             seen_rates(&mut rows, &previous.0, (now - previous.1).as_secs_f64());
-            if once {
-                say!("{}", table(&rows));
-                return Ok(());
-            }
             // Clear the screen and go home, as `top` does.
             say!("\x1b[2J\x1b[H{}", table(&rows));
             if super::stdout::failed() {
@@ -213,23 +296,34 @@ pub(crate) fn run(reach: &Reach, agent: Option<&str>, once: bool) -> ExitCode {
     })
 }
 
-/// The rows of every agent of `clients` but those in `left`; an agent whose run ended (see
-/// `remote::run_ended`) joins `left`, and the others are still shown. An error once all left.
+/// The rows of every agent of `clients` but those in `left` (by label); an agent whose run
+/// ended (see `remote::run_ended`) joins `left`, one that runs but did not answer shows as
+/// such, and the others are still shown. An error once all left, or when none answered.
 async fn collect(
-    clients: &[(String, Client)],
+    clients: &[Followed],
     left: &mut Vec<String>,
     recorded: bool,
 ) -> Result<Vec<ModuleRow>, TeamError> {
     let mut all = Vec::new();
-    for (agent, client) in clients {
-        if left.contains(agent) {
+    let mut silent = None;
+    for followed in clients {
+        if left.contains(&followed.label) {
             continue;
         }
-        match agent_rows(agent, client).await {
+        match agent_rows(followed).await {
             Ok(rows) => all.extend(rows),
-            Err(e) if super::remote::run_ended(&e, agent, recorded) => left.push(agent.clone()),
+            Err(e) if super::remote::run_ended(&e, &followed.agent, recorded) => {
+                left.push(followed.label.clone())
+            }
+            Err(e @ (TeamError::NoAnswer { .. } | TeamError::Busy { .. })) => {
+                all.push(ModuleRow::silent(&followed.label));
+                silent.get_or_insert(super::remote::left_or(e, &followed.agent, recorded));
+            }
             Err(e) => return Err(e),
         }
+    }
+    if let Some(e) = silent.filter(|_| all.iter().all(|r| r.status == NO_ANSWER)) {
+        return Err(e);
     }
     if !clients.is_empty() && left.len() == clients.len() {
         return Err(TeamError::Refused(match left.as_slice() {
@@ -240,8 +334,9 @@ async fn collect(
     Ok(all)
 }
 
-/// The rows of one agent.
-async fn agent_rows(agent: &str, client: &Client) -> Result<Vec<ModuleRow>, TeamError> {
+/// The rows of one agent, shown under its label.
+async fn agent_rows(followed: &Followed) -> Result<Vec<ModuleRow>, TeamError> {
+    let (agent, client) = (followed.agent.as_str(), &followed.client);
     let info = client.info(agent).await?;
     let modules: Vec<(String, String)> = info
         .modules
@@ -254,7 +349,7 @@ async fn agent_rows(agent: &str, client: &Client) -> Result<Vec<ModuleRow>, Team
         .into_iter()
         .map(|(key, _, json)| (key, json))
         .collect();
-    Ok(rows(agent, &modules, &stats))
+    Ok(rows(&followed.label, &modules, &stats))
 }
 
 #[cfg(test)]
@@ -308,6 +403,67 @@ mod tests {
             cells[3..6],
             ["failed", "42", "-"],
             "no rate once it no longer runs"
+        );
+    }
+
+    #[test]
+    fn an_agent_that_did_not_answer_shows_one_row_saying_so() {
+        let shown = table(&[ModuleRow::silent("frozen")]);
+        let cells: Vec<&str> = shown
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split("  ")
+            .filter(|c| !c.is_empty())
+            .map(str::trim)
+            .collect();
+        assert_eq!(
+            cells,
+            [
+                "frozen",
+                "-",
+                "-",
+                "no answer",
+                "-",
+                "-",
+                "-",
+                "-",
+                "-",
+                "-",
+                "-"
+            ]
+        );
+    }
+
+    #[test]
+    fn an_agent_name_two_runs_share_is_shown_with_each_runs_pid() {
+        let run = |pid, agents: &[&str]| discovery::Record {
+            pid,
+            agents: agents
+                .iter()
+                .map(|a| Reachable {
+                    agent: a.to_string(),
+                    team: format!("t{pid}"),
+                    connect: Vec::new(),
+                })
+                .collect(),
+        };
+        let targets = labelled(vec![run(10, &["robot1", "base"]), run(11, &["robot1"])]);
+        let shown: Vec<(&str, &str)> = targets
+            .iter()
+            .map(|t| (t.agent.as_str(), t.label.as_str()))
+            .collect();
+        assert_eq!(
+            shown,
+            [
+                ("robot1", "robot1 (pid 10)"),
+                ("base", "base"),
+                ("robot1", "robot1 (pid 11)")
+            ]
+        );
+        assert_eq!(
+            targets[2].reach.team, "t11",
+            "each reached on its own run's team"
         );
     }
 

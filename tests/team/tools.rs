@@ -244,6 +244,45 @@ fn echo_follows_values_and_queue_items_and_hz_reports_a_rate() {
     assert!(err.contains("has no property `out/nope`"), "{err}");
 }
 
+/// Two runs of one config: `top` tells their agents apart by pid; one of them stopped
+/// (`kill -STOP`) shows as not answering while the other is still shown.
+#[test]
+fn top_labels_twin_agents_by_pid_and_shows_a_stopped_one_beside_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let (first, records) = agent_run(dir.path(), "twin");
+    let (second, _) = agent_run(dir.path(), "twin");
+    let label = |run: &Run| format!("twin (pid {})", run.pid());
+    let (code, out, err) = petrel(&records, &["top", "--once"]);
+    assert_eq!(code, 0, "{err}");
+    for run in [&first, &second] {
+        let rows = out.lines().filter(|l| l.starts_with(&label(run))).count();
+        assert_eq!(rows, 3, "three modules of {}: {out}", label(run));
+    }
+
+    let signal = |sig: &str| {
+        let status = Command::new("kill")
+            .args([sig, &second.pid().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+    };
+    signal("-STOP");
+    let (code, out, err) = petrel(&records, &["top", "--once"]);
+    signal("-CONT");
+    assert_eq!(code, 0, "the other agent is still shown: {err}");
+    let stopped: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with(&label(&second)))
+        .collect();
+    assert_eq!(stopped.len(), 1, "{out}");
+    assert!(stopped[0].contains(" no answer "), "{out}");
+    let running = out
+        .lines()
+        .filter(|l| l.starts_with(&label(&first)) && l.contains(" running "))
+        .count();
+    assert_eq!(running, 3, "{out}");
+}
+
 /// A follower of a run that ends (here killed) says so and exits 1, rather than wait without
 /// end for an agent that cannot come back; hz too while it reports every second.
 #[test]
