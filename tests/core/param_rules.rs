@@ -63,6 +63,19 @@ async fn a_running_agent_refuses_a_parameter_read_at_start_and_keeps_it() {
             .contains("`abc` is a bare word, which is no value (text takes double quotes"),
         "{bare}"
     );
+    // A path or words without their quotes: the quoting said too.
+    for unquoted in ["/no/such/rules.ron", "fast mode", "./rules.ron"] {
+        let error = bb
+            .set_text("goals/params/report_every_s", unquoted)
+            .await
+            .unwrap_err();
+        assert!(
+            error
+                .to_string()
+                .contains(&format!("text takes double quotes: `\"{unquoted}\"`")),
+            "{error}"
+        );
+    }
     let deep = format!("{}{}", "[".repeat(5000), "]".repeat(5000));
     let deep = bb
         .set_text("goals/params/report_every_s", &deep)

@@ -464,6 +464,11 @@ pub fn parse_set_text(ron_text: &str) -> Result<ron::Value, String> {
         ron::Error::ExceededRecursionLimit => {
             "nested too deeply (lists or structures within each other)".to_string()
         }
+        // Text without its quotes (a path, words): say how to write it.
+        _ if looks_like_unquoted_text(ron_text) => {
+            let text = ron_text.trim();
+            format!("{e}: text takes double quotes: `\"{text}\"`, in a shell '\"{text}\"'")
+        }
         _ => e.to_string(),
     })?;
     // RON reads a bare word as a unit value: text takes quotes.
@@ -474,4 +479,12 @@ pub fn parse_set_text(ron_text: &str) -> Result<ron::Value, String> {
         ));
     }
     Ok(value)
+}
+
+/// Whether `text` that is no RON starts as no RON value does (a quote, a bracket, a number,
+/// a word such as `true` or `Some`): a path or words meant as text.
+fn looks_like_unquoted_text(text: &str) -> bool {
+    text.trim_start().starts_with(|c: char| {
+        matches!(c, '/' | '.' | '~') || c.is_alphabetic() && !c.is_ascii_uppercase()
+    })
 }
