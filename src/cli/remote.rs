@@ -53,10 +53,36 @@ pub(crate) fn property(reach: &Reach, url: &str, request: Request) -> ExitCode {
             Request::Get => client.get_json(&url).await.map(|(type_name, json)| {
                 sayln!("{} ({type_name})", String::from_utf8_lossy(&json));
             }),
-            Request::Set(value) => client.set_ron(&url, value).await.map(|()| {
+            Request::Set(value) => {
+                client.set_ron(&url, value).await?;
                 sayln!("{url} = {value}");
-            }),
+                if let Some(manager) = context_holding(&client, &url).await {
+                    eprintln!(
+                        "note: a context of `{manager}` holds `{}/{}`: while it is active it may write it again, and when it ends the value from before it comes back, not this one",
+                        url.module(),
+                        url.path()
+                    );
+                }
+                Ok(())
+            }
         }
+    })
+}
+
+/// The context manager of `url`'s agent whose active contexts set `url` (one that will put
+/// back its own original when they end), from the managers' `state/memory`.
+async fn context_holding(client: &Client, url: &PropertyUrl) -> Option<String> {
+    let agent = url.agent()?;
+    let target = format!("{}/{}", url.module(), url.path());
+    let memories = client.get_matching(agent, "*/state/memory").await.ok()?;
+    memories.into_iter().find_map(|(key, _, json)| {
+        let memory: serde_json::Value = serde_json::from_slice(&json).ok()?;
+        let held = memory
+            .get("original_values")?
+            .as_array()?
+            .iter()
+            .any(|entry| entry.get(0).and_then(serde_json::Value::as_str) == Some(target.as_str()));
+        held.then(|| key.trim_end_matches("/state/memory").to_string())
     })
 }
 

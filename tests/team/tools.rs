@@ -283,6 +283,55 @@ fn top_labels_twin_agents_by_pid_and_shows_a_stopped_one_beside_the_others() {
     assert_eq!(running, 3, "{out}");
 }
 
+/// `set` of a value an active context holds is done, with a note that the context puts its own
+/// original back when it ends (it did so in silence); a value no context holds gets none.
+#[test]
+fn set_of_a_value_a_context_holds_says_the_context_will_put_its_original_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let records = dir.path().join("records");
+    let rules = dir.path().join("hold.rules.ron");
+    std::fs::write(
+        &rules,
+        r#"Contexts(contexts: [(name: "hold", when: "signal/out/value > -10", set: {"scale/params/factor": "3.0"})])"#,
+    )
+    .unwrap();
+    let config = dir.path().join("held.ron");
+    std::fs::write(
+        &config,
+        format!(
+            r#"Agent(name: "held", modules: [
+                (name: "signal", type: "demo.signal", values: {{"params/sample_ms": 5}}),
+                (name: "scale", type: "demo.scale", links: {{"in/value": "signal/out/value"}}),
+                (name: "contexts", type: "context.manager", values: {{"params/rules": {:?}}}),
+            ])"#,
+            rules.display().to_string()
+        ),
+    )
+    .unwrap();
+    let mut run = Run::start(&config, &records);
+    // Both lines, in whichever order they come.
+    let (mut reachable, mut active) = (false, false);
+    for line in run.log.by_ref() {
+        let line = line.expect("the log is text");
+        reachable |= line.contains("reachable by tools");
+        active |= line.contains("context activated");
+        if reachable && active {
+            break;
+        }
+    }
+    assert!(reachable && active, "the log ended first");
+    let (code, out, err) = petrel(&records, &["set", "held/scale/params/factor", "7.0"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out.trim(), "petrel://held/scale/params/factor = 7.0");
+    assert!(
+        err.contains("note: a context of `contexts` holds `scale/params/factor`"),
+        "{err}"
+    );
+    let (code, _, err) = petrel(&records, &["set", "held/signal/params/period_s", "3.0"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("note:"), "no context holds it: {err}");
+}
+
 /// A follower of a run that ends (here killed) says so and exits 1, rather than wait without
 /// end for an agent that cannot come back; hz too while it reports every second.
 #[test]
