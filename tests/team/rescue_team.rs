@@ -226,7 +226,18 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
         let tail = seen[seen.len().saturating_sub(15)..].join("\n");
         panic!("robot_1 never started its search; its log ends:\n{tail}");
     }
+    // robot_1 started again, as an operator would: it rejoins the team, but its search action
+    // failed while it was away, so its explorer stays off and it must be given no frontier.
+    let mut back = run(&robot_1, Stdio::piped());
+    let back_log = BufReader::new(back.stderr.take().unwrap());
+    let mut back_lines = back_log.lines().map_while(Result::ok);
+    let rejoined = back_lines.any(|l| l.contains("reachable by tools"));
+    let back_log = std::thread::spawn(move || back_lines.count());
     let out = wait(team);
+    let _ = back.kill();
+    let _ = back.wait();
+    let _ = back_log.join();
+    assert!(rejoined, "robot_1 started again");
     let stdout = String::from_utf8_lossy(&out.stdout);
     let team_log = team_log.join().unwrap();
     let stderr = String::from_utf8_lossy(&team_log);
@@ -248,6 +259,8 @@ fn a_robot_killed_mid_search_hands_its_area_on_and_the_team_still_reaches_the_go
             && stdout.contains("robot_3#search: 1 start, 1 end, 0 failures"),
         "{stdout}"
     );
+    // Back, robot_1 was given no frontier: given one, it sat still and was found stalled.
+    assert!(!stdout.contains("robot_1 stalled"), "{stdout}");
     assert_every_victim_found(&stdout, &stderr);
 }
 

@@ -24,13 +24,14 @@ pub struct TeamMember {
     _searched: Input<OccupancyGrid>,
     _pose: Input<Pose2>,
     _given_up: Input<Path2>,
+    _searching: Input<bool>,
     _target: Output<Vec<f64>>,
 }
 
 impl Module for TeamMember {
     const TYPE: &'static str = "nav.team_member";
     const DESCRIPTION: &'static str =
-        "One robot of a team's shared search (named in a nav.team_search's params/members): its map, searched floor, pose and given-up targets in, its frontier out.";
+        "One robot of a team's shared search (named in a nav.team_search's params/members): its map, searched floor, pose, given-up targets and whether it searches in, its frontier out.";
 
     fn declare(ports: &mut Ports) -> Self {
         TeamMember {
@@ -38,6 +39,7 @@ impl Module for TeamMember {
             _searched: ports.input("in/searched", OccupancyGrid::default(), "optional: the floor the robot's camera searched (its nav.searched's out/searched; periodic and lossy links are fine); with it, the team searches until every reachable cell was looked at, not only until the laser mapped it"),
             _pose: ports.input("in/pose", Pose2::default(), "the robot's estimated pose, world frame"),
             _given_up: ports.input("in/givenUp", Path2::default(), "targets the robot reached or could not reach (its explorer's out/givenUp): never assigned again"),
+            _searching: ports.input("in/searching", true, "optional: whether the robot searches now (link it to the robot's explorer's `enabled`); a robot that does not is given no frontier, such as one whose process was restarted after its search action had failed"),
             _target: ports.output("out/target", Vec::new(), "the frontier this robot is to explore, `[x, y]`; empty = none for now"),
         }
     }

@@ -60,6 +60,7 @@ struct Member {
     searched: PropertyHandle<OccupancyGrid>,
     pose: PropertyHandle<Pose2>,
     given_up: PropertyHandle<Path2>,
+    searching: PropertyHandle<bool>,
     target: RemoteValue,
     told: Vec<f64>,
 }
@@ -211,7 +212,10 @@ impl TeamSearch {
         let mut waiting = false;
         let mut benched = false;
         let keep = self.keep_radius.value();
-        for m in state.members.iter().filter(|m| present.contains(&m.name)) {
+        // A robot that is back but does not search (its search action failed while it was
+        // away) would hold a frontier nobody explores.
+        let searching = |m: &&Member| present.contains(&m.name) && *m.searching.get();
+        for m in state.members.iter().filter(searching) {
             // A target the robot gave up is never its claim again.
             if let Some(claim) = state.allocator.claim_of(&m.name) {
                 let near = |b: &Point2| (b.0 - claim.0).norm() <= state.params.blacklist_radius;
@@ -364,6 +368,7 @@ async fn bind_members(ctx: &Context, names: &[String]) -> anyhow::Result<Vec<Mem
             searched: bb.handle(&at("in/searched")).await?,
             pose: bb.handle(&at("in/pose")).await?,
             given_up: bb.handle(&at("in/givenUp")).await?,
+            searching: bb.handle(&at("in/searching")).await?,
             target,
             told: Vec::new(),
         });
