@@ -307,6 +307,7 @@ mod tests {
     fn record(pid: u32, agents: &[(&str, &str)]) -> Record {
         Record {
             pid,
+            started: None,
             agents: agents
                 .iter()
                 .map(|(agent, team)| Reachable {

@@ -98,6 +98,7 @@ mod tests {
     fn agents_are_one_row_each() {
         let records = [Record {
             pid: 42,
+            started: None,
             agents: vec![Reachable {
                 agent: "robot".into(),
                 team: "local.42.robot".into(),

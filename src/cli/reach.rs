@@ -48,6 +48,7 @@ pub(crate) async fn join_all(
     }
     let record = Record {
         pid: std::process::id(),
+        started: discovery::process_start(std::process::id()),
         agents: reachable,
     };
     let dir = discovery::directory();

@@ -439,6 +439,7 @@ mod tests {
     fn an_agent_name_two_runs_share_is_shown_with_each_runs_pid() {
         let run = |pid, agents: &[&str]| discovery::Record {
             pid,
+            started: None,
             agents: agents
                 .iter()
                 .map(|a| Reachable {

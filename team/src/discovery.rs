@@ -41,6 +41,11 @@ impl Reachable {
 pub struct Record {
     /// The process.
     pub pid: u32,
+    /// When the process started, in clock ticks since boot (see [`process_start`]): the
+    /// record of a process that was killed, whose pid another process took since, is told
+    /// apart by it. `None` where it is not known.
+    #[serde(default)]
+    pub started: Option<u64>,
     /// Its agents.
     pub agents: Vec<Reachable>,
 }
@@ -252,12 +257,28 @@ pub fn running(dir: &Path) -> Vec<Record> {
         let record = std::fs::read_to_string(&path)
             .ok()
             .and_then(|t| ron::from_str::<Record>(&t).ok());
-        if let Some(record) = record.filter(|r| r.pid == pid) {
-            records.push(record);
+        let Some(record) = record.filter(|r| r.pid == pid) else {
+            continue;
+        };
+        // The pid is another process's now: the run was killed and left its record.
+        if record.started.is_some() && record.started != process_start(pid) {
+            let _ = std::fs::remove_file(&path);
+            continue;
         }
+        records.push(record);
     }
     records.sort_by_key(|r| r.pid);
     records
+}
+
+/// When process `pid` started, in clock ticks since boot (`starttime` of `/proc/PID/stat`);
+/// `None` where there is no such file.
+pub fn process_start(pid: u32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The command's name (the 2nd field) may hold spaces and parentheses: count from the last
+    // `)`, after which the 3rd field comes; `starttime` is the 22nd.
+    let after_name = &stat[stat.rfind(')')? + 1..];
+    after_name.split_whitespace().nth(19)?.parse().ok()
 }
 
 /// Whether process `pid` exists (signal 0 checks without sending anything).
@@ -277,6 +298,7 @@ mod tests {
     fn record(pid: u32, agents: &[&str]) -> Record {
         Record {
             pid,
+            started: None,
             agents: agents
                 .iter()
                 .map(|a| Reachable {
@@ -286,6 +308,32 @@ mod tests {
                 })
                 .collect(),
         }
+    }
+
+    #[test]
+    fn a_record_whose_pid_another_process_took_is_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let me = std::process::id();
+        let started = process_start(me);
+        assert!(started.is_some(), "this process has a start time");
+        let write = |started| {
+            let record = Record {
+                started,
+                ..record(me, &["robot"])
+            };
+            let text = ron::to_string(&record).unwrap();
+            std::fs::write(dir.path().join(format!("{me}.ron")), text).unwrap();
+        };
+        write(started);
+        assert_eq!(running(dir.path()).len(), 1, "this very process");
+        write(started.map(|s| s + 1));
+        assert!(
+            running(dir.path()).is_empty(),
+            "another process of that pid"
+        );
+        assert!(!dir.path().join(format!("{me}.ron")).exists(), "removed");
+        write(None);
+        assert_eq!(running(dir.path()).len(), 1, "a record from before: kept");
     }
 
     #[test]
