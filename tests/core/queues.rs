@@ -46,6 +46,40 @@ async fn every_reader_sees_every_item_exactly_once_in_order() {
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
+/// A producer that starts numbering over (a new process: its `state/next` back at 0) is no
+/// source of duplicates: the consumer counts a restart and checks on from there.
+#[tokio::test(start_paused = true)]
+async fn numbers_that_go_back_are_a_producer_starting_over_not_duplicates() {
+    let agent = start(
+        r#"Agent(name: "r1", modules: [
+            (name: "producer", type: "demo.producer", values: {"params/period_ms": 10, "params/batch": 5}),
+            (name: "consumer", type: "demo.consumer", links: {"in/items": "producer/out/items"}),
+        ])"#,
+    )
+    .await;
+    let bb = agent.blackboard().clone();
+    advance(505).await;
+    bb.set("producer/enabled", false).await.unwrap();
+    advance(20).await;
+    bb.set("producer/state/next", 0_i64).await.unwrap();
+    bb.set("producer/enabled", true).await.unwrap();
+    advance(505).await;
+    bb.set("producer/enabled", false).await.unwrap();
+    advance(20).await;
+    let count = |p: &'static str| {
+        let bb = bb.clone();
+        async move { *bb.get::<i64>(&format!("consumer/{p}")).await.unwrap() }
+    };
+    assert_eq!(count("out/restarts").await, 1);
+    assert_eq!(count("out/duplicates").await, 0);
+    assert_eq!(count("out/gaps").await, 0);
+    assert_eq!(
+        count("state/last").await,
+        count("out/received").await - 250 - 1
+    );
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
 #[tokio::test(start_paused = true)]
 async fn a_lagging_reader_loses_the_oldest_items_and_the_loss_is_visible() {
     let agent = start(

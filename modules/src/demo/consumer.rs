@@ -4,7 +4,9 @@ use petrel_actors::{Context, Module, Output, Param, Ports, QueueReader, Range, S
 const NONE_YET: i64 = -1;
 
 /// `demo.consumer`: reads numbered items and checks that none is missing or repeated, from the
-/// first one it receives.
+/// first one it receives. A queue delivers an item to a reader once, so numbers that go back
+/// are not repeats but a producer that started over (a new process numbering from 0): counted
+/// in `out/restarts`, and checked on from there.
 pub struct Consumer {
     items: QueueReader<i64>,
     report_every: Param<i64>,
@@ -12,6 +14,7 @@ pub struct Consumer {
     received: Output<i64>,
     gaps: Output<i64>,
     duplicates: Output<i64>,
+    restarts: Output<i64>,
 }
 
 impl Module for Consumer {
@@ -38,7 +41,12 @@ impl Module for Consumer {
             duplicates: ports.output(
                 "out/duplicates",
                 0,
-                "items at or below the last number seen",
+                "items numbered as the one before (delivered twice)",
+            ),
+            restarts: ports.output(
+                "out/restarts",
+                0,
+                "times the numbers went back: the producer started over (a new process)",
             ),
         }
     }
@@ -52,10 +60,11 @@ impl Module for Consumer {
         if batch.is_empty() {
             return Ok(());
         }
-        let (mut last, mut gaps, mut dups) = (
+        let (mut last, mut gaps, mut dups, mut restarts) = (
             self.last.value(),
             self.gaps.value(),
             self.duplicates.value(),
+            self.restarts.value(),
         );
         for item in &batch {
             let n = *item.value;
@@ -64,8 +73,15 @@ impl Module for Consumer {
             if last == NONE_YET {
                 last = (n - 1 - self.items.dropped()).max(NONE_YET);
             }
-            if n <= last {
+            if n == last {
                 dups += 1;
+            } else if n < last {
+                restarts += 1;
+                petrel_actors::outln!(
+                    "[{}] item #{n} after #{last}: the producer started over; checking on from #{n}",
+                    ctx.module()
+                );
+                last = n;
             } else {
                 gaps += n - last - 1;
                 last = n;
@@ -76,6 +92,9 @@ impl Module for Consumer {
         self.last.set(last);
         self.gaps.set(gaps);
         self.duplicates.set(dups);
+        if restarts != self.restarts.value() {
+            self.restarts.set(restarts);
+        }
         self.received.set(received);
         let every = self.report_every.value();
         self.report(ctx, every > 0 && received / every != before / every);
@@ -94,8 +113,12 @@ impl Consumer {
         if now {
             let (received, last) = (self.received.value(), self.last.value());
             let (gaps, dups) = (self.gaps.value(), self.duplicates.value());
+            let restarts = match self.restarts.value() {
+                0 => String::new(),
+                n => format!(" (the producer started over {n} time(s))"),
+            };
             petrel_actors::outln!(
-                "[{}] received {received} items, last #{last}, gaps {gaps}, duplicates {dups}",
+                "[{}] received {received} items, last #{last}, gaps {gaps}, duplicates {dups}{restarts}",
                 ctx.module()
             );
         }
