@@ -234,6 +234,11 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
                 }));
             }
         }
+        if following == 0 {
+            return Err(TeamError::Refused(
+                "no agent answered: nothing to follow".to_string(),
+            ));
+        }
         // Say when every stream is open, so a person (or a test) knows nothing is missed from
         // then on.
         drop(opened_tx);
@@ -252,11 +257,6 @@ pub(crate) fn events(reach: &Reach, agent: Option<&str>, count: Option<u64>) -> 
             names.join(", ")
         );
         drop(tx);
-        if following == 0 {
-            return Err(TeamError::Refused(
-                "no agent answered: nothing to follow".to_string(),
-            ));
-        }
         let mut printed = 0;
         let mut result = Ok(());
         while count.is_none_or(|n| printed < n) {

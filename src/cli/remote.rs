@@ -222,7 +222,8 @@ where
 
 /// `e`, or, for an agent that no longer answers because its run ended, that: when it was found
 /// in the records of the runs on this machine (`recorded`) and none has it any more. A run
-/// that ended reads otherwise as an agent outside the team.
+/// that ended reads otherwise as an agent outside the team; one that is still recorded but
+/// did not answer is said to be stopped or held, not asked whether it is in the team.
 pub(crate) fn left_or(e: TeamError, agent: &str, recorded: bool) -> TeamError {
     if run_ended(&e, agent, recorded) {
         return TeamError::Refused(format!("agent `{agent}` left: its run ended"));
