@@ -125,6 +125,8 @@ mod tests {
             agent: "filter".into(),
             zid: "z".into(),
             team: "demo".into(),
+            pid: None,
+            host: None,
             modules: vec!["scale".into()],
             types: [("scale".to_string(), "demo.scale".to_string())].into(),
             properties: vec![

@@ -105,6 +105,12 @@ pub struct AgentInfo {
     pub zid: String,
     /// Its team.
     pub team: String,
+    /// Its process id (agents from before it was said leave it out).
+    #[serde(default)]
+    pub pid: Option<u32>,
+    /// Its machine's host name (agents from before it was said leave it out).
+    #[serde(default)]
+    pub host: Option<String>,
     /// Its modules, in declaration order.
     pub modules: Vec<String>,
     /// The type of each module.

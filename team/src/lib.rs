@@ -23,6 +23,7 @@ use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 use zenoh::sample::SampleKind;
 
+mod claim;
 mod client;
 pub mod discovery;
 mod export;
@@ -59,6 +60,16 @@ pub enum TeamError {
     /// A zenoh declaration failed.
     #[error("team transport: {0}")]
     Transport(String),
+    /// Another run of this agent, which answers, holds the agent's name in the team.
+    #[error("agent `{agent}` is already in team `{team}`: {holder} runs it and answers. Two agents of one team cannot share a name: stop that run (`petrel ls` lists the runs on this machine), or give this agent another name")]
+    NameTaken {
+        /// The agent's name.
+        agent: String,
+        /// The team.
+        team: String,
+        /// Who holds the name: process, host and session, as far as it said.
+        holder: String,
+    },
     /// The agent lacks the `_team` properties (its config has no `team:` section).
     #[error("agent `{0}` was built without a `team:` section")]
     NotATeamAgent(String),
@@ -165,6 +176,9 @@ impl Team {
             seen: Mutex::default(),
             session,
         });
+        if board.is_some() {
+            claim_name(&ctx).await?;
+        }
         let mut team = Team {
             ctx: ctx.clone(),
             tasks: Vec::new(),
@@ -373,6 +387,27 @@ impl Team {
         self.declared.push(Box::new(sub));
         Ok(())
     }
+}
+
+/// Refuses the agent's name when another run that answers holds it; one that does not answer
+/// (stopped, or killed and its lease not over) is left to be taken over when its token ends,
+/// as a restarted robot must be able to do.
+async fn claim_name(ctx: &Ctx) -> Result<(), TeamError> {
+    let claim = claim::check(&ctx.session, &ctx.keys, &ctx.agent, &ctx.zid).await?;
+    if let Some(refused) = claim.refusal(&ctx.agent, &ctx.config.name) {
+        return Err(refused);
+    }
+    if let claim::Claim::Silent(holders) = claim {
+        tracing::warn!(
+            agent = %ctx.agent,
+            team = %ctx.config.name,
+            ?holders,
+            "the name `{}` is held in the team by a session that does not answer (a stopped or killed run?): this agent takes it over when that session's lease ({} ms) ends; until then the team refuses its samples",
+            ctx.agent,
+            ctx.config.lease_ms
+        );
+    }
+    Ok(())
 }
 
 impl Drop for Team {

@@ -37,11 +37,23 @@ pub(crate) async fn info_json(ctx: &Ctx) -> Result<Vec<u8>, String> {
         "agent": ctx.agent,
         "zid": ctx.zid,
         "team": ctx.config.name,
+        "pid": std::process::id(),
+        "host": host_name(),
         "modules": names,
         "types": types,
         "properties": listing.properties,
     });
     Ok(serde_json::to_vec(&info).expect("JSON of strings"))
+}
+
+/// This machine's host name, for telling apart two runs of one agent; `None` if the OS does
+/// not say.
+fn host_name() -> Option<String> {
+    let mut buf = [0u8; 256];
+    // SAFETY: the buffer is valid for its length; gethostname writes at most that many bytes.
+    let rc = unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) };
+    let end = buf.iter().position(|&b| b == 0)?;
+    (rc == 0 && end > 0).then(|| String::from_utf8_lossy(&buf[..end]).into_owned())
 }
 
 /// Answers a query for the current value of one of this agent's properties, or, for a

@@ -72,6 +72,79 @@ async fn three_agents_see_each_other_and_a_departure_makes_links_stale_until_rej
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_second_run_of_an_agent_is_refused_while_the_first_answers() {
+    let team = team_name("claim");
+    let pa = free_port();
+    let counter = r#"(name: "count", type: "demo.counter", values: {"params/period_ms": 5}),"#;
+    let a = start(&agent_config("a", &team, pa, &[], "", counter)).await;
+    let b = start(&agent_config("b", &team, free_port(), &[pa], "", counter)).await;
+    let members = b.handle::<TeamMembers>("_team/members").await;
+    wait_for(&members, "a and b", |l| names(l) == ["a", "b"]).await;
+
+    let Ok(Tap::Queue(mut events)) = b.agent.blackboard().tap("_team/events").await else {
+        panic!("_team/events is a queue");
+    };
+
+    // A second run of a: refused at start, naming the run that holds the name.
+    let again = agent_config("a", &team, free_port(), &[pa], "", counter);
+    let refused = start_refused(&again).await;
+    assert!(
+        matches!(refused, petrel::team::TeamError::NameTaken { .. }),
+        "{refused}"
+    );
+    let text = refused.to_string();
+    assert!(
+        text.contains("agent `a` is already in team")
+            && text.contains(&format!("process {}", std::process::id()))
+            && text.contains(a.team.zid()),
+        "{text}"
+    );
+
+    // A holder of a name that does not answer (a stopped or killed run whose lease is not over;
+    // here a bare session with a token) leaves the name to be taken over: c joins, and the
+    // others take it once the silent token goes.
+    let rogue = zenoh::open(
+        petrel::team::zenoh_config(&petrel::actors::team::TeamConfig {
+            name: team.clone(),
+            mode: Default::default(),
+            listen: vec![],
+            connect: vec![format!("tcp/127.0.0.1:{pa}")],
+            lease_ms: 1000,
+            remote_write: vec![],
+            scouting: false,
+        })
+        .unwrap(),
+    )
+    .await
+    .unwrap();
+    let token = rogue
+        .liveliness()
+        .declare_token(format!("petrel/{team}/@alive/c/0badc0de"))
+        .await
+        .unwrap();
+    wait_for(&members, "the silent c among the members", |l| {
+        names(l) == ["a", "b", "c"]
+    })
+    .await;
+    let c = start(&agent_config("c", &team, free_port(), &[pa], "", counter)).await;
+    drop(token);
+    rogue.close().await.unwrap();
+    wait_for(&members, "the running c with its modules", |l| {
+        names(l) == ["a", "b", "c"] && l.0[2].modules == ["count"]
+    })
+    .await;
+    // The refused run of a declared no token: the team saw c's claims, never a second a.
+    let seen = events_until(&mut events, |e| e.agent == "c" && e.kind == "rejoined").await;
+    assert!(
+        !seen.iter().any(|e| e.agent == "a"),
+        "the refused run never reached the team: {seen:?}"
+    );
+    for m in [c, b, a] {
+        m.stop().await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn teams_with_different_names_never_see_each_other() {
     let (pa, pb) = (free_port(), free_port());
     let a = start(&agent_config("a", &team_name("red"), pa, &[], "", "")).await;

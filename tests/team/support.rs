@@ -231,6 +231,26 @@ pub async fn start(config: &str) -> Member {
     }
 }
 
+/// Starts the agent of `config` and expects its team to refuse it: returns why, the agent
+/// stopped again.
+pub async fn start_refused(config: &str) -> petrel::team::TeamError {
+    let file = ConfigFile::parse("team-test.ron", config)
+        .unwrap_or_else(|e| panic!("config should parse:\n{e}\n{config}"));
+    let agent = Agent::start(&file, &registry())
+        .await
+        .unwrap_or_else(|e| panic!("agent should start:\n{e}"));
+    let team_config = file.config.team.clone().expect("a team section");
+    let joined = Team::join(&agent, &team_config).await;
+    agent.stop(Duration::from_secs(2)).await;
+    match joined {
+        Ok(team) => {
+            team.leave().await;
+            panic!("the team should have refused this agent:\n{config}");
+        }
+        Err(e) => e,
+    }
+}
+
 impl Member {
     /// A handle to one of this agent's properties.
     pub async fn handle<T: PropertyType>(&self, address: &str) -> PropertyHandle<T> {
