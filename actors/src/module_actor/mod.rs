@@ -155,7 +155,7 @@ impl<M: Module> Actor for ModuleActor<M> {
             ports.clock.clone(),
         );
         ctx.settle.signal = Some(binding.signal.clone());
-        let init = catching(module.init(&mut ctx).instrument(span.clone())).await;
+        let init = catching(&span, module.init(&mut ctx).instrument(span.clone())).await;
         let unrecoverable =
             matches!(&init, Ok(Err(e)) if e.downcast_ref::<Unrecoverable>().is_some());
         if let Some(reason) = failure(init) {
@@ -237,12 +237,16 @@ impl<M: Module> Running<M> {
     /// cleanup in its turn; the failure that ends the actor, if any.
     async fn live(mut self, me: ActorRef<RunLoop>) -> Result<(), String> {
         let span = self.span.clone();
-        match failure(catching(self.run().instrument(span.clone())).await) {
+        match failure(catching(&span, self.run().instrument(span.clone())).await) {
             None => {
                 // Stopped with the whole agent: clean up in reverse start order, when told.
                 self.stop.cleanup_turn().await;
                 self.ctx.restarting = self.stop.is_restart();
-                let cleanup = catching(self.module.cleanup(&mut self.ctx).instrument(span)).await;
+                let cleanup = catching(
+                    &span,
+                    self.module.cleanup(&mut self.ctx).instrument(span.clone()),
+                )
+                .await;
                 self.publish(status::STOPPED);
                 me.stop(None);
                 match failure(cleanup) {
