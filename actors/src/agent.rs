@@ -121,7 +121,9 @@ impl Agent {
         let events = registry.events_writer();
         let hold_events = registry.events_writer();
         let cfg = &config.config;
-        // Before any module reads the clock: a resumed agent's time goes on from its snapshot.
+        // The clock counts from the first agent's start, and, before any module reads it, a
+        // resumed agent's time goes on from its snapshot.
+        crate::expr::start_wall_clock();
         if let Some(secs) = cfg.clock_s {
             crate::expr::continue_from(secs);
         }

@@ -53,6 +53,14 @@ fn run_for_a_while_prints_a_summary_and_writes_a_runnable_snapshot() {
     let other = dir.path().join("other.ron");
     let snapshot = std::fs::read_to_string(&snap).unwrap();
     assert!(snapshot.contains("name: \"robot1\""), "{snapshot}");
+    // The agent's clock ran from its start, though nothing in it (no mission, no contexts)
+    // read the clock: a run resumed from here goes on from 300 ms at least.
+    let clock: f64 = snapshot
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("clock_s: "))
+        .and_then(|v| v.trim_end_matches(',').parse().ok())
+        .unwrap_or_else(|| panic!("a clock_s field: {snapshot}"));
+    assert!(clock >= 0.3, "the clock counts the 300 ms run: {clock}");
     std::fs::write(
         &other,
         snapshot.replace("name: \"robot1\"", "name: \"robot2\""),

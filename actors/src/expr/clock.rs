@@ -13,12 +13,19 @@ use std::time::Duration;
 use crate::AnyHandle;
 use tokio::time::Instant;
 
-/// The instant clock seconds count from: the first time any clock was read in this process
-/// (wall-clock seconds are thus shared by every module of the process, and by a restarted
-/// module).
+/// The instant clock seconds count from: when the first agent of this process was built, or
+/// the first time any clock was read before that (wall-clock seconds are thus shared by every
+/// module of the process, and by a restarted module).
 fn base() -> Instant {
     static BASE: OnceLock<Instant> = OnceLock::new();
     *BASE.get_or_init(Instant::now)
+}
+
+/// Starts this process's wall clock, if nothing read it yet: called when an agent is built,
+/// so that the clock counts from the first agent's start even when none of its modules reads
+/// the time (a snapshot of such an agent said `clock_s: 0.0` after running for minutes).
+pub(crate) fn start_wall_clock() {
+    base();
 }
 
 /// The most seconds a clock reading stands for (some 30,000 years): beyond, a clock property

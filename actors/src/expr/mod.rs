@@ -42,6 +42,7 @@ mod value;
 
 use std::fmt;
 
+pub(crate) use clock::start_wall_clock;
 pub use clock::{continue_from, Clock, MAX_CLOCK_S};
 pub use engine::{ExprId, ExprSet, PropId};
 pub use never::never_true;
