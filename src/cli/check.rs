@@ -298,7 +298,19 @@ fn check_files(file: &ConfigFile, built: &Registry) -> (Vec<ConfigError>, Vec<St
                 "module `{module}`: `{}` names {path}, but {problem} (relative paths are taken from the config file's directory)",
                 decl.path
             );
-            errors.push(file.error(module, Some(&decl.path), message));
+            let mut error = file.error(module, Some(&decl.path), message);
+            // The context manager the agent's `contexts:` field adds is written nowhere: the
+            // error is the field's.
+            if error.line == 0
+                && module == super::load::CONTEXTS_MODULE
+                && file.config.contexts.is_some()
+            {
+                error = file.locate(
+                    "contexts:",
+                    format!("`contexts:` names {path}, but {problem} (relative paths are taken from the config file's directory)"),
+                );
+            }
+            errors.push(error);
             modules.push(module.clone());
         }
     }

@@ -94,7 +94,7 @@ fn link_mission_clocks(file: &mut ConfigFile) {
 }
 
 /// The name of the context manager that an agent's `contexts:` field adds.
-const CONTEXTS_MODULE: &str = "contexts";
+pub(crate) const CONTEXTS_MODULE: &str = "contexts";
 
 /// The most config errors printed: beyond, a count (a generated config with a typo in a
 /// module type repeated 100,000 times printed 11 MB).

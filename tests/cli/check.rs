@@ -177,6 +177,24 @@ fn check_reports_a_missing_file_where_the_config_names_it() {
     );
     assert!(err.contains(&expected), "{err}");
 
+    // A missing rules file named by the agent's `contexts:` field: the field is where it is
+    // named (the context manager it adds is written nowhere).
+    let rules = dir.path().join("contexts.ron");
+    std::fs::write(
+        &rules,
+        "Agent(name: \"r1\",\n  contexts: \"missing.rules.ron\",\n  modules: [])",
+    )
+    .unwrap();
+    let out = petrel(&["check", rules.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    let expected = format!(
+        "{}:2:3: error: `contexts:` names {}, but it does not exist",
+        rules.display(),
+        dir.path().join("missing.rules.ron").display()
+    );
+    assert!(err.contains(&expected), "{err}");
+
     // Not a regular file (a FIFO would block the start forever), a symlink loop, a map image
     // that is a device: each named for what it is, before anything runs.
     let fifo = dir.path().join("fifo.txt");
