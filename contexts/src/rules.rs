@@ -121,13 +121,32 @@ impl LoadedRules {
         offset: Option<(u32, u32)>,
         message: String,
     ) -> RuleError {
-        let Some(start) = self.text.find(&format!("\"{context}\"")) else {
+        self.error_nth(context, 0, needle, offset, message)
+    }
+
+    /// [`error`](Self::error) about the `nth` (from 0) context of that name: a name given twice
+    /// is reported, and its second context checked, where the second is written.
+    pub fn error_nth(
+        &self,
+        context: &str,
+        nth: usize,
+        needle: Option<&str>,
+        offset: Option<(u32, u32)>,
+        message: String,
+    ) -> RuleError {
+        let quoted = format!("\"{context}\"");
+        let found = self.text.match_indices(&quoted).nth(nth);
+        let Some((start, _)) = found.or_else(|| self.text.match_indices(&quoted).next()) else {
             return RuleError::in_file(&self.path, message);
         };
+        // As written: quoted, or with RON's escapes (an expression holding a string, `"\"x\""`).
         let at = needle
             .and_then(|n| {
-                self.text[start..]
-                    .find(&format!("\"{n}\""))
+                let escaped = ron::to_string(n).unwrap_or_default();
+                [format!("\"{n}\""), escaped]
+                    .into_iter()
+                    .filter(|q| q.len() > 2)
+                    .find_map(|q| self.text[start..].find(&q))
                     .map(|i| start + i + 1)
             })
             .unwrap_or(start);

@@ -304,10 +304,26 @@ fn bad_rules_are_reported_with_positions() {
         "rules.ron:3:39: error: context `b`: unknown property `nope/params/x`",
         "rules.ron:5:121: error: context `d`: cannot relink `mapper/in/pose` (Pose2) to `speed/out/v` (f64): the types differ",
         "rules.ron:6:37: error: context `e`: in `speed/out/v >`: expected a value, found the end",
-        "rules.ron:6:50: error: context `e`: unknown property `ghost/enabled`",
+        "rules.ron:6:50: error: context `e`: unknown module `ghost`",
         "rules.ron:5:12: error: contexts `c` and `d` both change the oa/params/maxSpeed with priority 2: give them different priorities",
         "rules.ron:3:12: error: context `b` can never hold: its `when` is always false",
         "rules.ron:7:24: error: context `f` can never hold: `loc/out/q < 0.2` and `loc/out/q > 0.5` cannot both be true",
+    ];
+    assert_eq!(e, expected);
+}
+
+#[test]
+fn a_name_given_twice_is_reported_where_the_second_is_and_both_are_checked() {
+    let e = errors(
+        r#"Contexts(contexts: [
+    (name: "a", when: "speed/out/v > 0.5"),
+    (name: "a", when: "speed/out/v > 0.7", set: {"nope/params/x": "1", "nav/params/mode": "\"x\" + 1"}),
+])"#,
+    );
+    let expected = [
+        "rules.ron:3:12: error: duplicate context name `a`: a context of that name comes before; give this one another name",
+        "rules.ron:3:92: error: context `a`: in `\"x\" + 1`: the left operand of `+` must be a number, found a string",
+        "rules.ron:3:51: error: context `a`: unknown property `nope/params/x`",
     ];
     assert_eq!(e, expected);
 }

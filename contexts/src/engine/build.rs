@@ -32,23 +32,28 @@ impl Engine {
             candidates: Vec::new(),
         };
         // A set: 100,000 contexts were compared with each other (a minute of `petrel check`).
-        let mut names = std::collections::HashSet::new();
+        // Each name with how many contexts had it so far.
+        let mut names = std::collections::HashMap::new();
         for rule in &loaded.rules.contexts {
+            let seen = names.entry(rule.name.as_str()).or_insert(0usize);
+            let nth = *seen;
+            *seen += 1;
             let err = |needle: Option<&str>, offset, message| {
-                loaded.error(&rule.name, needle, offset, message)
+                loaded.error_nth(&rule.name, nth, needle, offset, message)
             };
             if rule.name.trim().is_empty() {
                 let message = "a context without a name: its switches and errors could not say which it is; give it `name: \"...\"`";
                 errors.push(err(Some("name: \"\""), None, message.into()));
                 continue;
             }
-            if !names.insert(rule.name.as_str()) {
+            // Reported where the second is written; its body is still checked, so its own
+            // mistakes show in the same run.
+            if nth > 0 {
                 errors.push(err(
                     None,
                     None,
-                    format!("duplicate context name `{}`", rule.name),
+                    format!("duplicate context name `{}`: a context of that name comes before; give this one another name", rule.name),
                 ));
-                continue;
             }
             // A dwell is a wait: past a day it is a typo (and u64::MAX overflowed the clock).
             if rule.min_dwell_ms > MAX_DWELL_MS {
@@ -93,11 +98,13 @@ impl Engine {
                 .map(|(t, s)| (t.clone(), s.clone(), t.clone()));
             for (target, src, needle) in plain.chain(toggles) {
                 let Some((info, sample)) = schema.property(&target) else {
-                    errors.push(err(
-                        Some(&needle),
-                        None,
-                        format!("context `{}`: unknown property `{target}`", rule.name),
-                    ));
+                    // An `enable`/`disable` entry names a module (its needle is the name).
+                    let what = match needle == target {
+                        true => format!("unknown property `{target}`"),
+                        false => format!("unknown module `{needle}`"),
+                    };
+                    let message = format!("context `{}`: {what}", rule.name);
+                    errors.push(err(Some(&needle), None, message));
                     continue;
                 };
                 let Some(want) = settable_ty(info) else {
