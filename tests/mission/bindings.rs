@@ -71,7 +71,7 @@ async fn unbound_actions_may_be_allowed_to_finish_at_once() {
 
 #[tokio::test(start_paused = true)]
 async fn bad_bindings_are_all_refused_at_init_with_positions() {
-    let plans = Plans::new(&[("bad.plan", "a; b; c; d; e_1; wait_x")]);
+    let plans = Plans::new(&[("bad.plan", "a; b; c; d; e_1; e_2; wait_x; wramup")]);
     let agent = start(&agent_with_mission(&format!(
         r#""params/plan": "{}", "params/is_mission": true,
            "params/conditions": {{"unused": "true"}},
@@ -80,6 +80,7 @@ async fn bad_bindings_are_all_refused_at_init_with_positions() {
             "b": (finished: "c1/out/value and true"),
             "c": (enable: ["nope"], set: {{"c1/params/period_ms": "fast"}}),
             "e": (failed: "c1/out/value > $1 +"),
+            "warmup": (finished: "true"),
         }}"#,
         plans.path("bad.plan")
     )))
@@ -98,10 +99,17 @@ async fn bad_bindings_are_all_refused_at_init_with_positions() {
         r#"bad.plan:1): `c1/params/period_ms` takes a value like 10, found "fast""#,
         r#"m/params/actions["e"].failed: 1:19: expected a value, found the end (in `c1/out/value > 1 +`)"#,
         "m/params/actions: no binding for actions `d` at ",
-        "(bound: a, b, c, e); bind them, or set params/allow_unbound to let them finish at once; `wait_x` is not the built-in wait: `wait_N` takes a number of seconds",
+        "`wramup` at ",
+        "bad.plan:1 (is the binding `warmup` it, misspelt?) (bound: a, b, c, e, warmup); bind them, or set params/allow_unbound to let them finish at once; `wait_x` is not the built-in wait: `wait_N` takes a number of seconds",
     ] {
         assert!(err.contains(want), "missing `{want}` in:\n{err}");
     }
+    // `e_1` and `e_2` share the binding and its mistake: said once.
+    assert_eq!(
+        err.matches(r#"m/params/actions["e"].failed:"#).count(),
+        1,
+        "{err}"
+    );
     assert!(
         exit.reason.contains("mission `m` could not start"),
         "{}",

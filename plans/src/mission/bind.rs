@@ -2,7 +2,7 @@
 //! handles and expressions (its own binding, or a built-in), every condition atom its
 //! expression; every problem is collected.
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap, HashSet};
 
 use petrel_actors::expr::{parse, properties, ExprId, ExprSet, Ty, TypeEnv};
 use petrel_actors::{AnyHandle, Blackboard};
@@ -92,6 +92,9 @@ struct Binder<'a> {
     handles: HashMap<String, Option<AnyHandle>>,
     exprs: ExprSet,
     errors: Vec<BindingProblem>,
+    /// Expression errors reported, by where and what: a binding used by several actions
+    /// (`count_5`, `count_1000`) has its mistake reported once, not once per action.
+    reported: HashSet<(String, String)>,
 }
 
 impl Binder<'_> {
@@ -152,10 +155,7 @@ impl Binder<'_> {
         let ast = match parse(src) {
             Ok(a) => a,
             Err(e) => {
-                self.problem(
-                    needle,
-                    format!("{what}: {e} (in `{}`)", petrel_actors::expr::quoted(src)),
-                );
+                self.expr_problem(src, what, needle, e.to_string());
                 return None;
             }
         };
@@ -169,12 +169,21 @@ impl Binder<'_> {
         match self.exprs.add(src, &env, Some(&Ty::Bool)) {
             Ok(id) => Some(id),
             Err(e) => {
-                self.problem(
-                    needle,
-                    format!("{what}: {e} (in `{}`)", petrel_actors::expr::quoted(src)),
-                );
+                self.expr_problem(src, what, needle, e.to_string());
                 None
             }
+        }
+    }
+
+    /// Reports error `e` of expression `src`, unless the same error of the same field was
+    /// reported already (the same binding, written for another action's parameters).
+    fn expr_problem(&mut self, src: &str, what: &str, needle: &str, e: String) {
+        if self
+            .reported
+            .insert((format!("{needle}\u{0}{what}"), e.clone()))
+        {
+            let message = format!("{what}: {e} (in `{}`)", petrel_actors::expr::quoted(src));
+            self.problem(needle, message);
         }
     }
 
@@ -344,6 +353,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
         handles: HashMap::new(),
         exprs: ExprSet::new(),
         errors: Vec::new(),
+        reported: HashSet::new(),
     };
     let mut actions = foldhash::HashMap::default();
     let mut unbound = Vec::new();
@@ -363,7 +373,7 @@ pub(crate) async fn bind(bb: &Blackboard, plan: &Plan, p: Params<'_>) -> Binding
             if unbound.len() == 1 { "" } else { "s" },
             unbound
                 .iter()
-                .map(|u| format!("`{u}`{}", b.at(u)))
+                .map(|u| format!("`{u}`{}{}", b.at(u), super::hints::misspelt_binding(u, &keys)))
                 .collect::<Vec<_>>()
                 .join(", "),
             if keys.is_empty() { "none".to_string() } else { keys.join(", ") }

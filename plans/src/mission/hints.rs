@@ -57,6 +57,30 @@ pub(crate) fn unused_bindings(
         .collect()
 }
 
+/// ` (is the binding `x` it, misspelt?)` for an action no binding matches, when a binding's
+/// name is close to the action's name or to one of its prefixes before a `_` (the binding
+/// `cuont` of `count_5`).
+pub(crate) fn misspelt_binding(action: &str, bindings: &[&str]) -> String {
+    let local = ActionName::parse(crate::remote::robot_of(action).map_or(action, |(_, l)| l)).local;
+    let prefixes = local
+        .match_indices('_')
+        .map(|(i, _)| &local[..i])
+        .chain(std::iter::once(local.as_str()));
+    prefixes
+        .flat_map(|name| bindings.iter().map(move |b| (close(name, b), *b)))
+        .filter_map(|(d, b)| d.map(|d| (d, b)))
+        .min()
+        .map_or(String::new(), |(_, b)| {
+            format!(" (is the binding `{b}` it, misspelt?)")
+        })
+}
+
+/// The edit distance of `name` and `candidate` when they are close (at most half the longer).
+fn close(name: &str, candidate: &str) -> Option<usize> {
+    let d = edit_distance(name, candidate);
+    (d > 0 && d <= name.len().max(candidate.len()) / 2).then_some(d)
+}
+
 /// `; did you mean `x`?` for the candidate nearest to `name`, if one is close.
 pub(crate) fn nearest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
     candidates
