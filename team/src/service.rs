@@ -16,7 +16,10 @@ use crate::Ctx;
 pub(crate) async fn info(ctx: Arc<Ctx>, query: Query) {
     match info_json(&ctx).await {
         Ok(payload) => {
-            let _ = query.reply(query.key_expr().clone(), payload).await;
+            let _ = query
+                .reply(query.key_expr().clone(), payload)
+                .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+                .await;
         }
         Err(e) => {
             let _ = query.reply_err(e).await;
@@ -112,8 +115,11 @@ async fn reply_value(
                 type_name: type_info.name().to_string(),
                 zid: ctx.zid.clone(),
             };
+            // Said like a stream sample's (`export.rs`), for clients that read the encoding.
+            let encoding = zenoh::bytes::Encoding::APPLICATION_JSON.with_schema(type_info.name());
             let _ = query
                 .reply(reply_key.to_string(), payload)
+                .encoding(encoding)
                 .attachment(attachment.encode())
                 .await;
         }

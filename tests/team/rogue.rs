@@ -135,3 +135,30 @@ async fn garbage_wrong_types_and_impostors_are_refused_and_counted() {
     b.stop().await;
     a.stop().await;
 }
+
+/// A client that is not petrel (another zenoh program) reads a current value by query: the
+/// reply says its encoding and type, as a stream sample does (docs/wire-format.md, Payloads).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_current_value_reply_says_its_encoding_like_a_stream_sample() {
+    let modules = r#"(name: "count", type: "demo.counter",
+        values: {"params/period_ms": 20, "params/start": 5.0, "params/increment": 0.0}),"#;
+    let (a, b) = pair("encoding", ("", modules), ("", "")).await;
+    let client = rogue_session(&a.team_name, a.port).await;
+    let key = format!("petrel/{}/a/count/out/value", a.team_name);
+    let replies = client
+        .get(key.as_str())
+        .timeout(std::time::Duration::from_secs(5))
+        .await
+        .unwrap();
+    let reply = replies.recv_async().await.expect("a answers");
+    let sample = reply.result().expect("a value");
+    assert_eq!(sample.encoding().to_string(), "application/json;f64");
+    let json = sample.payload().to_bytes();
+    assert!(
+        serde_json::from_slice::<f64>(&json).is_ok(),
+        "a JSON number: {json:?}"
+    );
+    client.close().await.unwrap();
+    b.stop().await;
+    a.stop().await;
+}
