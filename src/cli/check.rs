@@ -131,9 +131,13 @@ fn remote_link_problem(owner: &Registry, link: &petrel_actors::team::RemoteLink)
         return Some("which is a queue input: link to the queue it reads instead".into());
     }
     if decl.kind.is_queue() != wants_queue {
+        let kind = decl.kind.to_string();
+        let article = match kind.starts_with(['a', 'e', 'i', 'o', 'u']) {
+            true => "an",
+            false => "a",
+        };
         return Some(format!(
-            "which is a {}: a queue input links to a queue, a value to a value",
-            decl.kind
+            "which is {article} {kind}: a queue input links to a queue, a value to a value"
         ));
     }
     let (theirs, ours) = (decl.type_info.name(), link.feed.type_info().name());

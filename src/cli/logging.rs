@@ -1,4 +1,4 @@
-//! Tracing setup: `RUST_LOG`-style filtering (default `info`), pretty or JSON lines on stderr,
+//! Tracing setup: `RUST_LOG`-style filtering (default [`DEFAULT_FILTER`]), pretty or JSON lines on stderr,
 //! and the timeline trace of `--trace-out` (which sees steps and info events whatever `RUST_LOG`
 //! says).
 
@@ -9,6 +9,12 @@ use tracing_subscriber::util::SubscriberInitExt;
 use tracing_subscriber::{fmt, EnvFilter, Layer};
 
 use super::LogFormat;
+
+/// Without `RUST_LOG`: `info`, but zenoh's session start only at `error`. It warns when a
+/// peer in `connect` did not answer within its scouting delay, which is how a team starts (its
+/// members in any order; the link status says when a peer is missing), and its other warnings
+/// there (a listener that cannot bind) come back as petrel's own error.
+const DEFAULT_FILTER: &str = "info,zenoh::net::runtime::orchestrator=error";
 
 /// Sets up logging, and with `trace_out` the timeline trace (whose guard finishes the file
 /// when dropped).
@@ -26,7 +32,7 @@ pub(crate) fn init(
                 )),
             ),
         },
-        Err(_) => (EnvFilter::new("info"), None),
+        Err(_) => (EnvFilter::new(DEFAULT_FILTER), None),
     };
     let (trace, guard) = match trace_out {
         Some(path) => {

@@ -80,3 +80,36 @@ async fn get_and_set_reach_a_running_agent_and_refusals_exit_1() {
     );
     filter.stop().await;
 }
+
+/// A member started before the peer it connects to (the team demos start in any order) runs
+/// without zenoh's warning about its start conditions: the peer is expected to come later.
+#[test]
+fn a_member_started_before_its_peer_logs_no_zenoh_start_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let team = team_name("early");
+    // Nothing listens on `absent`: the peer this member connects to has not started.
+    let (port, absent) = (free_port(), free_port());
+    let config = agent_config(
+        "early",
+        &team,
+        port,
+        &[absent],
+        "",
+        r#"
+        (name: "scale", type: "demo.scale"),"#,
+    );
+    let path = dir.path().join("early.ron");
+    std::fs::write(&path, &config).unwrap();
+    let runtime = dir.path().join("runtime");
+    std::fs::create_dir(&runtime).unwrap();
+    let out = crate::bounded::output_within_deadline(
+        Command::new(env!("CARGO_BIN_EXE_petrel"))
+            .args(["run", path.to_str().unwrap(), "--for", "1s"])
+            .env("PETREL_RUNTIME_DIR", &runtime)
+            .env_remove("RUST_LOG"),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("joined the team"), "{err}");
+    assert!(!err.contains("Scouting delay"), "{err}");
+}
