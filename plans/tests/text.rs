@@ -348,6 +348,13 @@ fn syntax_errors_have_line_and_column() {
         error("a; LABEL_x; b; LABEL_x", None),
         "t.plan:1:16: label 'LABEL_x' defined twice"
     );
+    // A repeated block is written out: a label in it would be defined once per repeat.
+    assert_eq!(
+        error("a; { b; { LABEL_x; d } } * 3; GOTO_LABEL_x", None),
+        "t.plan:1:11: label 'LABEL_x' is inside '{ ... } * 3', which writes the block out 3 times: the label would be defined 3 times (put it before the block, or loop with a label and a goto)"
+    );
+    // Once is not a repeat: compiles (a failure panics).
+    compile("a; { LABEL_x; b } * 1; GOTO_LABEL_x", None);
     assert_eq!(
         error("a", Some("*if* x *during* a *do* b; skip_action; c")),
         "t.er:1:40: 'c' follows the end of the recovery"

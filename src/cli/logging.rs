@@ -1,4 +1,4 @@
-//! Tracing setup: `RUST_LOG`-style filtering (default [`DEFAULT_FILTER`]), pretty or JSON lines on stderr,
+//! Tracing setup: `RUST_LOG`-style filtering (default `DEFAULT_FILTER`), pretty or JSON lines on stderr,
 //! and the timeline trace of `--trace-out` (which sees steps and info events whatever `RUST_LOG`
 //! says).
 

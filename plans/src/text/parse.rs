@@ -186,6 +186,9 @@ impl<'a> Parser<'a> {
                         let body = branches.pop().unwrap_or_default();
                         match self.repeat()? {
                             Some((n, n_at)) => {
+                                if let Some((name, at)) = first_label(&body).filter(|_| n > 1) {
+                                    return self.err(at, format!("label '{name}' is inside '{{ ... }} * {n}', which writes the block out {n} times: the label would be defined {n} times (put it before the block, or loop with a label and a goto)"));
+                                }
                                 let once = steps(&body);
                                 let steps = once.saturating_mul(n as usize);
                                 if steps > MAX_STEPS {
@@ -387,6 +390,17 @@ fn steps(items: &[Item]) -> usize {
             _ => 1,
         })
         .fold(0, usize::saturating_add)
+}
+
+/// The first label in `items`, nested blocks included: its name and where it is written.
+fn first_label(items: &[Item]) -> Option<(&str, usize)> {
+    items.iter().find_map(|item| match item {
+        Item::Label { name, at } => Some((name.as_str(), *at)),
+        Item::Block(body) => first_label(body),
+        Item::Choice(branches) => branches.iter().find_map(|(_, b)| first_label(b)),
+        Item::Parallel(branches) => branches.iter().find_map(|b| first_label(b)),
+        _ => None,
+    })
 }
 
 /// `body` written out `n` times, one after the other.
