@@ -196,6 +196,7 @@ pub fn spaced_ron(text: &str) -> String {
 pub fn config_value_error(reason: &str, example: &str, given: &ron::Value) -> String {
     let form = example;
     let words = [
+        ("Expected a sequence", "expected a list"),
         ("Expected f64", "expected a number"),
         ("Expected f32", "expected a number"),
         ("Expected i64", "expected an integer"),
@@ -213,6 +214,16 @@ pub fn config_value_error(reason: &str, example: &str, given: &ron::Value) -> St
         reason = reason.replace(from, to);
     }
     format!("{reason}; a value looks like {form}")
+}
+
+/// What a value of list type `type_name` looks like, for a property whose value is an empty
+/// list now (`[]` alone shows nothing of the items).
+pub(crate) fn list_example(type_name: &str) -> Option<&'static str> {
+    match type_name {
+        "Path2" => Some("[(x: 1.0, y: 2.0), (x: 3.0, y: 4.0)]"),
+        "f64[]" => Some("[1.0, 2.5]"),
+        _ => None,
+    }
 }
 
 fn shorten(mut s: String) -> String {

@@ -24,6 +24,7 @@ fn check_lists_every_error_of_a_broken_config_and_exits_2() {
         r#"Agent(name: "r1", modules: [
     (name: "c", type: "demo.countr"),
     (name: "s", type: "demo.scale", values: {"params/factor": "x"}, links: {"in/value": "s/in/value"}),
+    (name: "g", type: "nav.goal_sequencer", values: {"params/goals": 5}),
 ])"#,
     )
     .unwrap();
@@ -33,12 +34,14 @@ fn check_lists_every_error_of_a_broken_config_and_exits_2() {
     let p = path.display();
     assert!(err.contains(&format!("{p}:2:23: error: module `c`: unknown module type `demo.countr`; did you mean `demo.counter`?")), "{err}");
     assert!(err.contains(&format!("{p}:3:46: error: module `s`, `params/factor` (f64): expected a number but found the string \"x\" instead; a value looks like 1.0")), "{err}");
+    // A list property empty now: the example shows what its items look like.
+    assert!(err.contains(&format!("{p}:4:54: error: module `g`, `params/goals` (Path2): expected a list but found the unsigned integer `5` instead; a value looks like [(x: 1.0, y: 2.0), (x: 3.0, y: 4.0)]")), "{err}");
     assert!(
         err.contains("link cycle: s/in/value -> s/in/value"),
         "{err}"
     );
     assert!(
-        err.ends_with("3 errors found; nothing was started\n"),
+        err.ends_with("4 errors found; nothing was started\n"),
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");

@@ -28,7 +28,9 @@ impl Registry {
                 let reason = match example {
                     Some(example) => crate::value::config_value_error(
                         &reason,
-                        &crate::value::spaced_ron(&example),
+                        &crate::value::list_example(ti.name())
+                            .filter(|_| example.trim() == "[]")
+                            .map_or_else(|| crate::value::spaced_ron(&example), String::from),
                         &value,
                     ),
                     None => reason,
