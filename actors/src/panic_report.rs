@@ -71,7 +71,20 @@ fn report(info: &PanicHookInfo<'_>, module: &tracing::Span) {
             tracing::error!(panic.location = %at, backtrace = %backtrace, "panicked: {what}");
         });
     match spawned {
-        Ok(handle) => PENDING.lock().push(handle),
+        Ok(handle) => {
+            // Reports already written are joined here, so that a module panicking all day
+            // leaves no finished threads waiting to be joined.
+            let done: Vec<_> = {
+                let mut pending = PENDING.lock();
+                let (done, running) = pending.drain(..).partition(|h| h.is_finished());
+                *pending = running;
+                pending.push(handle);
+                done
+            };
+            for finished in done {
+                let _ = finished.join();
+            }
+        }
         // No thread to spare: the report without its backtrace rather than none.
         Err(e) => tracing::error!(
             panic.location = %location,
