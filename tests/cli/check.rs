@@ -101,9 +101,10 @@ fn check_validates_context_rules_with_the_config() {
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
     let rules = dir.path().join("rules.ron");
+    // At the `\"x\"` the error is about, as written in the file (escaped).
     assert!(
         err.contains(&format!(
-            "{}:2:24: error: context `fast`: in `s/out/value > \"x\"`",
+            "{}:2:39: error: context `fast`: in `s/out/value > \"x\"`",
             rules.display()
         )),
         "{err}"
