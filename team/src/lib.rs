@@ -61,7 +61,7 @@ pub enum TeamError {
     #[error("team transport: {0}")]
     Transport(String),
     /// Another run of this agent, which answers, holds the agent's name in the team.
-    #[error("agent `{agent}` is already in team `{team}`: {holder} runs it and answers. Two agents of one team cannot share a name: stop that run (`petrel ls` lists the runs on this machine), or give this agent another name")]
+    #[error("team `{team}` already has an agent `{agent}`: {holder} runs it and answers. Two agents of one team cannot share a name: stop that run (`petrel ls` lists the runs on this machine), or give this agent another name")]
     NameTaken {
         /// The agent's name.
         agent: String,

@@ -94,7 +94,7 @@ async fn a_second_run_of_an_agent_is_refused_while_the_first_answers() {
     );
     let text = refused.to_string();
     assert!(
-        text.contains("agent `a` is already in team")
+        text.contains(&format!("team `{team}` already has an agent `a`"))
             && text.contains(&format!("process {}", std::process::id()))
             && text.contains(a.team.zid()),
         "{text}"

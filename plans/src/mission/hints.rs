@@ -75,17 +75,18 @@ pub(crate) fn misspelt_binding(action: &str, bindings: &[&str]) -> String {
         })
 }
 
-/// The edit distance of `name` and `candidate` when they are close (at most half the longer).
+/// The edit distance of `name` and `candidate` when they are close: at most a third of the
+/// longer, or 2 (a swap of two letters) for short names. Half the length offered `goto_dock`
+/// for `reprot_dock`.
 fn close(name: &str, candidate: &str) -> Option<usize> {
     let d = edit_distance(name, candidate);
-    (d > 0 && d <= name.len().max(candidate.len()) / 2).then_some(d)
+    (d > 0 && d <= (name.len().max(candidate.len()) / 3).max(2)).then_some(d)
 }
 
 /// `; did you mean `x`?` for the candidate nearest to `name`, if one is close.
 pub(crate) fn nearest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
     candidates
-        .map(|c| (edit_distance(name, c), c))
-        .filter(|(d, c)| *d <= name.len().max(c.len()) / 2)
+        .filter_map(|c| close(name, c).map(|d| (d, c)))
         .min()
         .map_or(String::new(), |(_, c)| format!("; did you mean `{c}`?"))
 }
@@ -104,4 +105,29 @@ fn edit_distance(a: &str, b: &str) -> usize {
         }
     }
     row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_close_names_are_offered() {
+        let offered = |name, c: &[&str]| nearest(name, c.iter().copied());
+        assert_eq!(
+            offered("reprot_dock", &["goto_dock", "report_dock"]),
+            "; did you mean `report_dock`?"
+        );
+        assert_eq!(offered("reprot_dock", &["goto_dock"]), "");
+        assert_eq!(offered("stop", &["goto"]), "");
+        assert_eq!(
+            misspelt_binding("count_5", &["cuont", "check"]),
+            " (is the binding `cuont` it, misspelt?)"
+        );
+        assert_eq!(
+            misspelt_binding("warmup", &["wramup"]),
+            " (is the binding `wramup` it, misspelt?)"
+        );
+        assert_eq!(misspelt_binding("goto_dock", &["stop"]), "");
+    }
 }
