@@ -292,7 +292,9 @@ impl Agent {
         drop(self.thread);
         // A panic's backtrace is written from a thread of its own: written before the agent
         // is said to be stopped, so a process ending now does not lose it.
-        let _ = tokio::task::spawn_blocking(crate::panic_report::flush).await;
+        if crate::panic_report::pending() {
+            let _ = tokio::task::spawn_blocking(crate::panic_report::flush).await;
+        }
         tracing::info!(agent = %self.name, "agent stopped");
     }
 

@@ -97,6 +97,11 @@ fn report(info: &PanicHookInfo<'_>, module: &tracing::Span) {
 static PENDING: parking_lot::Mutex<Vec<std::thread::JoinHandle<()>>> =
     parking_lot::Mutex::new(Vec::new());
 
+/// Whether backtraces of module panics are still being written (see [`flush`]).
+pub(crate) fn pending() -> bool {
+    !PENDING.lock().is_empty()
+}
+
 /// Waits until the backtraces of module panics so far are written, so that a process ending
 /// right after a panic does not lose its report.
 pub(crate) fn flush() {

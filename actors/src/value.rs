@@ -216,13 +216,18 @@ pub fn config_value_error(reason: &str, example: &str, given: &ron::Value) -> St
     format!("{reason}; a value looks like {form}")
 }
 
-/// What a value of list type `type_name` looks like, for a property whose value is an empty
-/// list now (`[]` alone shows nothing of the items).
-pub(crate) fn list_example(type_name: &str) -> Option<&'static str> {
-    match type_name {
-        "Path2" => Some("[(x: 1.0, y: 2.0), (x: 3.0, y: 4.0)]"),
-        "f64[]" => Some("[1.0, 2.5]"),
-        _ => None,
+/// What a value of `type_name` looks like, from a property's `current` value as RON text:
+/// that value spaced, unless it is an empty list of a list type (`[]` shows nothing of the
+/// items), for which an example with items.
+pub(crate) fn value_example(type_name: &str, current: &str) -> String {
+    let items = match type_name {
+        "Path2" => "[(x: 1.0, y: 2.0), (x: 3.0, y: 4.0)]",
+        "f64[]" => "[1.0, 2.5]",
+        _ => return spaced_ron(current),
+    };
+    match current.trim() {
+        "[]" => items.to_string(),
+        _ => spaced_ron(current),
     }
 }
 

@@ -98,6 +98,7 @@ pub(crate) async fn check(
             }
         }
     }
+    // Nobody else holds the name: no one to ask.
     if holders.iter().all(|z| z == own) {
         return Ok(Claim::Free);
     }

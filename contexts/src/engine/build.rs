@@ -31,8 +31,8 @@ impl Engine {
             changed: Vec::new(),
             candidates: Vec::new(),
         };
-        // A set: 100,000 contexts were compared with each other (a minute of `petrel check`).
-        // Each name with how many contexts had it so far.
+        // Each name with how many contexts had it so far, in a map: 100,000 contexts were
+        // compared with each other (a minute of `petrel check`).
         let mut names = std::collections::HashMap::new();
         for rule in &loaded.rules.contexts {
             let seen = names.entry(rule.name.as_str()).or_insert(0usize);

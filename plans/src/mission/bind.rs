@@ -92,9 +92,9 @@ struct Binder<'a> {
     handles: HashMap<String, Option<AnyHandle>>,
     exprs: ExprSet,
     errors: Vec<BindingProblem>,
-    /// Expression errors reported, by where and what: a binding used by several actions
+    /// Expression errors reported (needle, field, error): a binding used by several actions
     /// (`count_5`, `count_1000`) has its mistake reported once, not once per action.
-    reported: HashSet<(String, String)>,
+    reported: HashSet<(String, String, String)>,
 }
 
 impl Binder<'_> {
@@ -178,10 +178,8 @@ impl Binder<'_> {
     /// Reports error `e` of expression `src`, unless the same error of the same field was
     /// reported already (the same binding, written for another action's parameters).
     fn expr_problem(&mut self, src: &str, what: &str, needle: &str, e: String) {
-        if self
-            .reported
-            .insert((format!("{needle}\u{0}{what}"), e.clone()))
-        {
+        let key = (needle.to_string(), what.to_string(), e.clone());
+        if self.reported.insert(key) {
             let message = format!("{what}: {e} (in `{}`)", petrel_actors::expr::quoted(src));
             self.problem(needle, message);
         }

@@ -67,8 +67,11 @@ pub(crate) fn misspelt_binding(action: &str, bindings: &[&str]) -> String {
         .map(|(i, _)| &local[..i])
         .chain(std::iter::once(local.as_str()));
     prefixes
-        .flat_map(|name| bindings.iter().map(move |b| (close(name, b), *b)))
-        .filter_map(|(d, b)| d.map(|d| (d, b)))
+        .flat_map(|name| {
+            bindings
+                .iter()
+                .filter_map(move |b| close(name, b).map(|d| (d, *b)))
+        })
         .min()
         .map_or(String::new(), |(_, b)| {
             format!(" (is the binding `{b}` it, misspelt?)")

@@ -28,9 +28,7 @@ impl Registry {
                 let reason = match example {
                     Some(example) => crate::value::config_value_error(
                         &reason,
-                        &crate::value::list_example(ti.name())
-                            .filter(|_| example.trim() == "[]")
-                            .map_or_else(|| crate::value::spaced_ron(&example), String::from),
+                        &crate::value::value_example(ti.name(), &example),
                         &value,
                     ),
                     None => reason,
