@@ -34,7 +34,7 @@ pub use mapper::{Mapper, MapperParams};
 pub use planner::{Planner, PlannerOutput, PlannerParams};
 pub use pose_history::PoseHistory;
 pub use scan_matcher::{ScanLocalizer, ScanMatcher, ScanMatcherParams, ScanOutcome};
-pub use searched::{SearchParams, SearchedMap};
+pub use searched::{heading_change, SearchParams, SearchedMap};
 pub use sequencer::{GoalSequencer, SequencerOutput};
 pub use stall::StallWatch;
 pub use team_log::{Reassignment, TeamLog};

@@ -23,12 +23,15 @@ pub struct SearchedModule {
     min_views: Input<i64>,
     min_brightness: Input<f64>,
     max_brightness: Input<f64>,
+    max_turn_deg: Input<f64>,
     searched: Output<OccupancyGrid>,
     area: Output<f64>,
     counted: Output<i64>,
     skipped: Output<i64>,
     /// The frame count last looked at: a step without a new frame (the first) looks at nothing.
     last_frame: i64,
+    /// The heading the frame before was taken at: how far the robot turned between frames.
+    last_heading: Option<f64>,
     /// The poses since the frames began, to look from where the camera was when it took one.
     poses: PoseTrail,
     core: Option<SearchedMap>,
@@ -37,7 +40,7 @@ pub struct SearchedModule {
 impl Module for SearchedModule {
     const TYPE: &'static str = "nav.searched";
     const DESCRIPTION: &'static str =
-        "Marks the map cells the camera looked at well enough to see a victim (in range, in view, not hidden, image not too dark or bright), for an explorer that searches.";
+        "Marks the map cells the camera looked at well enough to see a victim (in range, in view, not hidden, image not too dark or bright, robot not turning fast), for an explorer that searches.";
 
     fn declare(ports: &mut Ports) -> Self {
         let module = SearchedModule {
@@ -53,11 +56,13 @@ impl Module for SearchedModule {
             min_views: ports.param_in("params/min_views", 3, Range::new(1.0, 255.0), "frames a cell must be in view in to be searched"),
             min_brightness: ports.param_in("params/min_brightness", 0.1, Range::new(0.0, 1.0), "darker frames search nothing (too little contrast left to detect), 0..1"),
             max_brightness: ports.param_in("params/max_brightness", 0.95, Range::new(0.0, 1.0), "brighter frames search nothing (saturated), 0..1"),
+            max_turn_deg: ports.param_in("params/max_turn_deg", 6.0, Range::new(0.0, 180.0), "frames taken after the robot turned more than this since the frame before search nothing (the turn smears a victim's pattern: the detector finds one in 1 frame of 5 turning 6° a frame at 10 Hz), degrees; 180: no limit"),
             searched: ports.output("out/searched", OccupancyGrid::default(), "the navigation map's cells: 0 searched, -1 not (written when it grows)"),
             area: ports.output("out/area", 0.0, "searched area, m²"),
             counted: ports.output("out/frames", 0, "frames that searched (bright enough)"),
-            skipped: ports.output("out/skipped", 0, "frames too dark or too bright to search anything"),
+            skipped: ports.output("out/skipped", 0, "frames too dark, too bright or too smeared by a turn to search anything"),
             last_frame: 0,
+            last_heading: None,
             poses: PoseTrail::default(),
             core: None,
         };
@@ -98,15 +103,24 @@ impl Module for SearchedModule {
             return Ok(());
         }
         self.last_frame = *frame.value;
+        // Before the localizer's first estimate the pose reads (0, 0, 0): not where it looked.
+        let looked_from = self.poses.at(frame.written);
+        // The turn since the frame before, whatever becomes of either frame.
+        let turned = looked_from.and_then(|pose| {
+            let before = self.last_heading.replace(pose.theta())?;
+            Some(crate::nav::heading_change(before, pose.theta()))
+        });
         let brightness = self.brightness.value();
-        // A frame too dark (or washed out) holds too little contrast for a victim's pattern:
-        // looking through it searched nothing.
-        if !(self.min_brightness.value()..=self.max_brightness.value()).contains(&brightness) {
+        // A frame too dark (or washed out) holds too little contrast for a victim's pattern,
+        // and a turn smears it over the exposure: looking through such a frame searched nothing.
+        let exposed =
+            (self.min_brightness.value()..=self.max_brightness.value()).contains(&brightness);
+        let smeared = turned.is_some_and(|deg| deg > self.max_turn_deg.value());
+        if !exposed || smeared {
             self.skipped.set(self.skipped.value() + 1);
             return Ok(());
         }
-        // Before the localizer's first estimate the pose reads (0, 0, 0): not where it looked.
-        let Some(looked_from) = self.poses.at(frame.written) else {
+        let Some(looked_from) = looked_from else {
             return Ok(());
         };
         self.counted.set(self.counted.value() + 1);

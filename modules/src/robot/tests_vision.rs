@@ -91,6 +91,42 @@ async fn nav_searched_counts_bright_frames_and_skips_dark_ones() {
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
 }
 
+/// A frame taken after the robot turned fast searches nothing: the turn smeared a victim's
+/// pattern over the exposure, and the detector would not have found it.
+#[tokio::test(start_paused = true)]
+async fn nav_searched_skips_frames_taken_while_turning_fast() {
+    use petrel_actors::{OccupancyGrid, Pose2};
+    let agent = searched_facing_x().await;
+    let bb = agent.blackboard();
+    bb.set("searched/in/brightness", 0.5).await.unwrap();
+    let frame_at = |heading: f64, frame: i64| {
+        let bb = bb.clone();
+        async move {
+            // Each frame later than the pose before: it is placed from the pose written with it.
+            tokio::time::sleep(Duration::from_millis(10)).await;
+            bb.set("searched/in/robotPose", Pose2::new(0.5, 5.5, heading))
+                .await
+                .unwrap();
+            bb.set("searched/in/frames", frame).await.unwrap();
+        }
+    };
+    // Facing +y: searched.
+    frame_at(std::f64::consts::FRAC_PI_2, 1).await;
+    wait_for(&agent, "searched/out/frames", 1).await;
+    // A quarter turn later, facing +x: smeared, the floor ahead stays unsearched.
+    frame_at(0.0, 2).await;
+    wait_for(&agent, "searched/out/skipped", 1).await;
+    let grid = bb.get::<OccupancyGrid>(SEARCHED).await.unwrap();
+    assert_eq!(grid.get(1, 5), Some(-1), "seen only while turning");
+    // Still facing +x, no turn since: searched.
+    frame_at(0.0, 3).await;
+    wait_for(&agent, "searched/out/frames", 2).await;
+    let grid = bb.get::<OccupancyGrid>(SEARCHED).await.unwrap();
+    assert_eq!(grid.get(1, 5), Some(0), "seen standing");
+    assert_eq!(*bb.get::<i64>("searched/out/skipped").await.unwrap(), 1);
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+}
+
 #[tokio::test(start_paused = true)]
 async fn a_restarted_victim_mapper_goes_on_with_its_candidates() {
     use crate::robot::victim_mapper::MapperMemory;
