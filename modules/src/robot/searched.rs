@@ -59,7 +59,7 @@ impl Module for SearchedModule {
             max_turn_deg: ports.param_in("params/max_turn_deg", 6.0, Range::new(0.0, 180.0), "frames taken after the robot turned more than this since the frame before search nothing (the turn smears a victim's pattern: the detector finds one in 1 frame of 5 turning 6° a frame at 10 Hz), degrees; 180: no limit"),
             searched: ports.output("out/searched", OccupancyGrid::default(), "the navigation map's cells: 0 searched, -1 not (written when it grows)"),
             area: ports.output("out/area", 0.0, "searched area, m²"),
-            counted: ports.output("out/frames", 0, "frames that searched (bright enough)"),
+            counted: ports.output("out/frames", 0, "frames that searched (bright enough, taken without a fast turn)"),
             skipped: ports.output("out/skipped", 0, "frames too dark, too bright or too smeared by a turn to search anything"),
             last_frame: 0,
             last_heading: None,
