@@ -220,13 +220,9 @@ pub fn config_value_error(reason: &str, example: &str, given: &ron::Value) -> St
 /// that value spaced, unless it is an empty list of a list type (`[]` shows nothing of the
 /// items), for which an example with items.
 pub(crate) fn value_example(type_name: &str, current: &str) -> String {
-    let items = match type_name {
-        "Path2" => "[(x: 1.0, y: 2.0), (x: 3.0, y: 4.0)]",
-        "f64[]" => "[1.0, 2.5]",
-        _ => return spaced_ron(current),
-    };
-    match current.trim() {
-        "[]" => items.to_string(),
+    match (type_name, current.trim()) {
+        ("Path2", "[]") => "[(x: 1.0, y: 2.0), (x: 3.0, y: 4.0)]".to_string(),
+        ("f64[]", "[]") => "[1.0, 2.5]".to_string(),
         _ => spaced_ron(current),
     }
 }

@@ -321,11 +321,10 @@ impl SearchedMap {
     }
 }
 
-/// How far a heading turned from `from` to `to` (radians, any turns), in degrees, 0 to 180:
-/// the shorter way round.
-pub fn heading_change(from: f64, to: f64) -> f64 {
-    let d = (to - from).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d).to_degrees()
+/// How far the heading turned from pose `from` to pose `to`, in degrees, 0 to 180: the shorter
+/// way round.
+pub fn heading_change(from: &Pose2, to: &Pose2) -> f64 {
+    from.0.rotation.angle_to(&to.0.rotation).abs().to_degrees()
 }
 
 #[cfg(test)]

@@ -30,8 +30,8 @@ pub struct SearchedModule {
     skipped: Output<i64>,
     /// The frame count last looked at: a step without a new frame (the first) looks at nothing.
     last_frame: i64,
-    /// The heading the frame before was taken at: how far the robot turned between frames.
-    last_heading: Option<f64>,
+    /// The pose the frame before was taken from: how far the robot turned between frames.
+    last_pose: Option<Pose2>,
     /// The poses since the frames began, to look from where the camera was when it took one.
     poses: PoseTrail,
     core: Option<SearchedMap>,
@@ -62,7 +62,7 @@ impl Module for SearchedModule {
             counted: ports.output("out/frames", 0, "frames that searched (bright enough, taken without a fast turn)"),
             skipped: ports.output("out/skipped", 0, "frames too dark, too bright or too smeared by a turn to search anything"),
             last_frame: 0,
-            last_heading: None,
+            last_pose: None,
             poses: PoseTrail::default(),
             core: None,
         };
@@ -107,8 +107,8 @@ impl Module for SearchedModule {
         let looked_from = self.poses.at(frame.written);
         // The turn since the frame before, whatever becomes of either frame.
         let turned = looked_from.and_then(|pose| {
-            let before = self.last_heading.replace(pose.theta())?;
-            Some(crate::nav::heading_change(before, pose.theta()))
+            let before = self.last_pose.replace(pose)?;
+            Some(crate::nav::heading_change(&before, &pose))
         });
         let brightness = self.brightness.value();
         // A frame too dark (or washed out) holds too little contrast for a victim's pattern,

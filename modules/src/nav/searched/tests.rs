@@ -203,14 +203,18 @@ fn bad_parameters_are_refused_by_name() {
 fn a_heading_change_is_the_shorter_way_round_in_degrees() {
     use std::f64::consts::PI;
     let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
-    assert!(close(heading_change(0.0, 0.1), 0.1f64.to_degrees()));
-    assert!(close(heading_change(0.1, 0.0), 0.1f64.to_degrees()));
+    let change = |a: f64, b: f64| {
+        // The positions do not matter.
+        heading_change(&Pose2::new(1.0, 2.0, a), &Pose2::new(-3.0, 0.5, b))
+    };
+    assert!(close(change(0.0, 0.1), 0.1f64.to_degrees()));
+    assert!(close(change(0.1, 0.0), 0.1f64.to_degrees()));
     // Across ±π: 2°, not 358°.
     assert!(close(
-        heading_change(PI - 0.0174533, -PI + 0.0174533),
+        change(PI - 0.0174533, -PI + 0.0174533),
         2.0 * 0.0174533f64.to_degrees()
     ));
     // Whole turns do not count.
-    assert!(close(heading_change(0.2, 0.2 + 4.0 * PI), 0.0));
-    assert!(close(heading_change(0.0, PI), 180.0));
+    assert!(close(change(0.2, 0.2 + 4.0 * PI), 0.0));
+    assert!(close(change(0.0, PI), 180.0));
 }
