@@ -17,8 +17,9 @@ fn navigate(overlay: &str) -> ConfigFile {
         "overlay.ron",
         // No module is moved off the agent's thread for a slow mean step (a debug build's
         // mapper): only there is every step a replayed instant woke sure to run before the next
-        // (`Context::settle_agent`).
-        &format!(r#"Agent(name: "robot1", step_budget: (mean_us: 0, steps: 20), modules: [(name: "recorder", type: "sim.recorder", values: {{"params/png": ""}}), {overlay}])"#),
+        // (`Context::settle_agent`). The mapper publishes every change, so the map read is all
+        // it mapped, not its last publication (`params/publish_every_scans`).
+        &format!(r#"Agent(name: "robot1", step_budget: (mean_us: 0, steps: 20), modules: [(name: "recorder", type: "sim.recorder", values: {{"params/png": ""}}), (name: "mapper", type: "nav.mapper", values: {{"params/publish_every_scans": 1}}), {overlay}])"#),
     )
     .unwrap_or_else(|e| panic!("{e}"));
     file.overlay(overlay);

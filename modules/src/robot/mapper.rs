@@ -8,7 +8,7 @@ use petrel_actors::{
 };
 
 use super::param_error;
-use crate::nav::{Mapper, MapperParams};
+use crate::nav::{Mapper, MapperParams, PublishGate};
 
 /// Scans kept waiting for a matching pose; beyond this the pose source is presumed silent and
 /// the oldest scan is mapped with the latest pose.
@@ -24,9 +24,11 @@ pub struct MapperModule {
     laser_mount: Input<Pose2>,
     fov_deg: Input<f64>,
     max_range: Input<f64>,
+    publish_every: Input<i64>,
     map: Output<OccupancyGrid>,
     pending: VecDeque<Item<LaserScan>>,
     core: Option<Mapper>,
+    gate: PublishGate,
 }
 
 impl Module for MapperModule {
@@ -78,13 +80,20 @@ impl Module for MapperModule {
                 Range::new(0.0, 100.0),
                 "map returns only up to this range, m (0 = the laser's)",
             ),
+            publish_every: ports.param_in(
+                "params/publish_every_scans",
+                1,
+                Range::new(1.0, 100_000.0),
+                "publish the map at most once per this many scans mapped (1 = whenever a scan changed it); what changed meanwhile is published with a later scan, or when the module stops",
+            ),
             map: ports.output(
                 "out/map",
                 OccupancyGrid::default(),
-                "the map (written only when it changed)",
+                "the map (written only when it changed, at most once per params/publish_every_scans)",
             ),
             pending: VecDeque::new(),
             core: None,
+            gate: PublishGate::new(1),
         };
         // Read only by `init`: a running agent refuses new values for these.
         ports.read_at_start(&[
@@ -94,6 +103,7 @@ impl Module for MapperModule {
             "params/laser_mount",
             "params/fov_deg",
             "params/max_range",
+            "params/publish_every_scans",
         ]);
         module
     }
@@ -112,6 +122,8 @@ impl Module for MapperModule {
         let mut core = self.build_core()?;
         self.map.set(core.grid());
         self.core = Some(core);
+        let every = *self.publish_every.read().value;
+        self.gate = PublishGate::new(u32::try_from(every).unwrap_or(u32::MAX));
         Ok(())
     }
 
@@ -119,7 +131,7 @@ impl Module for MapperModule {
         let core = super::initialized(&mut self.core);
         self.pending.extend(self.scans.drain());
         let pose = self.pose.read();
-        let mut changed = 0;
+        let (mut mapped, mut changed) = (0, false);
         // A scan is mapped with the first pose written at or after it: the pose estimated
         // from the same simulation step, not the previous one (which would smear the map
         // while turning). The declared default (version 0) is no pose yet: on a paused clock
@@ -129,11 +141,22 @@ impl Module for MapperModule {
             if (no_pose || pose.written < scan.stamp) && self.pending.len() <= MAX_PENDING {
                 break;
             }
-            changed += core.update(*pose.value, &scan.value);
+            changed |= core.update(*pose.value, &scan.value) > 0;
+            mapped += 1;
             self.pending.pop_front();
         }
-        if changed > 0 {
+        if self.gate.update(mapped, changed) {
             self.map.set(core.grid());
+        }
+        Ok(())
+    }
+
+    /// What changed since the last publication is published, so the last map is never lost
+    /// to `params/publish_every_scans`.
+    async fn cleanup(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
+        if let Some(core) = self.core.as_mut().filter(|_| self.gate.pending()) {
+            self.map.set(core.grid());
+            self.gate.published();
         }
         Ok(())
     }

@@ -168,4 +168,6 @@ mod body_tests;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_mapper;
+#[cfg(test)]
 mod tests_vision;
