@@ -67,6 +67,7 @@ async fn rescue_with(name: &str, extra: &str) -> Outcome {
     let truth = bb.get::<Path2>("robot/out/worldVictims").await.unwrap();
     let found = bb.get::<Path2>("victims/out/victims").await.unwrap();
     let collisions = *bb.get::<i64>("robot/out/collisions").await.unwrap();
+    let sim_time = *bb.get::<f64>("robot/out/simTime").await.unwrap();
     let max_pose_error = *bb.get::<f64>("recorder/out/poseErrorMax").await.unwrap();
     let plan_result = bb.get::<String>("mission/out/result").await.unwrap();
     let memory = bb
@@ -94,7 +95,7 @@ async fn rescue_with(name: &str, extra: &str) -> Outcome {
     }
     let restarts = summary.modules.iter().map(|m| m.restarts).sum();
     println!(
-        "{name}: {} ({}, plan {plan_result}), victims {matched}/{} (+{} false, worst error {worst:.2} m), {collisions} collisions, pose error max {max_pose_error:.3} m, {restarts} restarts",
+        "{name}: {} ({}, plan {plan_result}) at {sim_time:.1} s simulated, victims {matched}/{} (+{} false, worst error {worst:.2} m), {collisions} collisions, pose error max {max_pose_error:.3} m, {restarts} restarts",
         exit.code,
         exit.reason,
         truth.points().len(),
