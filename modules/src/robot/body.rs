@@ -42,7 +42,7 @@ impl Module for SimBody {
             _images: ports.queue_out("out/image", 4, "camera frames, 160 x 120 mono8, when the world's camera is enabled (other robots are seen)"),
             _pose: ports.output("out/pose", Pose2::default(), "ground-truth pose (for evaluation)"),
             _speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
-            _collisions: ports.output("out/collisions", 0, "collision events so far (walls and other robots)"),
+            _collisions: ports.output("out/collisions", 0, "collision events so far (walls and other robots), written when it changes"),
             _sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             _vibration: ports.output("out/vibration", 0.0, "vibration of the base, 0..1"),
             // A driver's camera settings: the robot that drives this body may link them to what

@@ -210,7 +210,7 @@ impl Module for LocalizerModule {
             quality: ports.output(
                 "out/quality",
                 1.0,
-                "localization quality, 0 (lost) .. 1 (perfect)",
+                "localization quality, 0 (lost) .. 1 (perfect); written when it changes",
             ),
             lost: ports.output(
                 "out/lost",
@@ -319,7 +319,9 @@ impl Module for LocalizerModule {
 impl LocalizerModule {
     fn publish(&mut self, (pose, quality, lost): (Pose2, f64, bool)) {
         self.estimate.set(pose);
-        self.quality.set(quality);
+        if quality != self.quality.value() {
+            self.quality.set(quality);
+        }
         if lost != self.lost.value() {
             self.lost.set(lost);
         }

@@ -161,7 +161,7 @@ impl Module for SimWorld {
             _images: ports.queue_out("out/image", 4, "camera frames, 160 x 120 mono8 (shared, never copied)"),
             pose: ports.output("out/pose", Pose2::default(), "ground-truth pose (for evaluation: a real robot has none)"),
             _speed: ports.output("out/actualSpeed", Twist2::default(), "actual speed over the last step"),
-            _collisions: ports.output("out/collisions", 0, "collision events so far"),
+            _collisions: ports.output("out/collisions", 0, "collision events so far, written when it changes"),
             sim_time: ports.output("out/simTime", 0.0, "simulated time, s"),
             world_goals: ports.output("out/worldGoals", Path2::default(), "goal markers `1`..`9` of an ASCII world file, in order"),
             world_victims: ports.output("out/worldVictims", Path2::default(), "victims of the world file (ground truth, for evaluation)"),

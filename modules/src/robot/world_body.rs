@@ -42,6 +42,7 @@ pub(super) struct BodyIo {
     collisions: RemoteValue,
     vibration: RemoteValue,
     last_vibration: f64,
+    last_collisions: Option<i64>,
     sim_time: RemoteValue,
     /// The camera settings of this body (`sim.body`'s `in/camera/...`), 0 = the world's.
     camera_settings: Option<(String, PropertyHandle<f64>, PropertyHandle<f64>)>,
@@ -91,6 +92,7 @@ impl BodyIo {
             collisions: value(bb, &at("out/collisions")).await?,
             vibration: value(bb, &at("out/vibration")).await?,
             last_vibration: f64::NAN,
+            last_collisions: None,
             sim_time: value(bb, &at("out/simTime")).await?,
             // A single-robot world has none: its own params are the camera's settings.
             camera_settings: match (
@@ -130,7 +132,13 @@ impl BodyIo {
         self.odometry.push(any(out.odometry.pose), now);
         self.pose.write(any(out.ground_truth), now);
         self.speed.write(any(out.speed), now);
-        self.collisions.write(any(out.collisions as i64), now);
+        // A count that rarely moves: written when it does, as vibration, so its readers and
+        // a recording are not handed the same number at every step.
+        let collisions = out.collisions as i64;
+        if self.last_collisions != Some(collisions) {
+            self.last_collisions = Some(collisions);
+            self.collisions.write(any(collisions), now);
+        }
         self.sim_time.write(any(out.odometry.stamp), now);
         if vibration != self.last_vibration {
             self.last_vibration = vibration;
