@@ -389,3 +389,33 @@ async fn a_recorder_that_saw_no_pose_leaves_the_last_picture_alone() {
     agent.stop(DEFAULT_STOP_TIMEOUT).await;
     assert_eq!(std::fs::read(&png).unwrap(), b"the last run's picture");
 }
+
+/// A count or a quality that stays the same is not written again at every simulation step:
+/// its readers are not woken, and a recording does not hold the same number 100 times a second.
+#[tokio::test(start_paused = true)]
+async fn collisions_and_quality_are_written_only_when_they_change() {
+    let agent = start(&format!(
+        r#"(name: "robot", type: "sim.world", values: {{"params/world": "{WORLD}",
+            "params/command_timeout_s": 0.0, "in/controlSpeed": (v: 0.0, omega: 0.5)}}),
+           (name: "localizer", type: "nav.localizer",
+            links: {{"in/odometry": "robot/out/odometry", "in/simTime": "robot/out/simTime"}})"#
+    ))
+    .await;
+    let bb = agent.blackboard();
+    let sim_time = bb.handle::<f64>("robot/out/simTime").await.unwrap();
+    let collisions = bb.handle::<i64>("robot/out/collisions").await.unwrap();
+    let quality = bb.handle::<f64>("localizer/out/quality").await.unwrap();
+    tokio::time::sleep(Duration::from_millis(1_000)).await;
+    let steps = sim_time.version();
+    let (collisions, quality) = (collisions.version(), quality.version());
+    agent.stop(DEFAULT_STOP_TIMEOUT).await;
+    assert!(steps > 50, "{steps} steps");
+    assert!(
+        collisions <= 1,
+        "collisions written {collisions} times in {steps} steps"
+    );
+    assert!(
+        quality <= 1,
+        "quality written {quality} times in {steps} steps"
+    );
+}
