@@ -10,18 +10,19 @@
 #[derive(Debug, Clone)]
 pub struct PublishGate {
     every: u32,
+    /// Inputs taken since the last publication; `every` before the first, so the first change
+    /// is published at once.
     since: u32,
-    published_once: bool,
     pending: bool,
 }
 
 impl PublishGate {
     /// A gate publishing at most once per `every` inputs (0 is taken as 1: every change).
     pub fn new(every: u32) -> Self {
+        let every = every.max(1);
         PublishGate {
-            every: every.max(1),
-            since: 0,
-            published_once: false,
+            every,
+            since: every,
             pending: false,
         }
     }
@@ -32,7 +33,7 @@ impl PublishGate {
     pub fn update(&mut self, inputs: u32, changed: bool) -> bool {
         self.since = self.since.saturating_add(inputs);
         self.pending |= changed;
-        if self.pending && (!self.published_once || self.since >= self.every) {
+        if self.pending && self.since >= self.every {
             self.published();
             return true;
         }
@@ -47,7 +48,6 @@ impl PublishGate {
     /// Notes a publication (also one made outside `update`, when stopping).
     pub fn published(&mut self) {
         self.pending = false;
-        self.published_once = true;
         self.since = 0;
     }
 }
