@@ -176,6 +176,23 @@ impl<T: PropertyType> Output<T> {
     }
 }
 
+impl<T: PropertyType + PartialEq> Output<T> {
+    /// Publishes `value` like [`set`](Self::set) unless the output holds an equal value
+    /// already; returns whether it wrote. For an output computed at every step that changes
+    /// seldom (a flag, a quality, a count): its watchers are woken, and a recording grows, only
+    /// when there is news. A NaN is never equal to what it replaces, so it is always written.
+    #[inline]
+    pub fn set_if_changed(&self, value: T) -> bool {
+        let same = self
+            .ep
+            .with_value(|v| v.downcast_ref::<T>() == Some(&value));
+        if !same {
+            self.set(value);
+        }
+        !same
+    }
+}
+
 read_methods!(Output);
 
 /// A handle to any value property of a running agent, from outside its modules (tools, tests,
@@ -518,5 +535,18 @@ mod tests {
         out.set(3.0);
         assert_eq!(out.read().written, step);
         clock.end();
+    }
+
+    #[test]
+    fn set_if_changed_writes_news_only() {
+        let ep = Endpoint::new("m/out/x", TypeInfo::of::<f64>(), Arc::new(0.0));
+        let out = Output::<f64>::new(ep, Arc::new(StepClock::default()));
+        let writes: Vec<bool> = [0.0, 1.0, 1.0, 2.0, f64::NAN, f64::NAN, 2.0]
+            .into_iter()
+            .map(|v| out.set_if_changed(v))
+            .collect();
+        assert_eq!(writes, [false, true, false, true, true, true, true]);
+        assert_eq!(out.version(), 5, "a write for every `true`");
+        assert_eq!(out.value(), 2.0);
     }
 }

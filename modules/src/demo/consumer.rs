@@ -92,9 +92,7 @@ impl Module for Consumer {
         self.last.set(last);
         self.gaps.set(gaps);
         self.duplicates.set(dups);
-        if restarts != self.restarts.value() {
-            self.restarts.set(restarts);
-        }
+        self.restarts.set_if_changed(restarts);
         self.received.set(received);
         let every = self.report_every.value();
         self.report(ctx, every > 0 && received / every != before / every);

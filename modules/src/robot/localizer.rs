@@ -319,11 +319,7 @@ impl Module for LocalizerModule {
 impl LocalizerModule {
     fn publish(&mut self, (pose, quality, lost): (Pose2, f64, bool)) {
         self.estimate.set(pose);
-        if quality != self.quality.value() {
-            self.quality.set(quality);
-        }
-        if lost != self.lost.value() {
-            self.lost.set(lost);
-        }
+        self.quality.set_if_changed(quality);
+        self.lost.set_if_changed(lost);
     }
 }

@@ -205,12 +205,8 @@ impl Module for PathPlanner {
         }
         self.local_target.set(out.local_target);
         // Flags are written only when they change so that their watchers wake for news.
-        if out.arrived != self.arrived.value() {
-            self.arrived.set(out.arrived);
-        }
-        if out.failed != self.failed.value() {
-            self.failed.set(out.failed);
-        }
+        self.arrived.set_if_changed(out.arrived);
+        self.failed.set_if_changed(out.failed);
         if out.replanned {
             self.replans.set(core.replans() as i64);
         }

@@ -122,13 +122,9 @@ impl Module for TeamVictimsModule {
             }
         }
         let found = core.victims().len() as i64;
-        if found != self.found.value() {
-            self.found.set(found);
-        }
+        self.found.set_if_changed(found);
         let list: Vec<Point2> = core.victims().iter().map(|v| v.position()).collect();
-        if list[..] != self.victims.get().0[..] {
-            self.victims.set(list.into());
-        }
+        self.victims.set_if_changed(list.into());
         if *self.saved.get() != *core {
             self.saved.set(core.clone());
         }

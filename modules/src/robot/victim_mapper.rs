@@ -240,13 +240,14 @@ impl Module for VictimMapper {
         if seen.as_slice() != self.seen.get().points() {
             self.seen.set(seen.into());
         }
-        set_changed(&self.pending, core.pending() as i64);
+        self.pending.set_if_changed(core.pending() as i64);
         let target = core.target(pose.position());
         let distance = target.map_or(NO_TARGET_DISTANCE, |t| {
             (t.position.0 - pose.position().0).norm()
         });
-        set_changed(&self.target_distance, distance);
-        set_changed(&self.target_in_view, target.is_some_and(|t| t.in_view));
+        self.target_distance.set_if_changed(distance);
+        self.target_in_view
+            .set_if_changed(target.is_some_and(|t| t.in_view));
         if let Some(t) = target {
             // The approach pose moves as sightings refine the position: tell the planner only
             // of moves that matter, so it does not replan at every frame.
@@ -264,12 +265,5 @@ impl Module for VictimMapper {
             });
         }
         Ok(())
-    }
-}
-
-/// Writes `v` if it differs from the output's value (watchers wake only on news).
-fn set_changed<T: petrel_actors::PropertyType + PartialEq>(out: &Output<T>, v: T) {
-    if *out.get() != v {
-        out.set(v);
     }
 }
