@@ -19,6 +19,11 @@ use crate::sink::{ChannelSpec, Entry};
 
 /// Items a queue tap takes at a time.
 const BATCH: usize = 256;
+/// Writes of one value property kept for the drain between two of its passes: a drain runs
+/// beside the modules, after each step that wrote, so it finds a few; a simulator catching up
+/// with the wall clock writes one per simulated step. Past this many, the oldest are lost and
+/// counted as dropped.
+const KEPT_WRITES: usize = 1024;
 
 /// Where one channel's values go: the writer's backlog, and the channel's drop counter.
 #[derive(Clone)]
@@ -111,8 +116,9 @@ impl Channels {
 
 /// What a drain reads of one tapped property.
 enum Source {
-    /// A value: its changes (the last version sent, to skip a wake-up with no new write).
-    Value { tap: ValueTap, last: Option<u64> },
+    /// A value: its value when tapped, then every write (and how many writes the tap lost,
+    /// already counted).
+    Value { tap: ValueTap, lost: u64 },
     /// A queue: its items (and how many it lost by lagging, already counted).
     Queue { tap: QueueTap, lost: u64 },
 }
@@ -138,6 +144,8 @@ struct Drain {
     batch: Vec<(usize, Entry)>,
     /// Values the writer handed back, dropped at each pass (the buffer is kept).
     spent: Vec<petrel_actors::AnyValue>,
+    /// The writes a value tap kept, taken in one read (the buffer is kept).
+    writes: Vec<(petrel_actors::AnyValue, u64, Instant)>,
 }
 
 impl Drop for Drain {
@@ -157,6 +165,7 @@ impl Drain {
             clock,
             batch: Vec::new(),
             spent: Vec::new(),
+            writes: Vec::new(),
         }
     }
 
@@ -169,9 +178,9 @@ impl Drain {
             type_info: tap.type_info(),
             queue: matches!(tap, Tap::Queue(_)),
         });
-        tap.wake_through(&self.ready, self.taps.len());
+        tap.record_through(&self.ready, self.taps.len(), KEPT_WRITES);
         let source = match tap {
-            Tap::Value(tap) => Source::Value { tap, last: None },
+            Tap::Value(tap) => Source::Value { tap, lost: 0 },
             Tap::Queue(tap) => Source::Queue { tap, lost: 0 },
         };
         self.taps.push(Tapped { out, source });
@@ -222,10 +231,11 @@ impl Drain {
         });
     }
 
-    /// Reads tap `id` into the batch: a value if it changed since the last read, a queue's
-    /// unread items.
+    /// Reads tap `id` into the batch: a value's writes since the last read, a queue's unread
+    /// items.
     fn read(&mut self, id: usize, log_ns: u64) {
         let Tapped { out, source } = &mut self.taps[id];
+        let writes = &mut self.writes;
         let clock = self.clock;
         let entry = |value, sequence, written| Entry {
             channel: out.channel,
@@ -235,11 +245,14 @@ impl Drain {
             log_ns,
         };
         match source {
-            Source::Value { tap, last } => {
-                let (value, version, written) = tap.read();
-                if *last != Some(version) {
-                    *last = Some(version);
+            Source::Value { tap, lost } => {
+                let now_lost = tap.take_writes(writes);
+                for (value, version, written) in writes.drain(..) {
                     self.batch.push((id, entry(value, version, written)));
+                }
+                if now_lost > *lost {
+                    out.dropped.fetch_add(now_lost - *lost, Ordering::Relaxed);
+                    *lost = now_lost;
                 }
             }
             Source::Queue { tap, lost } => {

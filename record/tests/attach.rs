@@ -1,6 +1,7 @@
 //! The recorder misses no write: attached before the agent's modules start, it records what
-//! they write in their first step; a module added while the agent runs is recorded from its
-//! first step too. Read back with the `mcap` crate's own reader.
+//! they write in their first step, every value of a property written several times in one
+//! step; a module added while the agent runs is recorded from its first step too. Read back
+//! with the `mcap` crate's own reader.
 
 use std::collections::BTreeMap;
 use std::time::Duration;
@@ -11,7 +12,7 @@ use petrel_actors::{
 };
 use petrel_record::{Format, RecordOptions, Recorder};
 
-/// Pushes three items and sets its count in its first step, then never steps again.
+/// Pushes three items and sets its count after each in its first step, then never steps again.
 struct Burst {
     items: QueueWriter<i64>,
     count: Output<i64>,
@@ -32,8 +33,8 @@ impl Module for Burst {
     async fn step(&mut self, _ctx: &mut Context) -> anyhow::Result<()> {
         for i in 0..3 {
             self.items.push(i);
+            self.count.set(i + 1);
         }
-        self.count.set(3);
         Ok(())
     }
 }
@@ -134,8 +135,9 @@ async fn what_modules_write_in_their_first_step_is_recorded() {
 
     let topics = recorded(&path);
     assert_eq!(items(&topics, "/a/burst/out/items"), pushed());
-    let counts = items(&topics, "/a/burst/out/count");
-    assert_eq!(counts.last().unwrap().1, "{\"value\":3}", "{counts:?}");
+    // The value before the step, then each of the step's three writes, by version.
+    let counts: Vec<(u32, String)> = (0..=3).map(|n| (n, format!("{{\"value\":{n}}}"))).collect();
+    assert_eq!(items(&topics, "/a/burst/out/count"), counts);
 }
 
 #[tokio::test(start_paused = true)]

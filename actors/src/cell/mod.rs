@@ -13,7 +13,9 @@ use tokio::time::Instant;
 
 use crate::value::{AnyValue, TypeInfo};
 
+mod history;
 mod signal;
+pub(crate) use history::History;
 pub(crate) use signal::{cause, Signal};
 
 /// A value with its version (writes since declaration) and write time.
@@ -75,25 +77,39 @@ impl Cell {
     /// Like [`write`](Self::write), returning the value it replaced (for a writer that reuses
     /// it once no reader holds it).
     pub fn replace(&self, value: AnyValue, written: Instant) -> AnyValue {
-        let old = {
+        let (old, watchers) = {
             let mut slot = self.slot.write();
             slot.version += 1;
             self.version.store(slot.version, Ordering::Release);
             slot.written = written;
-            std::mem::replace(&mut slot.value, value)
+            // The watchers are read under the lock, and a history is given the write there:
+            // it keeps concurrent writes in version order, and a watcher added meanwhile
+            // (see `add_watcher`) either has this write or the value it left.
+            let watchers = self.watchers.load();
+            for history in watchers.iter().filter_map(|(w, _)| w.history()) {
+                history.push(&value, slot.version, written);
+            }
+            (std::mem::replace(&mut slot.value, value), watchers)
         };
-        for (watcher, cause) in self.watchers.load().iter() {
+        for (watcher, cause) in watchers.iter() {
             watcher.raise(*cause);
         }
         old
     }
 
     fn add_watcher(&self, signal: &Arc<Signal>, cause: u8) {
+        // A history starts with the value it finds, taken where no write can come between
+        // (writers take the lock for writing): it then holds what the property read at each
+        // moment since, once each, across relinks too (each adds the new cell's value).
+        let slot = signal.history().map(|_| self.slot.read());
         self.watchers.rcu(|w| {
             let mut w = Vec::clone(w);
             w.push((signal.clone(), cause));
             w
         });
+        if let (Some(history), Some(slot)) = (signal.history(), slot) {
+            history.push(&slot.value, slot.version, slot.written);
+        }
     }
 
     fn remove_watcher(&self, signal: &Arc<Signal>, cause: u8) {

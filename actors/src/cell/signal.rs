@@ -2,10 +2,12 @@
 //! queues, timers and stop requests raise.
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicU8, Ordering};
+use std::sync::Arc;
 use std::task::Poll;
 
 use atomic_waker::AtomicWaker;
 
+use super::History;
 use crate::loop_watch::Hop;
 use crate::team::TapReady;
 
@@ -52,6 +54,9 @@ pub(crate) struct Signal {
     /// Set for a tap drained with many others: a raise queues this id on the shared list
     /// instead of waking a waiter of its own.
     ready: Option<(TapReady, usize)>,
+    /// Set for a tap that must see every write (a recorder's): the cells it watches keep each
+    /// write here, which a later read of the latest value would miss.
+    history: Option<Arc<History>>,
 }
 
 impl Default for Signal {
@@ -66,6 +71,7 @@ impl Default for Signal {
             hops: AtomicU64::new(0),
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             ready: None,
+            history: None,
         }
     }
 }
@@ -77,6 +83,22 @@ impl Signal {
             ready: Some((ready, id)),
             ..Signal::default()
         }
+    }
+
+    /// Like [`marking`](Self::marking), with the writes of the cells it watches kept in a
+    /// [`History`] of `capacity`.
+    pub fn recording(ready: TapReady, id: usize, capacity: usize) -> Self {
+        Signal {
+            ready: Some((ready, id)),
+            history: Some(Arc::new(History::new(capacity))),
+            ..Signal::default()
+        }
+    }
+
+    /// The history writes are kept in, for a recording signal.
+    #[inline]
+    pub fn history(&self) -> Option<&History> {
+        self.history.as_deref()
     }
 
     pub fn raise(&self, cause: u8) {

@@ -13,8 +13,11 @@ use std::sync::Arc;
 use parking_lot::Mutex;
 use tokio::sync::Notify;
 
+use tokio::time::Instant;
+
 use super::remote::{QueueTap, Tap, ValueTap};
 use crate::cell::{cause, Signal};
+use crate::value::AnyValue;
 
 /// The ready list many taps share: which of them have news, and one waiter to wake.
 #[derive(Clone, Default)]
@@ -76,14 +79,44 @@ impl Tap {
     }
 }
 
+impl Tap {
+    /// Like [`wake_through`](Self::wake_through), and a value tap keeps its value now and every
+    /// write from now on ([`ValueTap::take_writes`]), up to `capacity` not yet taken: for a
+    /// consumer that must see each change (a recorder), where a read finds only the latest. A
+    /// queue tap reads every item already.
+    pub fn record_through(&mut self, ready: &TapReady, id: usize, capacity: usize) {
+        match self {
+            Tap::Value(tap) => tap.route(Signal::recording(ready.clone(), id, capacity)),
+            Tap::Queue(tap) => tap.wake_through(ready, id),
+        }
+    }
+}
+
 impl ValueTap {
     /// See [`Tap::wake_through`].
     pub fn wake_through(&mut self, ready: &TapReady, id: usize) {
-        let signal = Arc::new(Signal::marking(ready.clone(), id));
+        self.route(Signal::marking(ready.clone(), id));
+    }
+
+    fn route(&mut self, signal: Signal) {
+        let signal = Arc::new(signal);
         self.ep.subscribe(&signal);
         self.ep.unsubscribe(&self.signal, cause::CHANGE);
         self.signal = signal;
         self.signal.raise(cause::CHANGE);
+    }
+
+    /// Moves the writes kept since the last call (see [`Tap::record_through`]) into `out`,
+    /// oldest first, as (value, version, write time): the first call begins with the value
+    /// the tap found, and a relink adds the value the property reads then. Returns how many
+    /// the tap lost so far to its capacity. Keeps nothing for a tap not routed by
+    /// `record_through`.
+    ///
+    /// Re-arms the tap first, as [`read`](Self::read) does: a write after it queues the tap
+    /// again, and one before it is among the writes taken.
+    pub fn take_writes(&self, out: &mut Vec<(AnyValue, u64, Instant)>) -> u64 {
+        self.signal.take();
+        self.signal.history().map_or(0, |h| h.take(out))
     }
 }
 
@@ -126,6 +159,47 @@ mod tests {
         assert_eq!(a.take(), cause::CHANGE);
         a.raise(cause::CHANGE);
         assert_eq!(taken(&ready), vec![3]);
+    }
+
+    #[test]
+    fn a_recording_tap_keeps_the_value_it_found_every_write_and_each_relink() {
+        let ep = Endpoint::new("m/in/x", TypeInfo::of::<i64>(), Arc::new(7_i64));
+        let ready = TapReady::new();
+        let mut tap = Tap::Value(ValueTap::new(ep.clone()));
+        tap.record_through(&ready, 2, 3);
+        let Tap::Value(tap) = tap else { unreachable!() };
+        let kept = |tap: &ValueTap| {
+            let mut out = Vec::new();
+            let lost = tap.take_writes(&mut out);
+            let values: Vec<i64> = out
+                .iter()
+                .map(|(v, _, _)| *v.downcast_ref::<i64>().unwrap())
+                .collect();
+            (values, lost)
+        };
+        assert_eq!(taken(&ready), vec![2], "queued at once");
+        ep.write(Arc::new(8_i64));
+        ep.write(Arc::new(9_i64));
+        assert_eq!(kept(&tap), (vec![7, 8, 9], 0), "found, then both writes");
+        // Linked elsewhere: the value it reads now, then that cell's writes.
+        let source = Endpoint::new("s/out/x", TypeInfo::of::<i64>(), Arc::new(40_i64));
+        ep.retarget(source.own.clone());
+        source.write(Arc::new(41_i64));
+        assert_eq!(taken(&ready), vec![2], "the relink queues it, once");
+        assert_eq!(kept(&tap), (vec![40, 41], 0));
+        for v in 0..5_i64 {
+            source.write(Arc::new(v));
+        }
+        assert_eq!(
+            kept(&tap),
+            (vec![2, 3, 4], 2),
+            "the capacity's newest, two lost"
+        );
+        assert_eq!(
+            taken(&ready),
+            vec![2],
+            "the writes after the re-arm queue it, once"
+        );
     }
 
     #[test]
