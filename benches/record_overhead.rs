@@ -10,7 +10,8 @@
 //!
 //! With `RECORD_OVERHEAD_THREADS` set, each run also prints its agent thread's CPU time (paused
 //! runs only), the process's and the file's size; `RECORD_COMPRESSION=lz4` records with LZ4
-//! chunks instead of the default (zstd), to compare.
+//! chunks instead of the default (zstd), to compare. `RECORD_OVERHEAD_ROUNDS=N` first runs N
+//! rounds of the paused runs side by side and prints their ratios (see `rounds`).
 
 mod common;
 
@@ -101,10 +102,44 @@ fn run(file: &ConfigFile, record: Option<(&Path, Format)>, clock: Clock) -> Dura
     total
 }
 
+/// Runs `n` rounds of paused runs side by side (without recording, Foxglove, ROS 2, without
+/// again) and prints each format's CPU time over the mean of its round's two runs without:
+/// the median of the rounds and their range. Criterion runs each function for ten seconds
+/// after the other, and on a shared VM what the same run costs drifts between them by more
+/// than the ratio sought (BENCHMARKS.md, session 32); runs a few milliseconds apart share
+/// the drift, so their ratio keeps what the recording costs.
+fn rounds(file: &ConfigFile, path: &Path, n: usize) {
+    let mut ratios = [Vec::new(), Vec::new()];
+    for _ in 0..n {
+        let before = run(file, None, Clock::Paused);
+        let recorded =
+            [Format::Foxglove, Format::Ros2].map(|f| run(file, Some((path, f)), Clock::Paused));
+        let base = (before + run(file, None, Clock::Paused)).as_secs_f64() / 2.0;
+        for (r, took) in ratios.iter_mut().zip(recorded) {
+            r.push(took.as_secs_f64() / base);
+        }
+    }
+    for (name, mut r) in ["foxglove", "ros2"].into_iter().zip(ratios) {
+        r.sort_by(f64::total_cmp);
+        eprintln!(
+            "ROUNDS {name} median {:.3} min {:.3} max {:.3} rounds {n}",
+            r[r.len() / 2],
+            r[0],
+            r[r.len() - 1]
+        );
+    }
+}
+
 fn record_overhead(c: &mut Criterion) {
     let file = common::navigate();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("nav.mcap");
+    if let Some(n) = std::env::var("RECORD_OVERHEAD_ROUNDS")
+        .ok()
+        .and_then(|n| n.parse().ok())
+    {
+        rounds(&file, &path, n);
+    }
     // A live run takes a second of wall time for about a third of a second of CPU time, which
     // is what criterion measures: a shorter measurement keeps each function near 15 s.
     for (group, clock, measure) in [
