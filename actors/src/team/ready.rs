@@ -12,7 +12,6 @@ use std::sync::Arc;
 
 use parking_lot::Mutex;
 use tokio::sync::Notify;
-
 use tokio::time::Instant;
 
 use super::remote::{QueueTap, Tap, ValueTap};
