@@ -28,7 +28,8 @@ fn config(dir: &std::path::Path, fault: &str) -> std::path::PathBuf {
     path
 }
 
-/// `petrel run` on one worker with a module whose first step blocks for good, once started.
+/// `petrel run` on one worker with a module whose first step blocks for good, once that step
+/// is seen blocking.
 fn blocked_on_one_worker(dir: &std::path::Path, stop_timeout: &str) -> Running {
     let config = config(dir, "block");
     let mut petrel = Running::start(
@@ -44,6 +45,11 @@ fn blocked_on_one_worker(dir: &std::path::Path, stop_timeout: &str) -> Running {
         dir,
     );
     petrel.wait_for("agent started");
+    // The agent has started before its modules' first steps: a stop asked now can reach
+    // `stuck` before its step blocks, and it then stops like any module (a run that ended 0
+    // in CI). The thread-hold watcher's warning says the step is holding the thread.
+    let (held, _) = petrel.wait_for("has held the agent's thread");
+    assert!(held.contains("module=stuck"), "{held}");
     petrel
 }
 
