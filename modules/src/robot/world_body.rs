@@ -41,7 +41,8 @@ pub(super) struct BodyIo {
     speed: RemoteValue,
     collisions: RemoteValue,
     vibration: RemoteValue,
-    last_vibration: f64,
+    /// What this body last wrote to `vibration` and `collisions` (see [`write_changed`]).
+    last_vibration: Option<f64>,
     last_collisions: Option<i64>,
     sim_time: RemoteValue,
     /// The camera settings of this body (`sim.body`'s `in/camera/...`), 0 = the world's.
@@ -91,7 +92,7 @@ impl BodyIo {
             speed: value(bb, &at("out/actualSpeed")).await?,
             collisions: value(bb, &at("out/collisions")).await?,
             vibration: value(bb, &at("out/vibration")).await?,
-            last_vibration: f64::NAN,
+            last_vibration: None,
             last_collisions: None,
             sim_time: value(bb, &at("out/simTime")).await?,
             // A single-robot world has none: its own params are the camera's settings.
@@ -132,18 +133,12 @@ impl BodyIo {
         self.odometry.push(any(out.odometry.pose), now);
         self.pose.write(any(out.ground_truth), now);
         self.speed.write(any(out.speed), now);
-        // A count that rarely moves: written when it does, as vibration, so its readers and
-        // a recording are not handed the same number at every step.
+        // Values that rarely move are written when they do, so their readers and a recording
+        // are not handed the same number at every step.
         let collisions = out.collisions as i64;
-        if self.last_collisions != Some(collisions) {
-            self.last_collisions = Some(collisions);
-            self.collisions.write(any(collisions), now);
-        }
+        write_changed(&self.collisions, &mut self.last_collisions, collisions, now);
         self.sim_time.write(any(out.odometry.stamp), now);
-        if vibration != self.last_vibration {
-            self.last_vibration = vibration;
-            self.vibration.write(any(vibration), now);
-        }
+        write_changed(&self.vibration, &mut self.last_vibration, vibration, now);
     }
 
     /// The camera of this body: the world's, with the body's own exposure and gain where set.
@@ -242,5 +237,20 @@ pub(super) fn start_pose(
             "invalid parameter `{param}`: {}",
             start_problem(other).unwrap_or_default()
         ),
+    }
+}
+
+/// Writes `value` unless it equals `last`, what this body wrote there before (a NaN is always
+/// written), and remembers it: `Output::set_if_changed` for an output the world writes from
+/// outside its module.
+fn write_changed<T: PropertyType + PartialEq + Copy>(
+    out: &RemoteValue,
+    last: &mut Option<T>,
+    value: T,
+    now: Instant,
+) {
+    if *last != Some(value) {
+        *last = Some(value);
+        out.write(any(value), now);
     }
 }
